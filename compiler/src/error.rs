@@ -1,0 +1,113 @@
+//! Why a mesh cannot be compiled.
+
+use crate::ids::{FaceId, VertexId};
+
+/// A mesh the compiler refuses, with the elements that show why. All indices are 0-based.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CompileError {
+    /// The mesh has no triangles.
+    #[error("the mesh has no triangles")]
+    NoFaces,
+    /// The mesh is too large for 32-bit indices.
+    #[error("the mesh is too large ({vertices} vertices, {faces} faces) for 32-bit indices")]
+    TooLarge {
+        /// Vertex count.
+        vertices: usize,
+        /// Face count.
+        faces: usize,
+    },
+    /// A face names a vertex that does not exist.
+    #[error("{face} refers to vertex {vertex}, but the mesh has {n_vertices} vertices")]
+    VertexOutOfRange {
+        /// The face.
+        face: FaceId,
+        /// The index it uses.
+        vertex: u32,
+        /// Number of vertices.
+        n_vertices: usize,
+    },
+    /// A face uses one vertex twice.
+    #[error("{face} uses the same vertex twice")]
+    RepeatedVertex {
+        /// The face.
+        face: FaceId,
+    },
+    /// A vertex position is NaN or infinite.
+    #[error("{vertex} has a non-finite coordinate")]
+    NonFinitePosition {
+        /// The vertex.
+        vertex: VertexId,
+    },
+    /// The position array and the faces disagree on the number of vertices.
+    #[error("{positions} positions given for a mesh of {n_vertices} vertices")]
+    PositionCount {
+        /// Positions given.
+        positions: usize,
+        /// Vertices expected.
+        n_vertices: usize,
+    },
+    /// More than two faces share an edge.
+    #[error("edge ({a}, {b}) is shared by {faces} faces (non-manifold)")]
+    NonManifoldEdge {
+        /// One end.
+        a: VertexId,
+        /// The other end.
+        b: VertexId,
+        /// How many faces share it.
+        faces: usize,
+    },
+    /// Two faces traverse an edge in the same direction.
+    #[error("{} and {} both run from {a} to {b}: inconsistent orientation", faces[0], faces[1])]
+    InconsistentOrientation {
+        /// Start of the directed edge.
+        a: VertexId,
+        /// End of the directed edge.
+        b: VertexId,
+        /// The two faces.
+        faces: [FaceId; 2],
+    },
+    /// The faces around a vertex do not form a single fan (for example a bow tie).
+    #[error("{vertex} is non-manifold: its faces do not form a single fan")]
+    NonManifoldVertex {
+        /// The vertex.
+        vertex: VertexId,
+    },
+    /// A vertex belongs to no face.
+    #[error("{vertex} belongs to no face")]
+    UnreferencedVertex {
+        /// The vertex.
+        vertex: VertexId,
+    },
+    /// The mesh has several connected components.
+    #[error("the mesh is not connected: {face} cannot be reached from face 0")]
+    Disconnected {
+        /// A face of another component.
+        face: FaceId,
+    },
+    /// The mesh has no boundary.
+    #[error("the mesh is a closed surface (Euler characteristic {euler}); a disk is required")]
+    ClosedSurface {
+        /// Its Euler characteristic.
+        euler: i64,
+    },
+    /// The mesh has holes; only disks are supported so far.
+    #[error("the mesh has {loops} boundary loops (Euler characteristic {euler}); meshes with holes are not supported yet, only disks")]
+    HasHoles {
+        /// Boundary loops.
+        loops: usize,
+        /// Euler characteristic.
+        euler: i64,
+    },
+    /// One boundary loop, but handles: not a disk.
+    #[error("the mesh is not a disk (Euler characteristic {euler}, {loops} boundary loop)")]
+    NotADisk {
+        /// Euler characteristic.
+        euler: i64,
+        /// Boundary loops.
+        loops: usize,
+    },
+    /// An internal invariant failed: the emitted program did not verify. This is a compiler bug.
+    #[error("internal error: the compiled program failed verification: {0}")]
+    Internal(#[from] bdmorph_isa::VerifyError),
+}

@@ -1,0 +1,253 @@
+//! Meshes and deformations made in code, for tests, benchmarks and the demo.
+//!
+//! Everything here is deterministic (jitter comes from a hash of the vertex index, not from a
+//! random generator), so a test or a benchmark sees the same mesh on every machine.
+//!
+//! ```
+//! use bdmorph::generate;
+//! let source = generate::disk(10, 0.2);
+//! assert_eq!(source.positions.len(), 3 * 10 * 11 + 1);
+//! let target = generate::twist(&source, 1.0);
+//! assert_eq!(target.faces, source.faces);
+//! ```
+
+use std::f64::consts::TAU;
+
+use crate::mesh::PlanarMesh;
+
+/// A number in [-1, 1) from an integer, by a fixed hash (SplitMix64).
+fn hash_unit(i: u64) -> f64 {
+    let mut z = i.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+/// A triangulated unit disk: a centre vertex and `rings` concentric rings, ring `r` holding
+/// `6 r` vertices (`3 rings (rings + 1) + 1` vertices in all). Consecutive rings are zipped by
+/// angle. Interior vertices are jittered by up to `jitter` times the ring spacing (keep it
+/// below about 0.3 for valid triangles).
+pub fn disk(rings: usize, jitter: f64) -> PlanarMesh {
+    let rings = rings.max(1);
+    let h = 1.0 / rings as f64;
+    let mut positions = vec![[0.0, 0.0]];
+    let mut ring_start = vec![0usize];
+    for r in 1..=rings {
+        ring_start.push(positions.len());
+        let n = 6 * r;
+        // Offset alternate rings by half a step so zipped triangles are well shaped.
+        let offset = if r % 2 == 0 { 0.5 } else { 0.0 };
+        for i in 0..n {
+            let a = (i as f64 + offset) / n as f64 * TAU;
+            let mut p = [r as f64 * h * a.cos(), r as f64 * h * a.sin()];
+            if r < rings {
+                let id = positions.len() as u64;
+                p[0] += jitter * h * hash_unit(2 * id);
+                p[1] += jitter * h * hash_unit(2 * id + 1);
+            }
+            positions.push(p);
+        }
+    }
+    let mut faces = Vec::new();
+    // Centre fan.
+    for i in 0..6u32 {
+        faces.push([0, 1 + i, 1 + (i + 1) % 6]);
+    }
+    for r in 2..=rings {
+        let (inner, outer) = (ring_start[r - 1], ring_start[r]);
+        let (ni, no) = (6 * (r - 1), 6 * r);
+        let offset_i = if (r - 1) % 2 == 0 { 0.5 } else { 0.0 };
+        let offset_o = if r % 2 == 0 { 0.5 } else { 0.0 };
+        let angle_i = |k: usize| (k as f64 + offset_i) / ni as f64;
+        let angle_o = |k: usize| (k as f64 + offset_o) / no as f64;
+        let (mut i, mut o) = (0usize, 0usize);
+        while i < ni || o < no {
+            let vi = (inner + i % ni) as u32;
+            let vo = (outer + o % no) as u32;
+            let advance_outer = i >= ni || (o < no && angle_o(o + 1) <= angle_i(i + 1));
+            if advance_outer {
+                faces.push([vi, vo, (outer + (o + 1) % no) as u32]);
+                o += 1;
+            } else {
+                faces.push([vi, vo, (inner + (i + 1) % ni) as u32]);
+                i += 1;
+            }
+        }
+    }
+    PlanarMesh { positions, faces }
+}
+
+/// The number of rings that makes [`disk`] have about `vertices` vertices.
+pub fn rings_for(vertices: usize) -> usize {
+    // 3 r^2 + 3 r + 1 = v.
+    let r = ((12.0 * vertices as f64 - 3.0).max(0.0).sqrt() - 3.0) / 6.0;
+    r.round().max(1.0) as usize
+}
+
+/// An `nx` by `ny` grid of vertices over `[0, nx - 1] x [0, ny - 1]`, two triangles per cell
+/// with alternating diagonals; interior vertices jittered by up to `jitter`.
+pub fn grid(nx: usize, ny: usize, jitter: f64) -> PlanarMesh {
+    let (nx, ny) = (nx.max(2), ny.max(2));
+    let mut positions = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let mut p = [i as f64, j as f64];
+            if i > 0 && j > 0 && i + 1 < nx && j + 1 < ny {
+                let id = (j * nx + i) as u64;
+                p[0] += jitter * hash_unit(2 * id);
+                p[1] += jitter * hash_unit(2 * id + 1);
+            }
+            positions.push(p);
+        }
+    }
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let mut faces = Vec::with_capacity(2 * (nx - 1) * (ny - 1));
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            if (i + j) % 2 == 0 {
+                faces.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                faces.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            } else {
+                faces.push([id(i, j), id(i + 1, j), id(i, j + 1)]);
+                faces.push([id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+    }
+    PlanarMesh { positions, faces }
+}
+
+/// A fan of `n` triangles around one interior vertex at the origin, rim on the unit circle,
+/// the rim radii varied by up to `jitter`.
+pub fn fan(n: usize, jitter: f64) -> PlanarMesh {
+    let n = n.max(3);
+    let mut positions = vec![[0.0, 0.0]];
+    for i in 0..n {
+        let a = i as f64 / n as f64 * TAU;
+        let r = 1.0 + jitter * hash_unit(i as u64);
+        positions.push([r * a.cos(), r * a.sin()]);
+    }
+    let faces = (0..n as u32)
+        .map(|i| [0, 1 + i, 1 + (i + 1) % n as u32])
+        .collect();
+    PlanarMesh { positions, faces }
+}
+
+fn map(mesh: &PlanarMesh, f: impl Fn([f64; 2]) -> [f64; 2]) -> PlanarMesh {
+    PlanarMesh {
+        positions: mesh.positions.iter().map(|&p| f(p)).collect(),
+        faces: mesh.faces.clone(),
+    }
+}
+
+/// Rotates each point about the centre of the bounding box by `angle * (1 - (r / R)^2)`
+/// radians, `R` the largest distance from the centre: the middle turns by `angle`, the rim not
+/// at all. Area preserving and orientation preserving.
+pub fn twist(mesh: &PlanarMesh, angle: f64) -> PlanarMesh {
+    let (c, radius) = centre_and_radius(mesh);
+    map(mesh, |p| {
+        let (x, y) = (p[0] - c[0], p[1] - c[1]);
+        let r2 = (x * x + y * y) / (radius * radius);
+        let a = angle * (1.0 - r2);
+        let (s, co) = a.sin_cos();
+        [c[0] + co * x - s * y, c[1] + s * x + co * y]
+    })
+}
+
+/// Bends the shape: a point at horizontal offset `x` from the centre (relative to the radius)
+/// is turned about a pivot below the shape, by `amount * x` radians, as a strip is bent into
+/// an arc. Smooth and orientation preserving for `|amount|` below about 1.
+pub fn bend(mesh: &PlanarMesh, amount: f64) -> PlanarMesh {
+    let (c, radius) = centre_and_radius(mesh);
+    map(mesh, |p| {
+        let x = (p[0] - c[0]) / radius;
+        let y = (p[1] - c[1]) / radius;
+        if amount.abs() < 1e-12 {
+            return p;
+        }
+        // Arc of radius rho = 1/amount: x runs along the arc, y across it.
+        let rho = 1.0 / amount;
+        let a = x * amount;
+        let rr = rho - y;
+        [
+            c[0] + radius * rr * a.sin(),
+            c[1] + radius * (rho - rr * a.cos()),
+        ]
+    })
+}
+
+/// Stretches the shape non-uniformly: `x` by a factor growing from `1 / s` on the left to `s`
+/// on the right, smoothly. Orientation preserving for `s > 0`.
+pub fn stretch(mesh: &PlanarMesh, s: f64) -> PlanarMesh {
+    let (c, radius) = centre_and_radius(mesh);
+    let k = s.max(1e-3).ln();
+    map(mesh, |p| {
+        let x = (p[0] - c[0]) / radius;
+        // x' = (exp(k x) - 1) / k has derivative exp(k x) > 0.
+        let xs = if k.abs() < 1e-12 {
+            x
+        } else {
+            ((k * x).exp() - 1.0) / k
+        };
+        [c[0] + radius * xs, p[1]]
+    })
+}
+
+fn centre_and_radius(mesh: &PlanarMesh) -> ([f64; 2], f64) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in &mesh.positions {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    let r = mesh
+        .positions
+        .iter()
+        .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
+        .fold(0.0, f64::max);
+    (c, if r > 0.0 { r } else { 1.0 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn all_ccw(m: &PlanarMesh) -> bool {
+        m.faces.iter().all(|f| m.signed_area(f) > 0.0)
+    }
+
+    #[test]
+    fn disks_are_valid_and_sized_as_documented() {
+        for rings in [1, 2, 5, 20] {
+            let m = disk(rings, 0.25);
+            assert_eq!(m.positions.len(), 3 * rings * (rings + 1) + 1);
+            assert_eq!(m.faces.len(), 6 * rings * rings);
+            assert!(all_ccw(&m), "rings {rings}");
+            m.validate().expect("valid disk");
+        }
+        assert_eq!(rings_for(1000), 18);
+        assert_eq!(rings_for(3 * 57 * 58 + 1), 57);
+    }
+
+    #[test]
+    fn grids_and_fans_are_valid() {
+        let g = grid(7, 5, 0.2);
+        assert!(all_ccw(&g));
+        g.validate().expect("valid grid");
+        let f = fan(9, 0.3);
+        assert!(all_ccw(&f));
+        f.validate().expect("valid fan");
+    }
+
+    #[test]
+    fn deformations_keep_orientation() {
+        let m = disk(12, 0.2);
+        for d in [twist(&m, 1.5), bend(&m, 0.8), stretch(&m, 2.0)] {
+            assert!(all_ccw(&d));
+            assert_eq!(d.faces, m.faces);
+        }
+    }
+}

@@ -1,0 +1,192 @@
+//! Planar triangle meshes and their checks.
+
+use std::path::Path;
+
+use crate::io::{self, ReadError, SurfaceMesh};
+
+/// A planar triangle mesh: one 2D position per vertex, triangles as 0-based vertex indices,
+/// counter-clockwise.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanarMesh {
+    /// Vertex positions.
+    pub positions: Vec<[f64; 2]>,
+    /// Triangles.
+    pub faces: Vec<[u32; 3]>,
+}
+
+/// Why a mesh (or a pair of meshes) is not valid input.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// A 3D mesh where a planar one is needed.
+    #[error("{path}: vertex {vertex} has z = {z}; a planar mesh (z = 0) is required")]
+    NotPlanar {
+        /// The file.
+        path: String,
+        /// First vertex off the plane.
+        vertex: usize,
+        /// Its z.
+        z: f64,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite coordinate")]
+    NonFinite {
+        /// The vertex.
+        vertex: usize,
+    },
+    /// A face names a vertex that does not exist.
+    #[error("face {face} refers to vertex {vertex}, but the mesh has {n_vertices} vertices")]
+    IndexOutOfRange {
+        /// The face.
+        face: usize,
+        /// The index.
+        vertex: u32,
+        /// Vertex count.
+        n_vertices: usize,
+    },
+    /// A triangle has (numerically) zero area.
+    #[error("face {face} is degenerate (area {area:e})")]
+    Degenerate {
+        /// The face.
+        face: usize,
+        /// Its signed area.
+        area: f64,
+    },
+    /// A triangle is clockwise.
+    #[error("face {face} is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
+    Clockwise {
+        /// The face.
+        face: usize,
+        /// Its signed area.
+        area: f64,
+    },
+    /// Source and target differ in size.
+    #[error("source and target differ: {what} {source_count} vs {target_count}")]
+    CountMismatch {
+        /// What differs.
+        what: &'static str,
+        /// Count in the source.
+        source_count: usize,
+        /// Count in the target.
+        target_count: usize,
+    },
+    /// Source and target have different triangles.
+    #[error("source and target differ at face {face}: {source_face:?} vs {target_face:?}; both meshes need the same triangles")]
+    FaceMismatch {
+        /// The face.
+        face: usize,
+        /// Its vertices in the source.
+        source_face: [u32; 3],
+        /// Its vertices in the target.
+        target_face: [u32; 3],
+    },
+    /// The connectivity cannot be compiled (not a manifold, consistently oriented, connected
+    /// disk).
+    #[error(transparent)]
+    Topology(#[from] bdmorph_compiler::CompileError),
+}
+
+impl PlanarMesh {
+    /// Reads a planar mesh from an OBJ or OFF file (z must be 0 when present).
+    pub fn read(path: &Path) -> Result<PlanarMesh, MeshError> {
+        PlanarMesh::from_surface(io::read_mesh(path)?, path)
+    }
+
+    /// Drops z from a mesh that lies in the plane z = 0.
+    pub fn from_surface(mesh: SurfaceMesh, path: &Path) -> Result<PlanarMesh, MeshError> {
+        if let Some((vertex, p)) = mesh.positions.iter().enumerate().find(|(_, p)| p[2] != 0.0) {
+            return Err(MeshError::NotPlanar {
+                path: path.display().to_string(),
+                vertex,
+                z: p[2],
+            });
+        }
+        Ok(PlanarMesh {
+            positions: mesh.positions.iter().map(|p| [p[0], p[1]]).collect(),
+            faces: mesh.faces,
+        })
+    }
+
+    /// The signed area of triangle `f` (positive when counter-clockwise).
+    /// Indices must be in range.
+    pub fn signed_area(&self, f: &[u32; 3]) -> f64 {
+        let [a, b, c] = f.map(|v| self.positions[v as usize]);
+        0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+    }
+
+    /// Size of the mesh: the diagonal of its bounding box.
+    pub fn diameter(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for p in &self.positions {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+    }
+
+    /// Checks the geometry: finite coordinates, indices in range, every triangle
+    /// counter-clockwise with an area above `1e-14` times the squared diameter. (Topology is
+    /// checked by the compiler.)
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if let Some(vertex) = self
+            .positions
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(MeshError::NonFinite { vertex });
+        }
+        let n = self.positions.len();
+        for (face, f) in self.faces.iter().enumerate() {
+            if let Some(&vertex) = f.iter().find(|&&v| v as usize >= n) {
+                return Err(MeshError::IndexOutOfRange {
+                    face,
+                    vertex,
+                    n_vertices: n,
+                });
+            }
+        }
+        let eps = 1e-14 * self.diameter().powi(2);
+        for (face, f) in self.faces.iter().enumerate() {
+            let area = self.signed_area(f);
+            if area.abs() <= eps {
+                return Err(MeshError::Degenerate { face, area });
+            }
+            if area < 0.0 {
+                return Err(MeshError::Clockwise { face, area });
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that `target` can be morphed with `self`: same counts, same triangles, both
+    /// geometrically valid.
+    pub fn validate_pair(&self, target: &PlanarMesh) -> Result<(), MeshError> {
+        for (what, s, t) in [
+            ("vertex count", self.positions.len(), target.positions.len()),
+            ("face count", self.faces.len(), target.faces.len()),
+        ] {
+            if s != t {
+                return Err(MeshError::CountMismatch {
+                    what,
+                    source_count: s,
+                    target_count: t,
+                });
+            }
+        }
+        if let Some(face) = (0..self.faces.len()).find(|&i| self.faces[i] != target.faces[i]) {
+            return Err(MeshError::FaceMismatch {
+                face,
+                source_face: self.faces[face],
+                target_face: target.faces[face],
+            });
+        }
+        self.validate()?;
+        target.validate()
+    }
+}

@@ -1,0 +1,55 @@
+//! Errors of the VM.
+
+/// Why the VM could not produce a result. Nothing is written to the caller's buffers when an
+/// error is returned, and the VM's warm-start state is restored to what it was before the call.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum VmError {
+    /// Newton's method did not reach the tolerance.
+    #[error(
+        "Newton did not converge: gradient norm {gradient_norm:e} after {iterations} iterations"
+    )]
+    NotConverged {
+        /// Iterations performed.
+        iterations: u32,
+        /// Gradient norm at the last iterate.
+        gradient_norm: f64,
+    },
+    /// The gradient became NaN or infinite.
+    #[error("the gradient became non-finite at Newton iteration {iteration}")]
+    NonFinite {
+        /// The iteration.
+        iteration: u32,
+    },
+    /// The Hessian was not numerically positive definite.
+    #[error("the Hessian is not positive definite (pivot {pivot} of the factorisation)")]
+    NotPositiveDefinite {
+        /// Index of the failing pivot in the factorisation's order.
+        pivot: usize,
+    },
+    /// The symbolic factorisation failed (out of memory).
+    #[error("symbolic Cholesky factorisation failed: {0}")]
+    Symbolic(String),
+    /// A caller's array has the wrong length.
+    #[error("{what}: expected length {expected}, got {got}")]
+    Length {
+        /// Which array.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// An interpolated squared edge length is not a positive finite number.
+    #[error("edge slot {slot} (vertices {a} and {b}) has squared length {value}, not positive and finite")]
+    BadMetric {
+        /// The edge slot.
+        slot: usize,
+        /// One end.
+        a: u32,
+        /// Other end.
+        b: u32,
+        /// The value.
+        value: f64,
+    },
+}

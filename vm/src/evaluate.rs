@@ -1,0 +1,99 @@
+//! The iteration-stream executor: one pass computes every edge length, every half-angle
+//! tangent, the gradient and the Hessian's CSC values, with no mesh structure at hand.
+
+use bdmorph_isa::{operand, Op, Program};
+
+use crate::kernel::half_angle_and_cot;
+
+const EDGE_LEN_II: u16 = Op::EdgeLenIi as u16;
+const EDGE_LEN_IB: u16 = Op::EdgeLenIb as u16;
+const EDGE_LEN_BB: u16 = Op::EdgeLenBb as u16;
+const HALF_TAN: u16 = Op::HalfTan as u16;
+const HALF_TAN_COT: u16 = Op::HalfTanCot as u16;
+const VERTEX_INFO: u16 = Op::VertexInfo as u16;
+
+/// Buffers the iteration stream writes; all sized once from the program.
+pub(crate) struct Registers<'a> {
+    pub l0: &'a [f64],
+    pub scale: &'a [f64],
+    pub len: &'a mut [f64],
+    pub temps: &'a mut [[f64; 2]],
+    pub grad: &'a mut [f64],
+    pub hvals: &'a mut [f64],
+}
+
+/// Runs the iteration stream of a verified program.
+///
+/// Operand indices are bounds-checked by ordinary slice indexing: a verified program never
+/// fails them, and the checks were not worth removing yet (see BENCHMARKS.md).
+pub(crate) fn run(program: &Program, r: Registers<'_>) {
+    let code = program.iteration();
+    let col_ptr = &program.hessian().col_ptr;
+    let Registers {
+        l0,
+        scale,
+        len,
+        temps,
+        grad,
+        hvals,
+    } = r;
+    let (mut pc, mut li, mut ti, mut k) = (0usize, 0usize, 0usize, 0usize);
+    let unknown = |k: usize, zz: u32| (k as i64 + operand::unzigzag(zz)) as usize;
+    while pc < code.len() {
+        let op = code[pc];
+        pc += 1;
+        match op {
+            EDGE_LEN_II => {
+                let a = unknown(k, operand::read(code, &mut pc));
+                let b = unknown(k, operand::read(code, &mut pc));
+                len[li] = l0[li] * scale[a] * scale[b];
+                li += 1;
+            }
+            EDGE_LEN_IB => {
+                let a = unknown(k, operand::read(code, &mut pc));
+                len[li] = l0[li] * scale[a];
+                li += 1;
+            }
+            EDGE_LEN_BB => {
+                len[li] = l0[li];
+                li += 1;
+            }
+            HALF_TAN | HALF_TAN_COT => {
+                let a = len[li - operand::read(code, &mut pc) as usize];
+                let b = len[li - operand::read(code, &mut pc) as usize];
+                let c = len[li - operand::read(code, &mut pc) as usize];
+                let t = half_angle_and_cot(a, b, c, op == HALF_TAN);
+                debug_assert!(t[0].is_finite() && t[1].is_finite(), "T{ti} = {t:?}");
+                temps[ti] = t;
+                ti += 1;
+            }
+            VERTEX_INFO => {
+                let n = operand::read(code, &mut pc) as usize;
+                let m = operand::read(code, &mut pc) as usize;
+                let mut angle = 0.0;
+                for _ in 0..n {
+                    angle += temps[ti - operand::read(code, &mut pc) as usize][0];
+                }
+                grad[k] = std::f64::consts::PI - angle;
+                let col = col_ptr[k] as usize;
+                let mut diag = 0.0;
+                for j in 0..n {
+                    let a = temps[ti - operand::read(code, &mut pc) as usize][1];
+                    let b = temps[ti - operand::read(code, &mut pc) as usize][1];
+                    let w = 0.25 * (a + b);
+                    diag += w;
+                    if j < m {
+                        hvals[col + 1 + j] = -w;
+                    }
+                }
+                debug_assert!(diag.is_finite() && grad[k].is_finite(), "unknown {k}");
+                hvals[col] = diag;
+                k += 1;
+            }
+            _ => unreachable!(
+                "verified program has an invalid opcode {op} at word {}",
+                pc - 1
+            ),
+        }
+    }
+}

@@ -1,0 +1,274 @@
+//! The BDMORPH virtual machine: executes a compiled [`Program`] with no mesh structure.
+//!
+//! A [`Vm`] owns the program, the symbolic Cholesky factorisation of its Hessian pattern
+//! (computed once, in [`Vm::new`]) and every buffer a frame needs, so that in steady state a
+//! Newton iteration and a whole frame allocate nothing:
+//!
+//! 1. [`Vm::set_metric_lerp`] (or [`Vm::set_metric`]) sets the interpolated metric `l0` of the
+//!    frame from squared edge lengths computed once per keyframe by [`Vm::squared_lengths`];
+//! 2. [`Vm::newton`] finds the log scale factors `u` that flatten it (CETM), warm-started from
+//!    the previous frame's `u`: each iteration runs the iteration stream into the gradient and
+//!    straight into the CSC values, factors numerically (faer's supernodal/simplicial LLT into
+//!    preallocated `L` values and workspace) and solves in place;
+//! 3. [`Vm::embed`] lays the flat metric out, given the rigid motion (anchor position and
+//!    direction of the anchor edge).
+//!
+//! ```
+//! use bdmorph_vm::{NewtonOptions, Vm};
+//! // A hexagon fan whose centre is pushed off-centre: the target metric is flat, so Newton
+//! // recovers u = 0 at t = 1, and the layout reproduces the target's shape.
+//! let mut a = vec![[0.0, 0.0]];
+//! let mut b = vec![[0.2, 0.1]];
+//! for i in 0..6 {
+//!     let t = i as f64 * std::f64::consts::PI / 3.0;
+//!     a.push([t.cos(), t.sin()]);
+//!     b.push([t.cos(), t.sin()]);
+//! }
+//! let faces: Vec<[u32; 3]> = (0..6).map(|i| [0, 1 + i, 1 + (i + 1) % 6]).collect();
+//! let program = bdmorph_compiler::compile(&a, &faces)?;
+//! let mut vm = Vm::new(program)?;
+//! let (la, lb) = (vm.squared_lengths(&a)?, vm.squared_lengths(&b)?);
+//! vm.set_metric_lerp(&la, &lb, 0.5)?;
+//! let report = vm.newton(&NewtonOptions::default())?;
+//! assert!(report.gradient_norm < 1e-10);
+//! let mut out = vec![[0.0; 2]; a.len()];
+//! vm.embed([0.1, 0.05], [1.0, 0.0], &mut out)?;
+//! assert_eq!(vm.count_flipped(&out), 0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![warn(missing_docs)]
+
+mod embed;
+mod error;
+mod evaluate;
+pub mod kernel;
+mod newton;
+
+pub use bdmorph_isa::Program;
+pub use error::VmError;
+pub use newton::{NewtonOptions, NewtonReport};
+
+use faer::dyn_stack::MemBuffer;
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
+use faer::sparse::SymbolicSparseColMat;
+
+/// Executes one compiled program; owns every buffer it needs (see the crate documentation).
+pub struct Vm {
+    program: Program,
+    pattern: SymbolicSparseColMat<u32>,
+    symbolic: SymbolicCholesky<u32>,
+    factor: Vec<f64>,
+    workspace: MemBuffer,
+    l0: Vec<f64>,
+    len: Vec<f64>,
+    scale: Vec<f64>,
+    temps: Vec<[f64; 2]>,
+    u: Vec<f64>,
+    u_saved: Vec<f64>,
+    u_base: Vec<f64>,
+    grad: Vec<f64>,
+    hvals: Vec<f64>,
+    step: Vec<f64>,
+    dirs: Vec<[f64; 2]>,
+    metric_set: bool,
+}
+
+impl std::fmt::Debug for Vm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Vm")
+            .field("unknowns", &self.u.len())
+            .field("edges", &self.l0.len())
+            .field("factor_nnz", &self.factor.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Vm {
+    /// Prepares a VM for `program`: allocates every buffer and computes the symbolic Cholesky
+    /// factorisation of the Hessian pattern (AMD ordering) once.
+    pub fn new(program: Program) -> Result<Vm, VmError> {
+        let n = program.n_unknowns();
+        let h = program.hessian();
+        let pattern = SymbolicSparseColMat::<u32>::new_checked(
+            n,
+            n,
+            h.col_ptr.clone(),
+            None,
+            h.row_idx.clone(),
+        );
+        let (symbolic, workspace) = newton::analyse(&pattern)?;
+        let factor = vec![0.0; symbolic.len_val()];
+        Ok(Vm {
+            pattern,
+            symbolic,
+            factor,
+            workspace,
+            l0: vec![0.0; program.n_edges()],
+            len: vec![0.0; program.n_edges()],
+            scale: vec![1.0; n],
+            temps: vec![[0.0; 2]; program.n_temps()],
+            u: vec![0.0; n],
+            u_saved: vec![0.0; n],
+            u_base: vec![0.0; n],
+            grad: vec![0.0; n],
+            hvals: vec![0.0; h.nnz()],
+            step: vec![0.0; n],
+            dirs: vec![[0.0; 2]; program.n_edges()],
+            metric_set: false,
+            program,
+        })
+    }
+
+    /// The program this VM runs.
+    pub fn program(&self) -> &Program {
+        &self.program
+    }
+
+    /// Squared length of every edge slot in a keyframe (one position per vertex), from the
+    /// init stream. Computed once per keyframe; allocates its result.
+    pub fn squared_lengths(&self, positions: &[[f64; 2]]) -> Result<Vec<f64>, VmError> {
+        self.check_len("positions", self.program.n_vertices(), positions.len())?;
+        Ok(self
+            .program
+            .edges()
+            .iter()
+            .map(|&[a, b]| {
+                let (p, q) = (positions[a as usize], positions[b as usize]);
+                (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)
+            })
+            .collect())
+    }
+
+    /// Sets the frame's metric from squared edge lengths (one per edge slot).
+    pub fn set_metric(&mut self, squared: &[f64]) -> Result<(), VmError> {
+        self.check_len("squared lengths", self.l0.len(), squared.len())?;
+        self.fill_metric(|slot| squared[slot])
+    }
+
+    /// Sets the frame's metric to `l0^2 = (1 - t) a + t b`, from the squared lengths of two
+    /// keyframes. Allocates nothing.
+    pub fn set_metric_lerp(&mut self, a: &[f64], b: &[f64], t: f64) -> Result<(), VmError> {
+        self.check_len("squared lengths", self.l0.len(), a.len())?;
+        self.check_len("squared lengths", self.l0.len(), b.len())?;
+        self.fill_metric(|slot| (1.0 - t) * a[slot] + t * b[slot])
+    }
+
+    fn fill_metric(&mut self, sq: impl Fn(usize) -> f64) -> Result<(), VmError> {
+        for slot in 0..self.l0.len() {
+            let v = sq(slot);
+            if !(v > 0.0 && v.is_finite()) {
+                self.metric_set = false;
+                let [a, b] = self.program.edges()[slot];
+                return Err(VmError::BadMetric {
+                    slot,
+                    a,
+                    b,
+                    value: v,
+                });
+            }
+            self.l0[slot] = v.sqrt();
+        }
+        // Slots outside the iteration stream join boundary vertices: their length is l0.
+        let n_it = self.program.n_iter_edges();
+        self.len[n_it..].copy_from_slice(&self.l0[n_it..]);
+        self.metric_set = true;
+        Ok(())
+    }
+
+    /// Runs the iteration stream once at the current `u`: fills the edge lengths, the gradient
+    /// and the Hessian values. Allocates nothing.
+    pub fn evaluate(&mut self) {
+        for (s, &u) in self.scale.iter_mut().zip(&self.u) {
+            *s = (0.5 * u).exp();
+        }
+        evaluate::run(
+            &self.program,
+            evaluate::Registers {
+                l0: &self.l0,
+                scale: &self.scale,
+                len: &mut self.len,
+                temps: &mut self.temps,
+                grad: &mut self.grad,
+                hvals: &mut self.hvals,
+            },
+        );
+    }
+
+    /// Log scale factors, one per unknown (interior vertex, see [`Program::unknown_vertex`]).
+    pub fn u(&self) -> &[f64] {
+        &self.u
+    }
+
+    /// Sets every log scale factor to 0 (a cold start for the next Newton solve).
+    pub fn reset_u(&mut self) {
+        self.u.fill(0.0);
+    }
+
+    /// Sets the log scale factors (the next Newton solve starts from them).
+    pub fn set_u(&mut self, u: &[f64]) -> Result<(), VmError> {
+        self.check_len("u", self.u.len(), u.len())?;
+        self.u.copy_from_slice(u);
+        Ok(())
+    }
+
+    /// The gradient from the last [`Vm::evaluate`] (or Newton iteration).
+    pub fn gradient(&self) -> &[f64] {
+        &self.grad
+    }
+
+    /// The Hessian's CSC values (lower triangle, in [`Program::hessian`]'s pattern) from the
+    /// last evaluation.
+    pub fn hessian_values(&self) -> &[f64] {
+        &self.hvals
+    }
+
+    /// Edge lengths per slot from the last evaluation (`l0 * exp((u_i + u_j) / 2)`).
+    pub fn lengths(&self) -> &[f64] {
+        &self.len
+    }
+
+    /// Number of stored values of the Cholesky factor.
+    pub fn factor_nnz(&self) -> usize {
+        self.factor.len()
+    }
+
+    /// Lays the current metric out in the plane: the anchor vertex at `anchor`, the anchor
+    /// edge along `direction` (normalised here), every other vertex from the propagated edge
+    /// directions. `out` receives one position per vertex. Call after [`Vm::newton`].
+    pub fn embed(
+        &mut self,
+        anchor: [f64; 2],
+        direction: [f64; 2],
+        out: &mut [[f64; 2]],
+    ) -> Result<(), VmError> {
+        self.check_len("output positions", self.program.n_vertices(), out.len())?;
+        let norm = direction[0].hypot(direction[1]);
+        let dir = if norm > 0.0 && norm.is_finite() {
+            [direction[0] / norm, direction[1] / norm]
+        } else {
+            [1.0, 0.0]
+        };
+        embed::run(&self.program, &self.len, &mut self.dirs, anchor, dir, out);
+        Ok(())
+    }
+
+    /// Number of triangles with non-positive signed area in `positions`.
+    pub fn count_flipped(&self, positions: &[[f64; 2]]) -> usize {
+        if positions.len() != self.program.n_vertices() {
+            return self.program.n_faces();
+        }
+        embed::count_flipped(&self.program, positions)
+    }
+
+    fn check_len(&self, what: &'static str, expected: usize, got: usize) -> Result<(), VmError> {
+        if expected == got {
+            Ok(())
+        } else {
+            Err(VmError::Length {
+                what,
+                expected,
+                got,
+            })
+        }
+    }
+}

@@ -1,0 +1,267 @@
+//! Behaviour of whole morphs: endpoints, symmetry, no flips, real keyframes, bad input.
+
+mod common;
+
+use bdmorph::{generate, MeshError, Morph, MorphError, MorphOptions, PlanarMesh};
+use common::{align, max_distance};
+
+fn pairs() -> Vec<(&'static str, PlanarMesh, PlanarMesh)> {
+    let d = generate::disk(14, 0.25);
+    let g = generate::grid(30, 20, 0.2);
+    vec![
+        ("twist", d.clone(), generate::twist(&d, 1.0)),
+        ("bend", d.clone(), generate::bend(&d, 0.8)),
+        ("stretch", d.clone(), generate::stretch(&d, 2.5)),
+        (
+            "grid-bend-twist",
+            g.clone(),
+            generate::twist(&generate::bend(&g, 0.6), 1.0),
+        ),
+        (
+            "fan",
+            generate::fan(9, 0.2),
+            generate::twist(&generate::fan(9, 0.2), 0.4),
+        ),
+    ]
+}
+
+#[test]
+fn endpoints_are_reproduced() {
+    for (name, a, b) in pairs() {
+        let mut m = Morph::new(&a, &b, MorphOptions::default()).expect(name);
+        // Warm: walk to t = 1 and back to t = 0, so the endpoints are reached warm-started.
+        for t in [0.0, 0.5, 1.0, 0.5, 0.0] {
+            let f = m.frame(t).expect(name);
+            let reference = if t == 0.0 { &a } else { &b };
+            if t == 0.0 || t == 1.0 {
+                let err = max_distance(f.positions, &reference.positions);
+                assert!(
+                    err < 1e-9 * reference.diameter(),
+                    "{name}: t = {t} off by {err}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn endpoints_are_reproduced_at_100k_vertices() {
+    let a = generate::disk(generate::rings_for(100_000), 0.25);
+    let b = generate::twist(&generate::bend(&a, 0.6), 1.2);
+    assert!(a.positions.len() > 99_000);
+    let mut m = Morph::new(&a, &b, MorphOptions::default()).expect("setup");
+    for (t, reference) in [(0.0, &a), (1.0, &b)] {
+        let f = m.frame(t).expect("frame");
+        assert_eq!(f.stats.flipped_triangles, 0);
+        let err = max_distance(f.positions, &reference.positions);
+        assert!(
+            err < 1e-9 * reference.diameter(),
+            "t = {t}: layout error {err} (diameter {})",
+            reference.diameter()
+        );
+    }
+}
+
+#[test]
+fn reversing_the_pair_reverses_time_up_to_a_rigid_motion() {
+    for (name, a, b) in pairs() {
+        let mut ab = Morph::new(&a, &b, MorphOptions::default()).expect(name);
+        let mut ba = Morph::new(&b, &a, MorphOptions::default()).expect(name);
+        for t in [0.25, 0.5, 0.8] {
+            let p = ab.frame(t).expect(name).positions.to_vec();
+            let q = ba.frame(1.0 - t).expect(name).positions.to_vec();
+            let [f0, f1, _] = a.faces[0];
+            let q = align(&p, &q, f0 as usize, f1 as usize);
+            let err = max_distance(&p, &q);
+            assert!(err < 1e-9 * a.diameter(), "{name}: t = {t}: {err}");
+        }
+    }
+}
+
+#[test]
+fn smooth_deformations_never_flip_and_converge_tightly() {
+    for (name, a, b) in pairs() {
+        let mut m = Morph::new(&a, &b, MorphOptions::default()).expect(name);
+        for i in 0..=20 {
+            let t = f64::from(i) / 20.0;
+            let f = m.frame(t).expect(name);
+            assert_eq!(f.stats.flipped_triangles, 0, "{name}: t = {t}");
+            assert!(f.stats.gradient_norm < 1e-10, "{name}: t = {t}");
+            assert!(
+                f.stats.newton_iterations <= 8,
+                "{name}: t = {t}: {:?}",
+                f.stats
+            );
+        }
+    }
+}
+
+#[test]
+fn cold_and_warm_starts_agree() {
+    let (_, a, b) = pairs().remove(0);
+    let mut warm = Morph::new(&a, &b, MorphOptions::default()).expect("warm");
+    let mut cold =
+        Morph::new(&a, &b, MorphOptions::default().with_warm_start(false)).expect("cold");
+    for t in [0.3, 0.6, 0.9] {
+        let w = warm.frame(t).expect("warm").positions.to_vec();
+        let c = cold.frame(t).expect("cold");
+        assert!(max_distance(&w, c.positions) < 1e-9 * a.diameter());
+    }
+}
+
+#[test]
+fn distortion_of_the_path_is_bounded_by_the_target() {
+    // The paper's theorem on a generated pair: the conformal distortion (ratio of singular
+    // values of each triangle's affine map from the source) never exceeds the target's.
+    let a = generate::disk(10, 0.2);
+    let b = generate::stretch(&generate::twist(&a, 1.0), 2.0);
+    let max_distortion = |p: &[[f64; 2]]| {
+        a.faces
+            .iter()
+            .map(|f| {
+                let [x0, x1, x2] = f.map(|v| a.positions[v as usize]);
+                let [y0, y1, y2] = f.map(|v| p[v as usize]);
+                let dm = [
+                    [x1[0] - x0[0], x2[0] - x0[0]],
+                    [x1[1] - x0[1], x2[1] - x0[1]],
+                ];
+                let ds = [
+                    [y1[0] - y0[0], y2[0] - y0[0]],
+                    [y1[1] - y0[1], y2[1] - y0[1]],
+                ];
+                let det = dm[0][0] * dm[1][1] - dm[0][1] * dm[1][0];
+                let inv = [
+                    [dm[1][1] / det, -dm[0][1] / det],
+                    [-dm[1][0] / det, dm[0][0] / det],
+                ];
+                let j = |r: usize, c: usize| ds[r][0] * inv[0][c] + ds[r][1] * inv[1][c];
+                let (a11, a12, a21, a22) = (j(0, 0), j(0, 1), j(1, 0), j(1, 1));
+                let fro2 = a11 * a11 + a12 * a12 + a21 * a21 + a22 * a22;
+                let d = (a11 * a22 - a12 * a21).abs();
+                let disc = (fro2 * fro2 - 4.0 * d * d).max(0.0).sqrt();
+                ((fro2 + disc) / (fro2 - disc).max(1e-300)).sqrt()
+            })
+            .fold(1.0, f64::max)
+    };
+    let bound = max_distortion(&b.positions);
+    let mut m = Morph::new(&a, &b, MorphOptions::default()).expect("setup");
+    for i in 0..=10 {
+        let t = f64::from(i) / 10.0;
+        let d = max_distortion(m.frame(t).expect("frame").positions);
+        assert!(d <= bound * (1.0 + 1e-9), "t = {t}: {d} > {bound}");
+    }
+}
+
+#[test]
+fn man_keyframes_morph_without_flips() {
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    let man = common::read(&dir, "morph2d/isadorable-man/man.obj");
+    for pose in ["man2.obj", "man3.obj"] {
+        let target = common::read(&dir, &format!("morph2d/isadorable-man/{pose}"));
+        let mut m = Morph::new(&man, &target, MorphOptions::default()).expect(pose);
+        for i in 0..=20 {
+            let t = f64::from(i) / 20.0;
+            let f = m.frame(t).unwrap_or_else(|e| panic!("{pose}: {e}"));
+            assert_eq!(f.stats.flipped_triangles, 0, "{pose}: t = {t}");
+            let reference = match i {
+                0 => Some(&man),
+                20 => Some(&target),
+                _ => None,
+            };
+            if let Some(r) = reference {
+                let err = max_distance(f.positions, &r.positions);
+                assert!(err < 1e-9 * r.diameter(), "{pose}: t = {t}: {err}");
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_input_is_refused_with_its_cause() {
+    let a = generate::disk(3, 0.0);
+    let mut b = generate::twist(&a, 0.3);
+    // Different triangles.
+    b.faces[4] = [b.faces[4][1], b.faces[4][2], b.faces[4][0]];
+    assert!(matches!(
+        Morph::new(&a, &b, MorphOptions::default()),
+        Err(MorphError::Mesh(MeshError::FaceMismatch { face: 4, .. }))
+    ));
+    // Different sizes.
+    let small = generate::disk(2, 0.0);
+    assert!(matches!(
+        Morph::new(&a, &small, MorphOptions::default()),
+        Err(MorphError::Mesh(MeshError::CountMismatch { .. }))
+    ));
+    // A flipped target triangle.
+    let mut c = a.clone();
+    c.positions[0] = [5.0, 5.0];
+    assert!(matches!(
+        Morph::new(&a, &c, MorphOptions::default()),
+        Err(MorphError::Mesh(MeshError::Clockwise { .. }))
+    ));
+    // Non-finite coordinates.
+    let mut d = a.clone();
+    d.positions[3][1] = f64::NAN;
+    assert!(matches!(
+        Morph::new(&a, &d, MorphOptions::default()),
+        Err(MorphError::Mesh(MeshError::NonFinite { vertex: 3 }))
+    ));
+    // Degenerate triangle.
+    let mut e = a.clone();
+    e.positions[e.faces[0][2] as usize] = e.positions[e.faces[0][1] as usize];
+    assert!(matches!(
+        Morph::new(&e, &e, MorphOptions::default()),
+        Err(MorphError::Mesh(MeshError::Degenerate { face: 0, .. }))
+    ));
+    // A mesh with a hole: a ring.
+    let mut pos = Vec::new();
+    for i in 0..8 {
+        let ang = f64::from(i) * std::f64::consts::TAU / 8.0;
+        pos.push([2.0 * ang.cos(), 2.0 * ang.sin()]);
+        pos.push([ang.cos(), ang.sin()]);
+    }
+    let mut faces = Vec::new();
+    for i in 0..8u32 {
+        let (o0, i0, o1, i1) = (2 * i, 2 * i + 1, 2 * ((i + 1) % 8), 2 * ((i + 1) % 8) + 1);
+        faces.push([o0, o1, i1]);
+        faces.push([o0, i1, i0]);
+    }
+    let ring = PlanarMesh {
+        positions: pos,
+        faces,
+    };
+    let err = Morph::new(&ring, &ring, MorphOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("holes are not supported"), "{err}");
+    // t outside [0, 1].
+    let mut m = Morph::new(&a, &generate::twist(&a, 0.3), MorphOptions::default()).expect("ok");
+    assert!(matches!(
+        m.frame(1.5),
+        Err(MorphError::TimeOutOfRange { .. })
+    ));
+    assert!(matches!(
+        m.frame(f64::NAN),
+        Err(MorphError::TimeOutOfRange { .. })
+    ));
+}
+
+#[test]
+fn non_convergence_is_a_typed_error_and_does_not_spoil_the_next_frame() {
+    let a = generate::disk(8, 0.2);
+    let b = generate::twist(&a, 1.0);
+    let mut m = Morph::new(&a, &b, MorphOptions::default().with_max_iterations(1)).expect("ok");
+    match m.frame(0.5) {
+        Err(MorphError::NotConverged {
+            iterations,
+            gradient_norm,
+            ..
+        }) => {
+            assert_eq!(iterations, 1);
+            assert!(gradient_norm > 1e-10);
+        }
+        other => panic!("expected NotConverged, got {other:?}"),
+    }
+    // The failed frame restored u = 0, so t = 0 still needs no iteration.
+    assert_eq!(m.frame(0.0).expect("t = 0").stats.newton_iterations, 0);
+}

@@ -1,0 +1,79 @@
+//! A Newton iteration and a whole frame allocate nothing on the heap in steady state.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use bdmorph::{generate, Morph, MorphOptions, NewtonOptions, Vm};
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator; the counter is a plain thread-local Cell.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+#[test]
+fn newton_iterations_and_frames_do_not_allocate() {
+    let a = generate::disk(30, 0.25);
+    let b = generate::twist(&generate::bend(&a, 0.5), 1.0);
+
+    // The VM alone: Newton with several iterations.
+    let program = bdmorph::compile(&a.positions, &a.faces).expect("compiles");
+    let mut vm = Vm::new(program).expect("vm");
+    let (sa, sb) = (
+        vm.squared_lengths(&a.positions).expect("a"),
+        vm.squared_lengths(&b.positions).expect("b"),
+    );
+    let mut out = vec![[0.0; 2]; a.positions.len()];
+    let before = allocations();
+    vm.set_metric_lerp(&sa, &sb, 0.7).expect("metric");
+    let report = vm.newton(&NewtonOptions::default()).expect("converges");
+    vm.embed([0.0, 0.0], [1.0, 0.0], &mut out).expect("embed");
+    let during = allocations() - before;
+    assert!(report.iterations >= 2, "{report:?}");
+    assert_eq!(
+        during, 0,
+        "{during} allocations in {} Newton iterations",
+        report.iterations
+    );
+
+    // Whole frames through the library API.
+    let mut morph = Morph::new(&a, &b, MorphOptions::default()).expect("morph");
+    morph.frame_into(0.1, &mut out).expect("warm-up");
+    let before = allocations();
+    let mut iterations = 0;
+    for i in 2..=10 {
+        iterations += morph
+            .frame_into(f64::from(i) / 10.0, &mut out)
+            .expect("frame")
+            .newton_iterations;
+        morph.frame(1.0 - f64::from(i) / 20.0).expect("frame");
+    }
+    let during = allocations() - before;
+    assert!(iterations > 0);
+    assert_eq!(during, 0, "{during} allocations over 18 frames");
+}

@@ -265,3 +265,23 @@ fn non_convergence_is_a_typed_error_and_does_not_spoil_the_next_frame() {
     // The failed frame restored u = 0, so t = 0 still needs no iteration.
     assert_eq!(m.frame(0.0).expect("t = 0").stats.newton_iterations, 0);
 }
+
+#[test]
+fn large_distortion_leaf_pair_morphs_without_flips() {
+    // A unit square mapped to a leaf: edge-length ratios from 1.6 to 87.
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    let a = common::read(&dir, "morph2d/ustc-hw8-leaf/0.000000.obj");
+    let b = common::read(&dir, "morph2d/ustc-hw8-leaf/1.000000.obj");
+    let mut m = Morph::new(&a, &b, MorphOptions::default()).expect("setup");
+    for i in 0..=10 {
+        let t = f64::from(i) / 10.0;
+        let f = m.frame(t).unwrap_or_else(|e| panic!("t = {t}: {e}"));
+        assert_eq!(f.stats.flipped_triangles, 0, "t = {t}");
+        if i == 10 {
+            let err = max_distance(f.positions, &b.positions);
+            assert!(err < 1e-9 * b.diameter(), "t = 1: {err}");
+        }
+    }
+}

@@ -43,3 +43,8 @@ pub use bdmorph_isa::{disassemble, Program};
 pub use bdmorph_vm::{NewtonOptions, Vm, VmError};
 pub use mesh::{MeshError, PlanarMesh};
 pub use morph::{Frame, FrameStats, Morph, MorphError, MorphOptions};
+
+/// The README's examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

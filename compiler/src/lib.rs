@@ -1,5 +1,5 @@
 //! The BDMORPH compiler: walks a triangle mesh's connectivity once and emits a
-//! [`Program`](bdmorph_isa::Program) of command streams that the VM runs every Newton
+//! [`Program`] of command streams that the VM runs every Newton
 //! iteration and every frame without any mesh structure.
 //!
 //! The compiler is pure and deterministic: the same faces and anchor give the same bytes.

@@ -14,7 +14,7 @@
 //! * the **embed stream** ([`EmbedRoot`] and [`EmbedStep`]s): lays the flat metric out in the
 //!   plane by propagating edge directions across triangles.
 //!
-//! A `Program` can only be built through [`Program::from_parts`], which runs the [`verify`]
+//! A `Program` can only be built through [`Program::from_parts`], which runs the verifier
 //! pass: every operand index, every CSC slot and every embed dependency is checked once, so the
 //! executor can trust the program.
 //!

@@ -120,8 +120,8 @@ pub fn gradient_and_hessian(
             }
         }
     }
-    // Duplicates are summed; the pattern is valid by construction.
+    // Duplicates are summed; every index is an unknown below n by construction.
     let h = SparseColMat::try_new_from_triplets(n, n, &triplets)
-        .unwrap_or_else(|_| SparseColMat::try_new_from_triplets(n, n, &[]).expect("empty matrix"));
+        .expect("triplet indices are unknowns, in range by construction");
     (grad, h)
 }

@@ -27,6 +27,14 @@ pub enum CompileError {
         /// Number of vertices.
         n_vertices: usize,
     },
+    /// The anchor asked for does not exist.
+    #[error("anchor {anchor} does not exist: the mesh has {n_vertices} vertices")]
+    AnchorOutOfRange {
+        /// The anchor.
+        anchor: VertexId,
+        /// Number of vertices.
+        n_vertices: usize,
+    },
     /// A face uses one vertex twice.
     #[error("{face} uses the same vertex twice")]
     RepeatedVertex {

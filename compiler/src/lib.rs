@@ -31,7 +31,7 @@ mod topology;
 pub use error::CompileError;
 pub use ids::{FaceId, VertexId};
 
-use bdmorph_isa::Program;
+use bdmorph_isa::{Program, ProgramParts};
 use topology::Topology;
 
 /// Compiles a planar triangle mesh. `positions` (one per vertex) only choose the anchor of
@@ -58,11 +58,7 @@ pub fn compile_with_anchor(
 ) -> Result<Program, CompileError> {
     let topo = Topology::new(n_vertices, faces)?;
     if anchor.0 as usize >= n_vertices {
-        return Err(CompileError::VertexOutOfRange {
-            face: FaceId(u32::MAX),
-            vertex: anchor.0,
-            n_vertices,
-        });
+        return Err(CompileError::AnchorOutOfRange { anchor, n_vertices });
     }
     compile_topology(&topo, anchor.0)
 }
@@ -72,18 +68,18 @@ fn compile_topology(topo: &Topology, anchor: u32) -> Result<Program, CompileErro
     let it = iteration::emit(topo, &order);
     let root_he = topo.first_out[anchor as usize];
     let (root, steps) = embed::emit(topo, &it.slot_of_edge, &it.edges, root_he);
-    Ok(Program::from_parts(
-        topo.n_vertices() as u32,
-        topo.faces.len() as u32,
-        it.edges,
-        it.unknown_vertex,
-        it.n_iter_edges,
-        it.n_temps,
-        it.code,
-        it.hessian,
-        root,
-        steps,
-    )?)
+    Ok(Program::from_parts(ProgramParts {
+        n_vertices: topo.n_vertices() as u32,
+        n_faces: topo.faces.len() as u32,
+        edges: it.edges,
+        unknown_vertex: it.unknown_vertex,
+        n_iter_edges: it.n_iter_edges,
+        n_temps: it.n_temps,
+        iteration: it.code,
+        hessian: it.hessian,
+        embed_root: root,
+        embed: steps,
+    })?)
 }
 
 /// The vertex nearest the centre of the bounding box of `positions` (0 when empty).
@@ -214,6 +210,20 @@ mod tests {
         let p = compile(&pos, &faces).expect("compiles");
         assert_eq!(p.n_unknowns(), 1);
         assert!(disassemble(&p).contains("vertex_info"));
+    }
+
+    #[test]
+    fn explicit_anchor_is_used_and_checked() {
+        let (pos, faces) = grid(4);
+        let p = compile_with_anchor(pos.len(), &faces, VertexId(5)).expect("compiles");
+        assert_eq!(p.embed_root().p0, 5);
+        assert_eq!(
+            compile_with_anchor(pos.len(), &faces, VertexId(16)),
+            Err(CompileError::AnchorOutOfRange {
+                anchor: VertexId(16),
+                n_vertices: 16
+            })
+        );
     }
 
     #[test]

@@ -35,8 +35,8 @@ mod program;
 mod verify;
 
 pub use disasm::disassemble;
-pub use program::{EmbedRoot, EmbedStep, HessianPattern, Program, ProgramStats};
-pub use verify::VerifyError;
+pub use program::{EmbedRoot, EmbedStep, HessianPattern, Program, ProgramParts, ProgramStats};
+pub use verify::{instructions, VerifyError};
 
 /// Opcodes of the iteration stream. Each instruction is one opcode word followed by its
 /// operands, each encoded with [`operand::push`]. Names say the operand kinds:

@@ -74,6 +74,32 @@ impl EmbedStep {
     pub const PLACE: u32 = 8;
 }
 
+/// The unverified parts of a program, as the compiler emits them or a loader reads them.
+/// [`Program::from_parts`] verifies them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProgramParts {
+    /// Number of mesh vertices.
+    pub n_vertices: u32,
+    /// Number of mesh triangles.
+    pub n_faces: u32,
+    /// The init stream: the two vertices of each edge slot.
+    pub edges: Vec<[u32; 2]>,
+    /// The mesh vertex of each unknown.
+    pub unknown_vertex: Vec<u32>,
+    /// Edge slots written by the iteration stream (the rest join boundary vertices).
+    pub n_iter_edges: u32,
+    /// Temporaries written by the iteration stream.
+    pub n_temps: u32,
+    /// The iteration stream.
+    pub iteration: Vec<u16>,
+    /// The Hessian's pattern.
+    pub hessian: HessianPattern,
+    /// Start of the layout.
+    pub embed_root: EmbedRoot,
+    /// The embed stream.
+    pub embed: Vec<EmbedStep>,
+}
+
 /// A compiled, verified BDMORPH program. See the crate documentation for its parts.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Program {
@@ -112,23 +138,19 @@ pub struct ProgramStats {
 
 impl Program {
     /// Assembles a program from its parts and verifies it (see [`VerifyError`]).
-    ///
-    /// `unknown_vertex[k]` is the mesh vertex of unknown `k`; `n_iter_edges` is the number of
-    /// edge slots written by the iteration stream (the remaining slots join two boundary
-    /// vertices, so their length is the interpolated one); `n_temps` the number of temporaries.
-    #[allow(clippy::too_many_arguments)]
-    pub fn from_parts(
-        n_vertices: u32,
-        n_faces: u32,
-        edges: Vec<[u32; 2]>,
-        unknown_vertex: Vec<u32>,
-        n_iter_edges: u32,
-        n_temps: u32,
-        iteration: Vec<u16>,
-        hessian: HessianPattern,
-        embed_root: EmbedRoot,
-        embed: Vec<EmbedStep>,
-    ) -> Result<Program, VerifyError> {
+    pub fn from_parts(parts: ProgramParts) -> Result<Program, VerifyError> {
+        let ProgramParts {
+            n_vertices,
+            n_faces,
+            edges,
+            unknown_vertex,
+            n_iter_edges,
+            n_temps,
+            iteration,
+            hessian,
+            embed_root,
+            embed,
+        } = parts;
         let program = Program {
             n_vertices,
             n_faces,
@@ -143,6 +165,22 @@ impl Program {
         };
         verify(&program)?;
         Ok(program)
+    }
+
+    /// A copy of the program's parts (for serialisation or inspection).
+    pub fn to_parts(&self) -> ProgramParts {
+        ProgramParts {
+            n_vertices: self.n_vertices,
+            n_faces: self.n_faces,
+            edges: self.edges.clone(),
+            unknown_vertex: self.unknown_vertex.clone(),
+            n_iter_edges: self.n_iter_edges,
+            n_temps: self.n_temps,
+            iteration: self.iteration.clone(),
+            hessian: self.hessian.clone(),
+            embed_root: self.embed_root,
+            embed: self.embed.clone(),
+        }
     }
 
     /// Number of mesh vertices (the length of a position array).

@@ -142,6 +142,22 @@ pub(crate) fn decode(code: &[u16], pc: &mut usize) -> Option<Instr> {
     })
 }
 
+/// The offset and opcode of every instruction of an iteration stream, or the offset where it
+/// cannot be decoded.
+pub fn instructions(code: &[u16]) -> Result<Vec<(usize, Op)>, VerifyError> {
+    let mut out = Vec::new();
+    let mut pc = 0;
+    while pc < code.len() {
+        let at = pc;
+        decode(code, &mut pc).ok_or(VerifyError::Decode { pc: at })?;
+        out.push((
+            at,
+            Op::from_word(code[at]).ok_or(VerifyError::Decode { pc: at })?,
+        ));
+    }
+    Ok(out)
+}
+
 fn check(ok: bool, err: VerifyError) -> Result<(), VerifyError> {
     if ok {
         Ok(())

@@ -27,6 +27,9 @@ pub enum VmError {
         /// Index of the failing pivot in the factorisation's order.
         pivot: usize,
     },
+    /// Newton was asked to run before a metric was set (or after setting one failed).
+    #[error("no metric: call set_metric or set_metric_lerp before newton")]
+    MetricNotSet,
     /// The symbolic factorisation failed (out of memory).
     #[error("symbolic Cholesky factorisation failed: {0}")]
     Symbolic(String),

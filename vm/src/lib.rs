@@ -272,3 +272,64 @@ impl Vm {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fan() -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+        let mut pos = vec![[0.1, 0.05]];
+        for i in 0..7 {
+            let a = f64::from(i) * std::f64::consts::TAU / 7.0;
+            pos.push([a.cos(), a.sin()]);
+        }
+        (pos, (0..7).map(|i| [0, 1 + i, 1 + (i + 1) % 7]).collect())
+    }
+
+    #[test]
+    fn newton_needs_a_metric_and_checks_lengths() {
+        let (pos, faces) = fan();
+        let mut vm = Vm::new(bdmorph_compiler::compile(&pos, &faces).expect("ok")).expect("vm");
+        assert_eq!(
+            vm.newton(&NewtonOptions::default()),
+            Err(VmError::MetricNotSet)
+        );
+        assert!(matches!(
+            vm.squared_lengths(&pos[..3]),
+            Err(VmError::Length {
+                expected: 8,
+                got: 3,
+                ..
+            })
+        ));
+        let mut bad = vm.squared_lengths(&pos).expect("ok");
+        bad[2] = -1.0;
+        assert!(matches!(
+            vm.set_metric(&bad),
+            Err(VmError::BadMetric { slot: 2, .. })
+        ));
+        assert_eq!(
+            vm.newton(&NewtonOptions::default()),
+            Err(VmError::MetricNotSet)
+        );
+    }
+
+    #[test]
+    fn flat_metric_needs_no_iteration_and_embeds_exactly() {
+        let (pos, faces) = fan();
+        let mut vm = Vm::new(bdmorph_compiler::compile(&pos, &faces).expect("ok")).expect("vm");
+        let sq = vm.squared_lengths(&pos).expect("ok");
+        vm.set_metric(&sq).expect("ok");
+        let report = vm.newton(&NewtonOptions::default()).expect("flat");
+        assert_eq!(report.iterations, 0);
+        let root = vm.program().embed_root();
+        let (p0, p1) = (pos[root.p0 as usize], pos[root.p1 as usize]);
+        let mut out = vec![[0.0; 2]; pos.len()];
+        vm.embed(p0, [p1[0] - p0[0], p1[1] - p0[1]], &mut out)
+            .expect("ok");
+        for (p, q) in out.iter().zip(&pos) {
+            assert!((p[0] - q[0]).abs() < 1e-14 && (p[1] - q[1]).abs() < 1e-14);
+        }
+        assert_eq!(vm.count_flipped(&out), 0);
+    }
+}

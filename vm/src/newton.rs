@@ -86,11 +86,7 @@ impl Vm {
     /// Allocates nothing.
     pub fn newton(&mut self, options: &NewtonOptions) -> Result<NewtonReport, VmError> {
         if !self.metric_set {
-            return Err(VmError::Length {
-                what: "metric (call set_metric first)",
-                expected: self.l0.len(),
-                got: 0,
-            });
+            return Err(VmError::MetricNotSet);
         }
         self.u_saved.copy_from_slice(&self.u);
         let result = self.newton_loop(options);

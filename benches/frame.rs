@@ -1,1 +1,296 @@
-fn main() {}
+//! Benchmarks of the compile-once, run-many pipeline over generated disks of about 1K, 10K
+//! and 100K vertices (source `disk(rings_for(n), 0.25)`, target `twist(bend(source, 0.6),
+//! 1.2)`).
+//!
+//! Groups (the parameter is the nominal vertex count):
+//!
+//! - `compile`: [`bdmorph::compile`] alone;
+//! - `setup`: [`Morph::new`] (checks, compile, symbolic Cholesky, keyframe lengths);
+//! - `iteration_stream`: one pass of the iteration stream (`vm`, [`Vm::evaluate`]) against the
+//!   direct uncompiled implementation (`direct`, [`reference::gradient_and_hessian`]) on the
+//!   same state: `t = 0.5` and the `u` that flattens it;
+//! - `factorization`: the numeric Cholesky factorisation and solve of one Newton step
+//!   ([`Vm::factor_and_solve`]) on that state;
+//! - `warm_frame`: one frame, alternating `t = 0.4` and `t = 0.5`, each warm-started from the
+//!   other ([`Morph::frame_into`]).
+//!
+//! Every case is built on first use, so a filter (`cargo bench --bench frame -- warm_frame`)
+//! only pays for what it runs. Program sizes and the Newton iterations of a warm frame are
+//! printed to stderr once per size. `cargo bench --bench frame -- --test` runs each benchmark
+//! once. See BENCHMARKS.md for results.
+
+use std::cell::OnceCell;
+use std::hint::black_box;
+use std::time::Duration;
+
+use bdmorph::reference::{self, Unknowns};
+use bdmorph::{generate, Morph, MorphOptions, NewtonOptions, PlanarMesh, Vm};
+use criterion::measurement::WallTime;
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, SamplingMode,
+};
+
+/// Nominal vertex counts.
+const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
+
+/// The source and target meshes of one size.
+struct Meshes {
+    source: PlanarMesh,
+    target: PlanarMesh,
+}
+
+impl Meshes {
+    fn new(n: usize) -> Meshes {
+        let source = generate::disk(generate::rings_for(n), 0.25);
+        let target = generate::twist(&generate::bend(&source, 0.6), 1.2);
+        Meshes { source, target }
+    }
+}
+
+/// A VM evaluated at `t = 0.5` and the `u` that flattens that metric, with the same state
+/// prepared for the direct implementation.
+struct Evaluated {
+    vm: Vm,
+    u_by_vertex: Vec<f64>,
+    unknowns: Unknowns,
+}
+
+impl Evaluated {
+    fn new(n: usize, m: &Meshes) -> Evaluated {
+        let program = bdmorph::compile(&m.source.positions, &m.source.faces).expect("compiles");
+        let mut vm = Vm::new(program).expect("vm");
+        let a = vm.squared_lengths(&m.source.positions).expect("lengths");
+        let b = vm.squared_lengths(&m.target.positions).expect("lengths");
+        vm.set_metric_lerp(&a, &b, 0.5).expect("metric");
+        let report = vm.newton(&NewtonOptions::default()).expect("converges");
+        let max_u = vm.u().iter().fold(0.0f64, |m, u| m.max(u.abs()));
+        assert!(max_u > 1e-3, "the benchmarked u is not trivial");
+        vm.evaluate();
+        let mut u_by_vertex = vec![0.0; m.source.positions.len()];
+        for (k, &v) in vm.program().unknown_vertex().iter().enumerate() {
+            u_by_vertex[v as usize] = vm.u()[k];
+        }
+        let unknowns = Unknowns::new(&m.source);
+        // Both sides of `iteration_stream` compute the same gradient.
+        let (g, _) =
+            reference::gradient_and_hessian(&m.source, &m.target, 0.5, &u_by_vertex, &unknowns);
+        for (k, &v) in vm.program().unknown_vertex().iter().enumerate() {
+            let r = g[unknowns.of_vertex[v as usize].expect("interior")];
+            assert!(
+                (vm.gradient()[k] - r).abs() < 1e-9,
+                "gradient mismatch at {v}"
+            );
+        }
+        eprintln!(
+            "[bdmorph n={n}] cold Newton solve at t=0.5: {} iterations, |g| = {:.1e}, \
+             max |u| = {max_u:.3}; hessian nnz {}, cholesky factor nnz {}",
+            report.iterations,
+            report.gradient_norm,
+            vm.program().hessian().nnz(),
+            vm.factor_nnz(),
+        );
+        Evaluated {
+            vm,
+            u_by_vertex,
+            unknowns,
+        }
+    }
+}
+
+/// Everything built for one size, each part on first use.
+struct Case {
+    n: usize,
+    meshes: OnceCell<Meshes>,
+    evaluated: Option<Evaluated>,
+}
+
+impl Case {
+    fn meshes(&self) -> &Meshes {
+        self.meshes.get_or_init(|| {
+            let m = Meshes::new(self.n);
+            let stats = bdmorph::compile(&m.source.positions, &m.source.faces)
+                .expect("compiles")
+                .stats();
+            eprintln!(
+                "[bdmorph n={}] {} vertices, {} faces, {} unknowns, {} edges; iteration stream \
+                 {} bytes ({:.1} bytes/face), whole program {} bytes ({:.1} bytes/face)",
+                self.n,
+                stats.vertices,
+                stats.faces,
+                stats.unknowns,
+                stats.edges,
+                stats.iteration_bytes,
+                stats.iteration_bytes_per_face,
+                stats.total_bytes,
+                stats.total_bytes as f64 / stats.faces as f64,
+            );
+            m
+        })
+    }
+
+    fn evaluated(&mut self) -> &mut Evaluated {
+        self.both().1
+    }
+
+    fn both(&mut self) -> (&Meshes, &mut Evaluated) {
+        if self.evaluated.is_none() {
+            let e = Evaluated::new(self.n, self.meshes());
+            self.evaluated = Some(e);
+        }
+        (
+            self.meshes.get().expect("built with the evaluation"),
+            self.evaluated.as_mut().expect("just built"),
+        )
+    }
+}
+
+/// Applies the measurement settings of a size: the 100K cases take few, long samples.
+fn configure(group: &mut BenchmarkGroup<'_, WallTime>, n: usize) {
+    if n >= 100_000 {
+        group
+            .sample_size(10)
+            .sampling_mode(SamplingMode::Flat)
+            .warm_up_time(Duration::from_secs(1))
+            .measurement_time(Duration::from_secs(4));
+    } else {
+        group
+            .sample_size(50)
+            .sampling_mode(SamplingMode::Auto)
+            .warm_up_time(Duration::from_secs(1))
+            .measurement_time(Duration::from_secs(3));
+    }
+}
+
+fn bench_compile(c: &mut Criterion, cases: &mut [Case]) {
+    let mut group = c.benchmark_group("compile");
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let m = case.meshes();
+            b.iter(|| bdmorph::compile(&m.source.positions, &m.source.faces).expect("compiles"));
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("setup");
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let m = case.meshes();
+            b.iter(|| Morph::new(&m.source, &m.target, MorphOptions::default()).expect("morph"));
+        });
+    }
+    group.finish();
+}
+
+fn bench_iteration_stream(c: &mut Criterion, cases: &mut [Case]) {
+    let mut group = c.benchmark_group("iteration_stream");
+    for case in cases.iter_mut() {
+        configure(&mut group, case.n);
+        let id = BenchmarkId::new("vm", case.n);
+        group.bench_function(id, |b| {
+            let e = case.evaluated();
+            b.iter(|| {
+                e.vm.evaluate();
+                black_box(e.vm.hessian_values());
+            });
+        });
+        let id = BenchmarkId::new("direct", case.n);
+        group.bench_function(id, |b| {
+            let (m, e) = case.both();
+            b.iter(|| {
+                reference::gradient_and_hessian(
+                    &m.source,
+                    &m.target,
+                    black_box(0.5),
+                    &e.u_by_vertex,
+                    &e.unknowns,
+                )
+            });
+        });
+    }
+    group.finish();
+}
+
+fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
+    let mut group = c.benchmark_group("factorization");
+    for case in cases.iter_mut() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let e = case.evaluated();
+            b.iter(|| {
+                black_box(e.vm.factor_and_solve().expect("positive definite"));
+            });
+        });
+    }
+    group.finish();
+}
+
+fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
+    let mut group = c.benchmark_group("warm_frame");
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        // The morph, its output buffer, the last t, and (frames, Newton iterations) counted
+        // over every call the benchmark made.
+        let mut state: Option<(Morph, Vec<[f64; 2]>, f64)> = None;
+        let (mut frames, mut iterations) = (0u64, 0u64);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let (morph, out, t) = state.get_or_insert_with(|| {
+                let m = case.meshes();
+                let mut morph =
+                    Morph::new(&m.source, &m.target, MorphOptions::default()).expect("morph");
+                let mut out = vec![[0.0; 2]; m.source.positions.len()];
+                let cold = morph.frame_into(0.5, &mut out).expect("frame");
+                let down = morph.frame_into(0.4, &mut out).expect("frame");
+                let up = morph.frame_into(0.5, &mut out).expect("frame");
+                eprintln!(
+                    "[bdmorph n={}] cold frame t=0.5: {} Newton iterations; warm 0.5->0.4: {} \
+                     (|g| {:.1e}, {} flipped); warm 0.4->0.5: {} (|g| {:.1e}, {} flipped)",
+                    case.n,
+                    cold.newton_iterations,
+                    down.newton_iterations,
+                    down.gradient_norm,
+                    down.flipped_triangles,
+                    up.newton_iterations,
+                    up.gradient_norm,
+                    up.flipped_triangles,
+                );
+                (morph, out, 0.5)
+            });
+            b.iter(|| {
+                *t = if *t == 0.5 { 0.4 } else { 0.5 };
+                let stats = morph.frame_into(*t, out).expect("frame");
+                frames += 1;
+                iterations += u64::from(stats.newton_iterations);
+                stats
+            });
+        });
+        if frames > 0 {
+            eprintln!(
+                "[bdmorph n={}] warm frames run by the benchmark: {frames}, mean Newton \
+                 iterations per frame {:.2}",
+                case.n,
+                iterations as f64 / frames as f64
+            );
+        }
+    }
+    group.finish();
+}
+
+fn benches(c: &mut Criterion) {
+    let mut cases: Vec<Case> = SIZES
+        .iter()
+        .map(|&n| Case {
+            n,
+            meshes: OnceCell::new(),
+            evaluated: None,
+        })
+        .collect();
+    bench_compile(c, &mut cases);
+    bench_iteration_stream(c, &mut cases);
+    bench_factorization(c, &mut cases);
+    bench_warm_frame(c, &mut cases);
+}
+
+criterion_group!(frame, benches);
+criterion_main!(frame);

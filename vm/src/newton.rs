@@ -149,6 +149,19 @@ impl Vm {
         }
     }
 
+    /// Factors the Hessian of the last [`Vm::evaluate`] numerically (reusing the symbolic
+    /// factorisation computed in [`Vm::new`]) and solves `H step = -g`, returning the Newton
+    /// step, one value per unknown. This is the linear-algebra half of one Newton iteration,
+    /// exposed so that it can be measured and checked on its own; `u`, the gradient and the
+    /// Hessian values are left unchanged. Allocates nothing.
+    ///
+    /// Fails with [`VmError::NotPositiveDefinite`] when the Hessian is not numerically
+    /// positive definite (for instance before any evaluation, when its values are all zero).
+    pub fn factor_and_solve(&mut self) -> Result<&[f64], VmError> {
+        self.newton_step(self.u.len())?;
+        Ok(&self.step)
+    }
+
     /// Factors the Hessian of the last evaluation and solves `H step = -g` in place.
     fn newton_step(&mut self, n: usize) -> Result<(), VmError> {
         let stack = MemStack::new(&mut self.workspace);
@@ -180,5 +193,81 @@ impl Vm {
             stack,
         );
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn factor_and_solve_returns_the_newton_step() {
+        // A jittered hexagonal patch: a centre, a ring of 6 and a ring of 12 vertices, so
+        // there are 7 unknowns and off-diagonal Hessian entries.
+        let mut positions = vec![[0.0, 0.0]];
+        for (ring, n) in [(1.0, 6), (2.0, 12)] {
+            for i in 0..n {
+                let a = i as f64 / n as f64 * std::f64::consts::TAU;
+                let r = ring * (1.0 + 0.05 * (i as f64 * 1.7).sin());
+                positions.push([r * a.cos(), r * a.sin()]);
+            }
+        }
+        let mut faces: Vec<[u32; 3]> = (0..6).map(|i| [0, 1 + i, 1 + (i + 1) % 6]).collect();
+        for i in 0..6u32 {
+            let (inner, next_inner) = (1 + i, 1 + (i + 1) % 6);
+            let (o0, o1, o2) = (7 + 2 * i, 7 + 2 * i + 1, 7 + (2 * i + 2) % 12);
+            faces.push([inner, o0, o1]);
+            faces.push([inner, o1, next_inner]);
+            faces.push([next_inner, o1, o2]);
+        }
+        let program = bdmorph_compiler::compile(&positions, &faces).expect("compiles");
+        let mut vm = Vm::new(program).expect("vm");
+        let n = vm.program().n_unknowns();
+        assert_eq!(n, 7);
+
+        // Before any evaluation the Hessian is zero: no factorisation.
+        let sq = vm.squared_lengths(&positions).expect("lengths");
+        vm.set_metric(&sq).expect("metric");
+        assert!(matches!(
+            vm.factor_and_solve(),
+            Err(VmError::NotPositiveDefinite { .. })
+        ));
+
+        let u: Vec<f64> = (0..n).map(|k| 0.1 * (k as f64 - 3.0)).collect();
+        vm.set_u(&u).expect("u");
+        vm.evaluate();
+        let grad = vm.gradient().to_vec();
+        let hvals = vm.hessian_values().to_vec();
+        let step = vm.factor_and_solve().expect("positive definite").to_vec();
+        assert_eq!(vm.u(), &u[..], "u is left unchanged");
+
+        // H step = -g, H symmetric and stored as its lower triangle.
+        let h = vm.program().hessian();
+        let mut hs = vec![0.0; n];
+        for col in 0..n {
+            let slots = h.col_ptr[col] as usize..h.col_ptr[col + 1] as usize;
+            for (&row, &value) in h.row_idx[slots.clone()].iter().zip(&hvals[slots]) {
+                let row = row as usize;
+                hs[row] += value * step[col];
+                if row != col {
+                    hs[col] += value * step[row];
+                }
+            }
+        }
+        for k in 0..n {
+            assert!(
+                (hs[k] + grad[k]).abs() < 1e-12,
+                "row {k}: {} vs {}",
+                hs[k],
+                -grad[k]
+            );
+        }
+        assert!(
+            grad.iter().any(|g| g.abs() > 1e-3),
+            "a non-trivial right-hand side"
+        );
+
+        // Repeating it gives the same step.
+        assert_eq!(vm.factor_and_solve().expect("again"), &step[..]);
     }
 }

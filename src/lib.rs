@@ -37,6 +37,7 @@ pub mod io;
 pub mod mesh;
 pub mod morph;
 pub mod reference;
+pub mod render;
 
 pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
 pub use bdmorph_isa::{disassemble, Program};

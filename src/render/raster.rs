@@ -1,0 +1,1 @@
+//! Rasterised pictures (PNG, GIF).

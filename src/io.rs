@@ -37,6 +37,28 @@ pub struct SurfaceMesh {
     pub positions: Vec<[f64; 3]>,
     /// Triangles as 0-based indices into `positions`, in file order, corners as written.
     pub faces: Vec<[u32; 3]>,
+    /// Texture coordinates, when the file has `vt` lines and every face names one per corner.
+    pub texcoords: Option<TexCoords>,
+}
+
+/// Texture coordinates of an OBJ file: the `vt` values and, per face, the `vt` index of each
+/// corner (so seams, where one vertex has several texture coordinates, are kept).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TexCoords {
+    /// The `vt` values `(u, v)` in file order.
+    pub uv: Vec<[f64; 2]>,
+    /// Per face, the 0-based index into `uv` of each corner; parallel to the faces.
+    pub corners: Vec<[u32; 3]>,
+}
+
+impl TexCoords {
+    /// The `(u, v)` of each corner of each face.
+    pub fn corner_uv(&self) -> Vec<[[f64; 2]; 3]> {
+        self.corners
+            .iter()
+            .map(|c| c.map(|i| self.uv.get(i as usize).copied().unwrap_or([0.0, 0.0])))
+            .collect()
+    }
 }
 
 impl SurfaceMesh {
@@ -235,32 +257,71 @@ fn words(line: &str) -> SplitAsciiWhitespace<'_> {
 /// Parses Wavefront OBJ text. `path` is only used in error messages (it may be empty).
 ///
 /// Reads `v x y [z [w]]` (z = 0 when absent; w and any vertex colour after x y z are ignored)
-/// and `f a b c` with corners `v`, `v/vt`, `v/vt/vn` or `v//vn`, of which only the vertex index
-/// is used. Indices are 1-based; negative ones count back from the last vertex read so far;
-/// positive ones may refer to vertices defined later in the file. Every other keyword (`vt`,
-/// `vn`, `g`, `o`, `s`, `usemtl`, `mtllib`, `l`, ...) is ignored.
+/// `vt u [v [w]]`, and `f a b c` with corners `v`, `v/vt`, `v/vt/vn` or `v//vn` (normals are
+/// ignored). Indices are 1-based; negative ones count back from the last element read so far;
+/// positive ones may refer to elements defined later in the file. When every face names a
+/// `vt` per corner, [`SurfaceMesh::texcoords`] keeps them. Every other keyword (`vn`, `g`,
+/// `o`, `s`, `usemtl`, `mtllib`, `l`, ...) is ignored. Polygons with more than three corners
+/// are refused ([`ReadError::NotATriangle`]), not triangulated.
 pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
     let mut positions: Vec<[f64; 3]> = Vec::new();
     let mut faces: Vec<[u32; 3]> = Vec::new();
+    let mut uv: Vec<[f64; 2]> = Vec::new();
+    // Per face, the vt index of each corner, while every face so far has them.
+    let mut uv_corners: Option<Vec<[u32; 3]>> = Some(Vec::new());
     // Positive indices past the vertices read so far, as (line, index): checked at the end.
     let mut forward: Vec<(usize, i64)> = Vec::new();
+    let mut forward_uv: Vec<(usize, i64)> = Vec::new();
     for (i, line) in lines(text) {
         let at = At { path, line: i + 1 };
         let mut words = words(line);
         match words.next() {
             Some("v") => positions.push(obj_vertex(words, at)?),
-            Some("f") => faces.push(obj_face(words, positions.len(), &mut forward, at)?),
+            Some("vt") => uv.push(obj_texcoord(words, at)?),
+            Some("f") => {
+                let counts = [positions.len(), uv.len()];
+                let (face, tex) = obj_face(words, counts, [&mut forward, &mut forward_uv], at)?;
+                faces.push(face);
+                match (tex, uv_corners.as_mut()) {
+                    (Some(t), Some(all)) => all.push(t),
+                    _ => uv_corners = None,
+                }
+            }
             _ => {}
         }
     }
-    let count = positions.len();
-    if let Some(&(line, index)) = forward.iter().find(|&&(_, i)| i as u64 > count as u64) {
-        return Err(At { path, line }.out_of_range(index, count));
+    for (pending, count) in [(&forward, positions.len()), (&forward_uv, uv.len())] {
+        if let Some(&(line, index)) = pending.iter().find(|&&(_, i)| i as u64 > count as u64) {
+            return Err(At { path, line }.out_of_range(index, count));
+        }
     }
     if positions.is_empty() || faces.is_empty() {
         return Err(empty(path));
     }
-    Ok(SurfaceMesh { positions, faces })
+    let texcoords = uv_corners
+        .filter(|_| !uv.is_empty())
+        .map(|corners| TexCoords { uv, corners });
+    Ok(SurfaceMesh {
+        positions,
+        faces,
+        texcoords,
+    })
+}
+
+fn obj_texcoord(words: SplitAsciiWhitespace<'_>, at: At) -> Result<[f64; 2], ReadError> {
+    let mut t = [0.0; 2];
+    let mut count = 0;
+    for word in words {
+        let x = coordinate(word, "'vt'", at)?;
+        if let Some(slot) = t.get_mut(count) {
+            *slot = x;
+        }
+        count += 1;
+    }
+    match count {
+        1..=3 => Ok(t),
+        _ => Err(at.parse(format!("'vt' needs 1 to 3 numbers, found {count}"))),
+    }
 }
 
 fn obj_vertex(words: SplitAsciiWhitespace<'_>, at: At) -> Result<[f64; 3], ReadError> {
@@ -280,53 +341,85 @@ fn obj_vertex(words: SplitAsciiWhitespace<'_>, at: At) -> Result<[f64; 3], ReadE
     }
 }
 
+/// One face: its vertex indices and, when every corner names one, its `vt` indices.
+type ObjFace = ([u32; 3], Option<[u32; 3]>);
+
 fn obj_face(
     words: SplitAsciiWhitespace<'_>,
-    vertex_count: usize,
-    forward: &mut Vec<(usize, i64)>,
+    counts: [usize; 2],
+    forward: [&mut Vec<(usize, i64)>; 2],
     at: At,
-) -> Result<[u32; 3], ReadError> {
+) -> Result<ObjFace, ReadError> {
+    let [forward_v, forward_t] = forward;
     let mut face = [0u32; 3];
+    let mut tex = [0u32; 3];
+    let mut all_tex = true;
     let mut corners = 0;
     for word in words {
-        if let Some(slot) = face.get_mut(corners) {
-            *slot = obj_corner(word, vertex_count, forward, at)?;
+        if corners < 3 {
+            let bad = || at.expected("a vertex index after 'f'", word);
+            let mut parts = word.split('/');
+            let vertex = parts.next().unwrap_or("");
+            let vt = parts.next().unwrap_or("");
+            let vn = parts.next().unwrap_or("");
+            if parts.next().is_some() || !(vn.is_empty() || vn.parse::<i64>().is_ok()) {
+                return Err(bad());
+            }
+            face[corners] = obj_index("vertex", vertex, counts[0], forward_v, at).map_err(|e| match e {
+                IndexError::Syntax => bad(),
+                IndexError::Read(e) => e,
+            })?;
+            if vt.is_empty() {
+                all_tex = false;
+            } else {
+                tex[corners] = obj_index("texture", vt, counts[1], forward_t, at).map_err(|e| match e {
+                    IndexError::Syntax => at.expected("a texture index after '/'", word),
+                    IndexError::Read(e) => e,
+                })?;
+            }
         }
         corners += 1;
     }
     match corners {
-        3 => Ok(face),
+        3 => Ok((face, all_tex.then_some(tex))),
         0..=2 => Err(at.parse(format!("'f' needs 3 corners, found {corners}"))),
         _ => Err(at.not_a_triangle(corners)),
     }
 }
 
-/// Resolves one `v[/vt][/vn]` corner to a 0-based vertex index.
-fn obj_corner(
+enum IndexError {
+    Syntax,
+    Read(ReadError),
+}
+
+/// Resolves one 1-based (or negative, relative) OBJ index against the `count` elements read
+/// so far; positive indices beyond them are remembered in `forward` and checked at the end.
+fn obj_index(
+    what: &str,
     word: &str,
-    vertex_count: usize,
+    count: usize,
     forward: &mut Vec<(usize, i64)>,
     at: At,
-) -> Result<u32, ReadError> {
-    let bad = || at.expected("a vertex index after 'f'", word);
-    let (vertex, rest) = word.split_once('/').unwrap_or((word, ""));
-    let valid = |part: &str| part.is_empty() || part.parse::<i64>().is_ok();
-    if rest.split('/').count() > 2 || !rest.split('/').all(valid) {
-        return Err(bad());
-    }
-    let index: i64 = vertex.parse().map_err(|_| bad())?;
-    let count = i64::try_from(vertex_count).unwrap_or(i64::MAX);
+) -> Result<u32, IndexError> {
+    let index: i64 = word.parse().map_err(|_| IndexError::Syntax)?;
+    let vertex_count = count;
+    let count = i64::try_from(count).unwrap_or(i64::MAX);
+    let read = IndexError::Read;
     let zero_based = match index {
-        0 => return Err(at.parse("vertex index 0 is invalid (OBJ counts from 1)".to_owned())),
+        0 => {
+            return Err(read(at.parse(format!(
+                "{what} index 0 is invalid (OBJ counts from 1)"
+            ))))
+        }
         i if i > count => {
             forward.push((at.line, i));
             i - 1
         }
         i if i > 0 => i - 1,
         i if i + count >= 0 => i + count,
-        i => return Err(at.out_of_range(i, vertex_count)),
+        i => return Err(read(at.out_of_range(i, vertex_count))),
     };
-    u32::try_from(zero_based).map_err(|_| at.out_of_range(index, vertex_count))
+    u32::try_from(zero_based).map_err(|_| read(at.out_of_range(index, vertex_count)))
 }
 
 /// The words of OFF text with `#` comments removed, keeping track of the line number.
@@ -440,7 +533,11 @@ pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
         t.skip_rest_of_line();
         faces.push(face);
     }
-    Ok(SurfaceMesh { positions, faces })
+    Ok(SurfaceMesh {
+        positions,
+        faces,
+        texcoords: None,
+    })
 }
 
 /// Writes a planar mesh as OBJ: optional `# comment` header lines, then `v x y 0` per vertex
@@ -455,6 +552,34 @@ pub fn write_obj_2d(
     positions: &[[f64; 2]],
     faces: &[[u32; 3]],
     header: &[&str],
+) -> Result<(), WriteError> {
+    write_obj_2d_textured(path, positions, faces, None, header)
+}
+
+/// As [`write_obj_2d`], with texture coordinates: the `vt` lines, and faces as
+/// `f a/ta b/tb c/tc` with the corners' texture indices (see [`format_obj_2d_textured`]).
+pub fn write_obj_2d_textured(
+    path: &Path,
+    positions: &[[f64; 2]],
+    faces: &[[u32; 3]],
+    texcoords: Option<&TexCoords>,
+    header: &[&str],
+) -> Result<(), WriteError> {
+    write_atomic(path, |file| {
+        format_obj_2d_textured(file, positions, faces, texcoords, header)
+    })
+}
+
+/// Writes `bytes` to `path` atomically (temporary file in the same directory, sync, rename):
+/// on any error the destination is untouched and the temporary file removed.
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    write_atomic(path, |file| file.write_all(bytes))
+}
+
+/// Runs `fill` on a fresh temporary file next to `path`, then renames it over `path`.
+fn write_atomic(
+    path: &Path,
+    fill: impl FnOnce(&mut File) -> io::Result<()>,
 ) -> Result<(), WriteError> {
     static COUNTER: AtomicU32 = AtomicU32::new(0);
     let error = |source| WriteError::Io {
@@ -477,7 +602,7 @@ pub fn write_obj_2d(
         .create_new(true)
         .open(&temp)
         .map_err(error)?;
-    let written = format_obj_2d(&mut file, positions, faces, header).and_then(|()| file.sync_all());
+    let written = fill(&mut file).and_then(|()| file.sync_all());
     drop(file); // closed before the rename, which some platforms require
     if let Err(source) = written.and_then(|()| fs::rename(&temp, path)) {
         let _ = fs::remove_file(&temp); // best effort: the first error is the one to report
@@ -502,6 +627,19 @@ pub fn format_obj_2d<W: Write>(
     faces: &[[u32; 3]],
     header: &[&str],
 ) -> io::Result<()> {
+    format_obj_2d_textured(out, positions, faces, None, header)
+}
+
+/// As [`format_obj_2d`], with optional texture coordinates: `vt u v` lines after the
+/// vertices, and each face as `f a/ta b/tb c/tc`. Fails with [`io::ErrorKind::InvalidInput`]
+/// before writing anything if the texture corners do not match the faces.
+pub fn format_obj_2d_textured<W: Write>(
+    out: W,
+    positions: &[[f64; 2]],
+    faces: &[[u32; 3]],
+    texcoords: Option<&TexCoords>,
+    header: &[&str],
+) -> io::Result<()> {
     let invalid = |message| Err(io::Error::new(io::ErrorKind::InvalidInput, message));
     let n = positions.len();
     if let Some(i) = positions
@@ -515,6 +653,15 @@ pub fn format_obj_2d<W: Write>(
         .position(|f| f.iter().any(|&v| v as usize >= n))
     {
         return invalid(format!("face {i} {:?} needs a vertex beyond {n}", faces[i]));
+    }
+    if let Some(t) = texcoords {
+        let nt = t.uv.len();
+        if t.corners.len() != faces.len()
+            || t.corners.iter().flatten().any(|&i| i as usize >= nt)
+            || !t.uv.iter().flatten().all(|x| x.is_finite())
+        {
+            return invalid("texture coordinates do not match the faces".to_owned());
+        }
     }
     let mut out = BufWriter::new(out);
     for text in header {
@@ -533,9 +680,27 @@ pub fn format_obj_2d<W: Write>(
         write_coordinate(&mut out, y)?;
         out.write_all(b" 0\n")?;
     }
-    for face in faces {
-        let [a, b, c] = face.map(|v| u64::from(v) + 1);
-        writeln!(out, "f {a} {b} {c}")?;
+    match texcoords {
+        None => {
+            for face in faces {
+                let [a, b, c] = face.map(|v| u64::from(v) + 1);
+                writeln!(out, "f {a} {b} {c}")?;
+            }
+        }
+        Some(t) => {
+            for &[u, v] in &t.uv {
+                out.write_all(b"vt ")?;
+                write_coordinate(&mut out, u)?;
+                out.write_all(b" ")?;
+                write_coordinate(&mut out, v)?;
+                out.write_all(b"\n")?;
+            }
+            for (face, tex) in faces.iter().zip(&t.corners) {
+                let [a, b, c] = face.map(|v| u64::from(v) + 1);
+                let [ta, tb, tc] = tex.map(|v| u64::from(v) + 1);
+                writeln!(out, "f {a}/{ta} {b}/{tb} {c}/{tc}")?;
+            }
+        }
     }
     out.flush()
 }
@@ -629,7 +794,7 @@ mod tests {
             ("f 1 2\n", "t.obj:4: 'f' needs 3 corners, found 2"),
             ("f 0 1 2\n", "t.obj:4: vertex index 0 is invalid (OBJ counts from 1)"),
             ("f 1 2 x\n", "t.obj:4: expected a vertex index after 'f', found 'x'"),
-            ("f 1/a 2 3\n", "t.obj:4: expected a vertex index after 'f', found '1/a'"),
+            ("f 1/a 2 3\n", "t.obj:4: expected a texture index after '/', found '1/a'"),
             ("f 1/1/1/1 2 3\n", "t.obj:4: expected a vertex index after 'f', found '1/1/1/1'"),
             ("f 1.5 2 3\n", "t.obj:4: expected a vertex index after 'f', found '1.5'"),
             ("f -1 -2 -4\nv 1 1\n", "t.obj:4: vertex -4 does not exist (3 vertices)"),
@@ -818,6 +983,45 @@ mod tests {
 
     /// tobj re-indexes vertices per `v/vt/vn` combination, so triangle corners are compared by
     /// position, in order.
+    #[test]
+    fn texture_coordinates_are_read_per_corner_and_written_back() {
+        let text = "v 0 0\nv 1 0\nv 0 1\nv 1 1\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1 0\n\
+                    f 1/1 2/2 3/3\nf 2/2/1 4/-1 3/3\n";
+        let m = parse_obj(text, Path::new("t.obj")).unwrap();
+        let t = m.texcoords.clone().expect("texture coordinates");
+        assert_eq!(t.uv.len(), 4);
+        assert_eq!(t.corners, vec![[0, 1, 2], [1, 3, 2]]);
+        assert_eq!(t.corner_uv()[1], [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+        let planar: Vec<[f64; 2]> = m.positions.iter().map(|p| [p[0], p[1]]).collect();
+        let mut out = Vec::new();
+        format_obj_2d_textured(&mut out, &planar, &m.faces, Some(&t), &[]).unwrap();
+        let written = String::from_utf8(out).unwrap();
+        assert!(written.contains("f 2/2 4/4 3/3"), "{written}");
+        let back = parse_obj(&written, Path::new("w.obj")).unwrap();
+        assert_eq!(back.texcoords, Some(t));
+        // A face without vt drops texture coordinates for the whole mesh.
+        let partial = "v 0 0\nv 1 0\nv 0 1\nvt 0 0\nf 1/1 2/1 3/1\nf 1 2 3\n";
+        assert_eq!(parse_obj(partial, Path::new("p.obj")).unwrap().texcoords, None);
+        // A texture index out of range names its line.
+        let bad = "v 0 0\nv 1 0\nv 0 1\nvt 0 0\nf 1/1 2/9 3/1\n";
+        let err = parse_obj(bad, Path::new("b.obj")).unwrap_err().to_string();
+        assert!(err.starts_with("b.obj:5:"), "{err}");
+    }
+
+    #[test]
+    fn write_bytes_atomic_writes_and_replaces() {
+        let dir = std::env::temp_dir().join(format!("bdmorph-io-bytes-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("x.bin");
+        write_bytes_atomic(&path, b"one").unwrap();
+        write_bytes_atomic(&path, b"two").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"two");
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        assert!(write_bytes_atomic(&dir.join("missing/x.bin"), b"x").is_err());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn agrees_with_tobj() {
         let texts = [

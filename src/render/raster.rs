@@ -1,1 +1,1202 @@
-//! Rasterised pictures (PNG, GIF).
+//! Rasterised pictures: [`render`] a frame to an [`Image`], encode it as PNG ([`encode_png`])
+//! or a looping animated GIF ([`encode_gif`]), tile frames into a contact sheet ([`strip`]),
+//! and read PNG or JPEG textures ([`read_image`], [`decode_image`]).
+//!
+//! Triangles are drawn anti-aliased with [`tiny_skia`]: light blue with dark blue edges, or
+//! filled with a texture through their corner texture coordinates; triangles that are flipped
+//! (signed area zero or negative) are red so problems stand out.
+//!
+//! ```
+//! use bdmorph::generate;
+//! use bdmorph::render::{raster, Drawing, ImageSize, Viewport};
+//!
+//! let mesh = generate::disk(4, 0.0);
+//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None };
+//! let view = Viewport::fit([&mesh.positions[..]]);
+//! let size = ImageSize { width: 64, height: 48 };
+//! let image = raster::render(&mesh.positions, &drawing, &view, size);
+//! assert_eq!((image.width, image.height), (64, 48));
+//! let png = raster::encode_png(&image)?;
+//! assert_eq!(raster::decode_image(&png)?, image);
+//! # Ok::<(), raster::RenderError>(())
+//! ```
+
+use super::{Drawing, Image, ImageSize, Viewport};
+use std::error::Error as StdError;
+use std::fmt;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+use tiny_skia::{
+    Color, FillRule, FilterQuality, Paint, PathBuilder, Pattern, Pixmap, PixmapRef, Shader,
+    SpreadMode, Stroke, Transform,
+};
+
+/// Fill of a triangle without texture (`#cfe0f5`).
+pub(super) const FILL: [u8; 3] = [0xcf, 0xe0, 0xf5];
+/// Triangle edges (`#3a5a80`).
+pub(super) const EDGE: [u8; 3] = [0x3a, 0x5a, 0x80];
+/// Fill of a flipped triangle (`#e05050`).
+pub(super) const FLIPPED: [u8; 3] = [0xe0, 0x50, 0x50];
+
+/// Largest width or height of a decoded image.
+const MAX_DECODED_SIDE: u32 = 16384;
+/// White space between the frames of a [`strip`], in pixels.
+const STRIP_GAP: u32 = 4;
+
+/// Why a picture could not be read, decoded or encoded. Every message is one line; errors of
+/// [`read_image`] start with the file name.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// The file could not be read.
+    #[error("{}: cannot read: {source}", .path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The bytes are neither a PNG nor a JPEG image.
+    #[error("{}not a PNG or JPEG image", FilePrefix(.path))]
+    UnknownFormat {
+        /// The file, when the bytes came from one.
+        path: Option<PathBuf>,
+    },
+    /// The image is damaged or uses a feature the decoder does not support.
+    #[error("{}cannot decode {format} image: {source}", FilePrefix(.path))]
+    Decode {
+        /// The file, when the bytes came from one.
+        path: Option<PathBuf>,
+        /// `"PNG"` or `"JPEG"`.
+        format: &'static str,
+        /// The decoder's error.
+        source: Box<dyn StdError + Send + Sync>,
+    },
+    /// A decoded image is wider or taller than 16384 pixels.
+    #[error("{}image is {width}x{height} pixels; at most {max} per side are supported", FilePrefix(.path))]
+    TooLarge {
+        /// The file, when the bytes came from one.
+        path: Option<PathBuf>,
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
+        /// The largest supported side.
+        max: u32,
+    },
+    /// The encoder failed.
+    #[error("cannot encode {format}: {source}")]
+    Encode {
+        /// `"PNG"` or `"GIF"`.
+        format: &'static str,
+        /// The encoder's error.
+        source: Box<dyn StdError + Send + Sync>,
+    },
+    /// An [`Image`]'s pixel buffer does not have `width * height * 4` bytes.
+    #[error("a {width}x{height} image needs {expected} RGBA bytes, but has {actual}")]
+    BadBuffer {
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
+        /// `width * height * 4`.
+        expected: u64,
+        /// The buffer's length.
+        actual: usize,
+    },
+    /// An image has no pixels, or an animation no frames.
+    #[error("nothing to encode: {what}")]
+    Empty {
+        /// What is empty.
+        what: &'static str,
+    },
+    /// The frames of an animation differ in size.
+    #[error("frame {index} is {width}x{height} pixels but frame 0 is {first_width}x{first_height}; all frames must have one size")]
+    FrameSize {
+        /// The frame (0-based).
+        index: usize,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// Width of frame 0.
+        first_width: u32,
+        /// Height of frame 0.
+        first_height: u32,
+    },
+    /// The image is too large for the format (GIF allows at most 65535 pixels per side).
+    #[error("{format} allows at most {max} pixels per side, the image is {width}x{height}")]
+    TooLargeForFormat {
+        /// The format.
+        format: &'static str,
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
+        /// The largest side the format allows.
+        max: u32,
+    },
+}
+
+/// Shows `path: ` before a message when there is a path.
+struct FilePrefix<'a>(&'a Option<PathBuf>);
+
+impl fmt::Display for FilePrefix<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(path) => write!(f, "{}: ", path.display()),
+            None => Ok(()),
+        }
+    }
+}
+
+impl RenderError {
+    /// The same error, naming `file` (for errors that can name one).
+    fn in_file(mut self, file: &Path) -> RenderError {
+        match &mut self {
+            RenderError::UnknownFormat { path }
+            | RenderError::Decode { path, .. }
+            | RenderError::TooLarge { path, .. } => *path = Some(file.to_path_buf()),
+            _ => {}
+        }
+        self
+    }
+}
+
+/// A triangle in pixel coordinates, with its face index and whether it is flipped.
+pub(super) struct PixelTriangle {
+    /// Index into `Drawing::faces`.
+    pub face: usize,
+    /// Corners in pixels (`y` down).
+    pub corners: [[f64; 2]; 3],
+    /// Signed area in world coordinates is zero or negative (or NaN).
+    pub flipped: bool,
+}
+
+/// The drawable triangles of `faces` in pixel coordinates: faces with a vertex index out of
+/// range or a non-finite (or beyond 10^7 px) pixel coordinate are left out.
+pub(super) fn pixel_triangles<'a>(
+    positions: &'a [[f64; 2]],
+    faces: &'a [[u32; 3]],
+    view: &Viewport,
+    size: ImageSize,
+) -> impl Iterator<Item = PixelTriangle> + 'a {
+    let (scale, ox, oy) = view.transform(size);
+    faces.iter().enumerate().filter_map(move |(face, f)| {
+        let p = [
+            *positions.get(f[0] as usize)?,
+            *positions.get(f[1] as usize)?,
+            *positions.get(f[2] as usize)?,
+        ];
+        let area2 =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+        let corners = p.map(|q| [ox + scale * q[0], oy - scale * q[1]]);
+        // Beyond this tiny-skia's f32 geometry loses precision; a triangle with a corner
+        // thousands of pictures away is left out like a non-finite one.
+        let limit = 1e7;
+        if !corners.iter().flatten().all(|c| c.abs() < limit) {
+            return None;
+        }
+        Some(PixelTriangle {
+            face,
+            corners,
+            flipped: area2.is_nan() || area2 <= 0.0,
+        })
+    })
+}
+
+fn colour([r, g, b]: [u8; 3]) -> Color {
+    Color::from_rgba8(r, g, b, 255)
+}
+
+fn solid(rgb: [u8; 3], anti_alias: bool) -> Paint<'static> {
+    let mut paint = Paint::default();
+    paint.set_color(colour(rgb));
+    paint.anti_alias = anti_alias;
+    paint
+}
+
+fn add_triangle(pb: &mut PathBuilder, c: &[[f64; 2]; 3]) {
+    pb.move_to(c[0][0] as f32, c[0][1] as f32);
+    pb.line_to(c[1][0] as f32, c[1][1] as f32);
+    pb.line_to(c[2][0] as f32, c[2][1] as f32);
+    pb.close();
+}
+
+/// Fills all `triangles` as one path, so shared edges leave no seams.
+fn fill_union<'a>(
+    pixmap: &mut Pixmap,
+    triangles: impl Iterator<Item = &'a PixelTriangle>,
+    rgb: [u8; 3],
+) {
+    let mut pb = PathBuilder::new();
+    for t in triangles {
+        add_triangle(&mut pb, &t.corners);
+    }
+    if let Some(path) = pb.finish() {
+        pixmap.fill_path(
+            &path,
+            &solid(rgb, true),
+            FillRule::Winding,
+            Transform::identity(),
+            None,
+        );
+    }
+}
+
+/// Strokes every edge once (shared edges are not drawn twice), 1 px wide and anti-aliased.
+/// When the mesh is so dense that edges would hide the fills, they fade.
+fn stroke_edges(pixmap: &mut Pixmap, triangles: &[PixelTriangle], faces: &[[u32; 3]]) {
+    let mut edges: Vec<(u32, u32, usize, usize)> = Vec::with_capacity(3 * triangles.len());
+    for (ti, t) in triangles.iter().enumerate() {
+        let f = faces[t.face];
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            // Remember which triangle and corner the edge starts at, for its pixel position.
+            let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+            edges.push((lo, hi, ti, k));
+        }
+    }
+    edges.sort_unstable_by_key(|e| (e.0, e.1));
+    edges.dedup_by_key(|e| (e.0, e.1));
+    if edges.is_empty() {
+        return;
+    }
+    let mut lengths: Vec<f64> = Vec::with_capacity(edges.len());
+    let mut pb = PathBuilder::with_capacity(2 * edges.len(), 2 * edges.len());
+    for &(_, _, ti, k) in &edges {
+        let c = &triangles[ti].corners;
+        let (p, q) = (c[k], c[(k + 1) % 3]);
+        lengths.push((q[0] - p[0]).hypot(q[1] - p[1]));
+        pb.move_to(p[0] as f32, p[1] as f32);
+        pb.line_to(q[0] as f32, q[1] as f32);
+    }
+    let mid = lengths.len() / 2;
+    let median = *lengths.select_nth_unstable_by(mid, f64::total_cmp).1;
+    // Full strength from a median edge of 12 px, fading linearly to a fifth at 4 px.
+    let opacity = ((median - 2.0) / 10.0).clamp(0.2, 1.0);
+    let mut paint = solid(EDGE, true);
+    paint.shader.apply_opacity(opacity as f32);
+    if let Some(path) = pb.finish() {
+        let stroke = Stroke {
+            width: 1.0,
+            ..Stroke::default()
+        };
+        pixmap.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+    }
+}
+
+/// The texture as an opaque tiny-skia pixmap (transparent parts composited over white), or
+/// `None` when it has no pixels or a malformed buffer.
+fn texture_pixmap(texture: &Image) -> Option<Pixmap> {
+    if texture.width == 0 || texture.height == 0 || check_buffer(texture).is_err() {
+        return None;
+    }
+    let size = tiny_skia::IntSize::from_wh(texture.width, texture.height)?;
+    let mut data = texture.rgba.clone();
+    for px in data.chunks_exact_mut(4) {
+        let a = u32::from(px[3]);
+        for c in &mut px[..3] {
+            *c = ((u32::from(*c) * a + 255 * (255 - a) + 127) / 255) as u8;
+        }
+        px[3] = 255;
+    }
+    Pixmap::from_vec(data, size)
+}
+
+/// The affine map taking texture pixel coordinates of the corners to their pixel positions,
+/// or `None` when the texture coordinates are (nearly) collinear.
+fn texture_transform(
+    uv: &[[f64; 2]; 3],
+    corners: &[[f64; 2]; 3],
+    w: f64,
+    h: f64,
+) -> Option<Transform> {
+    let t = uv.map(|c| [c[0] * w, (1.0 - c[1]) * h]);
+    let (a, b) = (
+        [t[1][0] - t[0][0], t[1][1] - t[0][1]],
+        [t[2][0] - t[0][0], t[2][1] - t[0][1]],
+    );
+    let (p, q) = (
+        [corners[1][0] - corners[0][0], corners[1][1] - corners[0][1]],
+        [corners[2][0] - corners[0][0], corners[2][1] - corners[0][1]],
+    );
+    let det = a[0] * b[1] - a[1] * b[0];
+    let norm = (a[0] * a[0] + a[1] * a[1]) * (b[0] * b[0] + b[1] * b[1]);
+    if det.is_nan() || det.abs() <= 1e-9 * norm.sqrt() {
+        return None;
+    }
+    // M = [p q] [a b]^-1.
+    let inv = [[b[1] / det, -b[0] / det], [-a[1] / det, a[0] / det]];
+    let m00 = p[0] * inv[0][0] + q[0] * inv[1][0];
+    let m01 = p[0] * inv[0][1] + q[0] * inv[1][1];
+    let m10 = p[1] * inv[0][0] + q[1] * inv[1][0];
+    let m11 = p[1] * inv[0][1] + q[1] * inv[1][1];
+    let tx = corners[0][0] - (m00 * t[0][0] + m01 * t[0][1]);
+    let ty = corners[0][1] - (m10 * t[0][0] + m11 * t[0][1]);
+    let ts = Transform::from_row(
+        m00 as f32, m10 as f32, m01 as f32, m11 as f32, tx as f32, ty as f32,
+    );
+    ts.is_finite().then_some(ts)
+}
+
+/// The texture's colour at the (nearest pixel to) the centroid of `uv`.
+fn texture_colour_at_centroid(texture: PixmapRef<'_>, uv: &[[f64; 2]; 3]) -> Color {
+    let (w, h) = (texture.width(), texture.height());
+    let u = (uv[0][0] + uv[1][0] + uv[2][0]) / 3.0;
+    let v = (uv[0][1] + uv[1][1] + uv[2][1]) / 3.0;
+    let x = (u * f64::from(w)).floor().clamp(0.0, f64::from(w - 1)) as u32;
+    let y = ((1.0 - v) * f64::from(h))
+        .floor()
+        .clamp(0.0, f64::from(h - 1)) as u32;
+    texture
+        .pixel(x, y)
+        .map(|c| c.demultiply())
+        .map(|c| Color::from_rgba8(c.red(), c.green(), c.blue(), 255))
+        .unwrap_or(Color::WHITE)
+}
+
+/// Fills the unflipped triangles with the texture. Anti-aliased fills of adjacent triangles
+/// leave faint seams where both cover a pixel partially, so a second pass without
+/// anti-aliasing paints every pixel whose centre lies in a triangle opaquely: the seams
+/// vanish and only the outline keeps the first pass's smooth edge.
+fn fill_textured(
+    pixmap: &mut Pixmap,
+    triangles: &[PixelTriangle],
+    corner_uv: &[[[f64; 2]; 3]],
+    texture: &Pixmap,
+) {
+    let (w, h) = (f64::from(texture.width()), f64::from(texture.height()));
+    let mut pb = PathBuilder::new();
+    for anti_alias in [true, false] {
+        for t in triangles.iter().filter(|t| !t.flipped) {
+            let uv = &corner_uv[t.face];
+            let shader = match texture_transform(uv, &t.corners, w, h) {
+                Some(ts) => Pattern::new(
+                    texture.as_ref(),
+                    SpreadMode::Pad,
+                    FilterQuality::Bilinear,
+                    1.0,
+                    ts,
+                ),
+                None => Shader::SolidColor(texture_colour_at_centroid(texture.as_ref(), uv)),
+            };
+            let paint = Paint {
+                shader,
+                anti_alias,
+                ..Paint::default()
+            };
+            add_triangle(&mut pb, &t.corners);
+            let Some(path) = pb.finish() else {
+                pb = PathBuilder::new();
+                continue;
+            };
+            pixmap.fill_path(
+                &path,
+                &paint,
+                FillRule::Winding,
+                Transform::identity(),
+                None,
+            );
+            pb = path.clear();
+        }
+    }
+}
+
+/// Draws the triangles of `drawing` at `positions` (world coordinates, `y` up) as an image
+/// of `size` on a white background, `view` mapped to the image as by
+/// [`Viewport::transform`].
+///
+/// With a texture and per-corner texture coordinates (one entry per face), each triangle is
+/// filled with the texture (bilinear sampling, transparency composited over white) through
+/// the affine map its corners define; otherwise triangles are light blue with dark blue,
+/// 1 px, anti-aliased edges (fading when the median edge is shorter than 12 px, so a dense
+/// mesh does not turn solid blue). Flipped triangles (world signed area zero or negative) are
+/// filled red on top in both cases. Faces with out-of-range vertex indices or non-finite (or
+/// beyond 10^7 px) positions are skipped. A texture whose `corner_uv` length differs from the
+/// number of faces is ignored.
+///
+/// The result is opaque. An image with zero width or height has no pixels.
+pub fn render(
+    positions: &[[f64; 2]],
+    drawing: &Drawing,
+    view: &Viewport,
+    size: ImageSize,
+) -> Image {
+    let blank = || Image {
+        width: size.width,
+        height: size.height,
+        rgba: vec![255; size.width as usize * size.height as usize * 4],
+    };
+    let Some(mut pixmap) = Pixmap::new(size.width, size.height) else {
+        return blank();
+    };
+    pixmap.fill(Color::WHITE);
+    let triangles: Vec<PixelTriangle> =
+        pixel_triangles(positions, drawing.faces, view, size).collect();
+
+    let textured = match (drawing.texture, drawing.corner_uv) {
+        (Some(texture), Some(uv)) if uv.len() == drawing.faces.len() => {
+            texture_pixmap(texture).map(|t| (t, uv))
+        }
+        _ => None,
+    };
+    match &textured {
+        Some((texture, uv)) => fill_textured(&mut pixmap, &triangles, uv, texture),
+        None => fill_union(&mut pixmap, triangles.iter().filter(|t| !t.flipped), FILL),
+    }
+    fill_union(&mut pixmap, triangles.iter().filter(|t| t.flipped), FLIPPED);
+    if textured.is_none() {
+        stroke_edges(&mut pixmap, &triangles, drawing.faces);
+    }
+    Image {
+        width: size.width,
+        height: size.height,
+        rgba: pixmap.take_demultiplied(),
+    }
+}
+
+fn check_buffer(img: &Image) -> Result<(), RenderError> {
+    let expected = u64::from(img.width) * u64::from(img.height) * 4;
+    if img.rgba.len() as u64 != expected {
+        return Err(RenderError::BadBuffer {
+            width: img.width,
+            height: img.height,
+            expected,
+            actual: img.rgba.len(),
+        });
+    }
+    Ok(())
+}
+
+fn encode_error(
+    format: &'static str,
+) -> impl FnOnce(Box<dyn StdError + Send + Sync>) -> RenderError {
+    move |source| RenderError::Encode { format, source }
+}
+
+/// Encodes an image as an 8-bit RGBA PNG.
+///
+/// # Errors
+/// [`RenderError::Empty`] for an image without pixels, [`RenderError::BadBuffer`] when the
+/// buffer does not match the size.
+pub fn encode_png(img: &Image) -> Result<Vec<u8>, RenderError> {
+    check_buffer(img)?;
+    if img.rgba.is_empty() {
+        return Err(RenderError::Empty {
+            what: "the image has no pixels",
+        });
+    }
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, img.width, img.height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    let fail = |e: png::EncodingError| encode_error("PNG")(Box::new(e));
+    let mut writer = encoder.write_header().map_err(fail)?;
+    writer.write_image_data(&img.rgba).map_err(fail)?;
+    writer.finish().map_err(fail)?;
+    Ok(out)
+}
+
+fn too_large(width: u32, height: u32) -> Result<(), RenderError> {
+    if width > MAX_DECODED_SIDE || height > MAX_DECODED_SIDE {
+        return Err(RenderError::TooLarge {
+            path: None,
+            width,
+            height,
+            max: MAX_DECODED_SIDE,
+        });
+    }
+    Ok(())
+}
+
+/// Widens 8-bit pixels of 1 (grey), 2 (grey, alpha), 3 (RGB) or 4 (RGBA) channels to RGBA.
+fn to_rgba(pixels: &[u8], channels: usize) -> Vec<u8> {
+    match channels {
+        4 => pixels.to_vec(),
+        3 => pixels
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect(),
+        2 => pixels
+            .chunks_exact(2)
+            .flat_map(|p| [p[0], p[0], p[0], p[1]])
+            .collect(),
+        _ => pixels.iter().flat_map(|&g| [g, g, g, 255]).collect(),
+    }
+}
+
+fn decode_png(bytes: &[u8]) -> Result<Image, RenderError> {
+    let fail = |e: png::DecodingError| RenderError::Decode {
+        path: None,
+        format: "PNG",
+        source: Box::new(e),
+    };
+    let mut decoder = png::Decoder::new(Cursor::new(bytes));
+    decoder.set_transformations(png::Transformations::normalize_to_color8());
+    let mut reader = decoder.read_info().map_err(fail)?;
+    let (width, height) = (reader.info().width, reader.info().height);
+    too_large(width, height)?;
+    let len = reader
+        .output_buffer_size()
+        .ok_or_else(|| RenderError::TooLarge {
+            path: None,
+            width,
+            height,
+            max: MAX_DECODED_SIDE,
+        })?;
+    let mut buf = vec![0; len];
+    let info = reader.next_frame(&mut buf).map_err(fail)?;
+    let channels = match info.color_type {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => {
+            // Expanded by `normalize_to_color8`; kept as an error rather than a panic.
+            return Err(RenderError::Decode {
+                path: None,
+                format: "PNG",
+                source: "indexed colour was not expanded".into(),
+            });
+        }
+    };
+    let row = width as usize * channels;
+    let mut rgba = Vec::with_capacity(width as usize * height as usize * 4);
+    for line in buf.chunks(info.line_size).take(height as usize) {
+        rgba.extend(to_rgba(&line[..row], channels));
+    }
+    Ok(Image {
+        width,
+        height,
+        rgba,
+    })
+}
+
+fn decode_jpeg(bytes: &[u8]) -> Result<Image, RenderError> {
+    use zune_jpeg::zune_core::bytestream::ZCursor;
+    use zune_jpeg::zune_core::colorspace::ColorSpace;
+    use zune_jpeg::zune_core::options::DecoderOptions;
+    let fail = |e: Box<dyn StdError + Send + Sync>| RenderError::Decode {
+        path: None,
+        format: "JPEG",
+        source: e,
+    };
+    let options = DecoderOptions::default()
+        .jpeg_set_out_colorspace(ColorSpace::RGBA)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options);
+    decoder.decode_headers().map_err(|e| fail(Box::new(e)))?;
+    let (w, h) = decoder
+        .dimensions()
+        .ok_or_else(|| fail("no image size in the headers".into()))?;
+    let (width, height) = (
+        u32::try_from(w).unwrap_or(u32::MAX),
+        u32::try_from(h).unwrap_or(u32::MAX),
+    );
+    too_large(width, height)?;
+    let pixels = decoder.decode().map_err(|e| fail(Box::new(e)))?;
+    let channels = match decoder.output_colorspace() {
+        Some(ColorSpace::RGBA) => 4,
+        Some(ColorSpace::RGB) => 3,
+        Some(ColorSpace::LumaA) => 2,
+        Some(ColorSpace::Luma) => 1,
+        other => {
+            return Err(fail(
+                format!("unsupported output colour space {other:?}").into(),
+            ))
+        }
+    };
+    if pixels.len() != w * h * channels {
+        return Err(fail(
+            format!(
+                "decoder returned {} bytes for {w}x{h} pixels of {channels} channels",
+                pixels.len()
+            )
+            .into(),
+        ));
+    }
+    Ok(Image {
+        width,
+        height,
+        rgba: to_rgba(&pixels, channels),
+    })
+}
+
+/// Decodes a PNG or JPEG image (recognised by its first bytes) to RGBA: grey, palette and
+/// 16-bit PNGs are converted; a PNG's transparency is kept.
+///
+/// # Errors
+/// [`RenderError::UnknownFormat`] for other bytes, [`RenderError::Decode`] for damaged or
+/// unsupported images, [`RenderError::TooLarge`] beyond 16384 pixels per side.
+pub fn decode_image(bytes: &[u8]) -> Result<Image, RenderError> {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        decode_png(bytes)
+    } else if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        decode_jpeg(bytes)
+    } else {
+        Err(RenderError::UnknownFormat { path: None })
+    }
+}
+
+/// Reads a PNG or JPEG file, as [`decode_image`].
+///
+/// # Errors
+/// [`RenderError::Read`] when the file cannot be read; otherwise those of [`decode_image`],
+/// naming the file.
+pub fn read_image(path: &Path) -> Result<Image, RenderError> {
+    let bytes = std::fs::read(path).map_err(|source| RenderError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    decode_image(&bytes).map_err(|e| e.in_file(path))
+}
+
+/// Encodes frames as an animated GIF that loops forever, each shown for
+/// `delay_centiseconds` (viewers tend to treat 0 and 1 as 10). Each frame gets its own
+/// palette: exact when it has at most 256 colours, otherwise quantised (NeuQuant).
+/// Fully transparent pixels stay transparent.
+///
+/// # Errors
+/// [`RenderError::Empty`] without frames or for frames without pixels,
+/// [`RenderError::FrameSize`] when frames differ in size, [`RenderError::TooLargeForFormat`]
+/// beyond 65535 pixels per side, [`RenderError::BadBuffer`] for a malformed frame.
+pub fn encode_gif(frames: &[Image], delay_centiseconds: u16) -> Result<Vec<u8>, RenderError> {
+    let first = frames.first().ok_or(RenderError::Empty {
+        what: "an animation needs at least one frame",
+    })?;
+    let (width, height) = (first.width, first.height);
+    for (index, f) in frames.iter().enumerate() {
+        if (f.width, f.height) != (width, height) {
+            return Err(RenderError::FrameSize {
+                index,
+                width: f.width,
+                height: f.height,
+                first_width: width,
+                first_height: height,
+            });
+        }
+        check_buffer(f)?;
+    }
+    if width == 0 || height == 0 {
+        return Err(RenderError::Empty {
+            what: "the frames have no pixels",
+        });
+    }
+    let (Ok(w), Ok(h)) = (u16::try_from(width), u16::try_from(height)) else {
+        return Err(RenderError::TooLargeForFormat {
+            format: "GIF",
+            width,
+            height,
+            max: u32::from(u16::MAX),
+        });
+    };
+    let fail = |e: gif::EncodingError| encode_error("GIF")(Box::new(e));
+    let mut out = Vec::new();
+    let mut encoder = gif::Encoder::new(&mut out, w, h, &[]).map_err(fail)?;
+    encoder.set_repeat(gif::Repeat::Infinite).map_err(fail)?;
+    let mut pixels = Vec::new();
+    for f in frames {
+        pixels.clone_from(&f.rgba);
+        let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
+        frame.delay = delay_centiseconds;
+        encoder.write_frame(&frame).map_err(fail)?;
+    }
+    encoder.into_inner().map_err(fail)?;
+    Ok(out)
+}
+
+/// A contact sheet: the frames tiled left to right, `columns` per row (at least 1, at most
+/// the number of frames), top to bottom, separated by 4 px of white. Each cell is as large as
+/// the largest frame; smaller frames sit at its top left. No frames give an empty image.
+/// Frames whose buffer does not match their size are drawn as far as their rows go.
+///
+/// # Panics
+/// When the sheet would be more than `u32::MAX` pixels wide or tall.
+pub fn strip(frames: &[Image], columns: usize) -> Image {
+    if frames.is_empty() {
+        return Image {
+            width: 0,
+            height: 0,
+            rgba: Vec::new(),
+        };
+    }
+    let columns = columns.clamp(1, frames.len());
+    let rows = frames.len().div_ceil(columns);
+    let cell_w = frames.iter().map(|f| f.width).max().unwrap_or(0) as usize;
+    let cell_h = frames.iter().map(|f| f.height).max().unwrap_or(0) as usize;
+    let gap = STRIP_GAP as usize;
+    let width = columns * cell_w + (columns - 1) * gap;
+    let height = rows * cell_h + (rows - 1) * gap;
+    let too_big = "contact sheet larger than u32::MAX pixels per side";
+    let (sheet_w, sheet_h) = (
+        u32::try_from(width).expect(too_big),
+        u32::try_from(height).expect(too_big),
+    );
+    let mut rgba = vec![255u8; width * height * 4];
+    for (i, f) in frames.iter().enumerate() {
+        let (x0, y0) = (
+            (i % columns) * (cell_w + gap),
+            (i / columns) * (cell_h + gap),
+        );
+        let row_bytes = f.width as usize * 4;
+        if row_bytes == 0 {
+            continue;
+        }
+        for (y, line) in f
+            .rgba
+            .chunks_exact(row_bytes)
+            .take(f.height as usize)
+            .enumerate()
+        {
+            let start = ((y0 + y) * width + x0) * 4;
+            rgba[start..start + row_bytes].copy_from_slice(line);
+        }
+    }
+    Image {
+        width: sheet_w,
+        height: sheet_h,
+        rgba,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The unit square as two counter-clockwise triangles.
+    fn square() -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+        (
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+    }
+
+    /// Shows `[-0.25, 1.25]^2`: the unit square covers pixels 10.67 to 53.33 of a 64x64 image.
+    const VIEW: Viewport = Viewport {
+        min: [-0.25, -0.25],
+        max: [1.25, 1.25],
+    };
+    const SIZE: ImageSize = ImageSize {
+        width: 64,
+        height: 64,
+    };
+
+    fn px(img: &Image, x: u32, y: u32) -> [u8; 4] {
+        let i = ((y * img.width + x) * 4) as usize;
+        img.rgba[i..i + 4].try_into().unwrap()
+    }
+
+    fn near(got: [u8; 4], rgb: [u8; 3], tol: u8) -> bool {
+        (0..3).all(|c| got[c].abs_diff(rgb[c]) <= tol) && got[3] == 255
+    }
+
+    fn lum(p: [u8; 4]) -> u32 {
+        u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2])
+    }
+
+    /// The pixel containing world point `p`.
+    fn pixel_of(view: &Viewport, size: ImageSize, p: [f64; 2]) -> (u32, u32) {
+        let (s, ox, oy) = view.transform(size);
+        ((ox + s * p[0]) as u32, (oy - s * p[1]) as u32)
+    }
+
+    fn plain(faces: &[[u32; 3]]) -> Drawing<'_> {
+        Drawing {
+            faces,
+            corner_uv: None,
+            texture: None,
+        }
+    }
+
+    #[test]
+    fn square_is_filled_inside_white_outside_with_darker_edges() {
+        let (pos, faces) = square();
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        assert_eq!(
+            (img.width, img.height, img.rgba.len()),
+            (64, 64, 64 * 64 * 4)
+        );
+        // Inside, away from the edges and the diagonal (x + y = 64 in pixels).
+        for (x, y) in [(20, 20), (44, 44), (16, 30), (30, 16)] {
+            assert!(
+                near(px(&img, x, y), FILL, 2),
+                "({x},{y}) {:?}",
+                px(&img, x, y)
+            );
+        }
+        // Outside.
+        for (x, y) in [(2, 2), (60, 32), (32, 61), (5, 58)] {
+            assert_eq!(px(&img, x, y), [255; 4], "({x},{y})");
+        }
+        // On the left boundary (x = 10.67), and on the shared diagonal.
+        let fill = lum([FILL[0], FILL[1], FILL[2], 255]);
+        for (x, y) in [(10, 32), (31, 32), (32, 31)] {
+            let p = px(&img, x, y);
+            assert!(
+                lum(p) + 120 < fill,
+                "({x},{y}) {p:?} is not darker than the fill"
+            );
+        }
+    }
+
+    #[test]
+    fn flipped_triangles_are_red() {
+        let (pos, _) = square();
+        // Clockwise in world coordinates, and a degenerate one.
+        let faces = [[0, 2, 1], [0, 0, 3]];
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let (x, y) = pixel_of(&VIEW, SIZE, [0.7, 0.3]);
+        assert!(near(px(&img, x, y), FLIPPED, 2), "{:?}", px(&img, x, y));
+        // The other half of the square is empty.
+        let (x, y) = pixel_of(&VIEW, SIZE, [0.3, 0.7]);
+        assert_eq!(px(&img, x, y), [255; 4]);
+    }
+
+    #[test]
+    fn world_y_up_is_image_up() {
+        let pos = [[-1.0, 0.1], [1.0, 0.1], [0.0, 1.0]];
+        let faces = [[0, 1, 2]];
+        let view = Viewport {
+            min: [-1.0, -1.0],
+            max: [1.0, 1.0],
+        };
+        let img = render(&pos, &plain(&faces), &view, SIZE);
+        let inked = |rows: std::ops::Range<u32>| {
+            rows.flat_map(|y| (0..64).map(move |x| (x, y)))
+                .filter(|&(x, y)| px(&img, x, y) != [255; 4])
+                .count()
+        };
+        assert!(inked(0..30) > 300);
+        assert_eq!(inked(32..64), 0);
+    }
+
+    /// Bounding box `(width, height)` of the non-white pixels.
+    fn ink_extent(img: &Image) -> (u32, u32) {
+        let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
+        for y in 0..img.height {
+            for x in 0..img.width {
+                if px(img, x, y) != [255; 4] {
+                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+                }
+            }
+        }
+        (x1 + 1 - x0, y1 + 1 - y0)
+    }
+
+    #[test]
+    fn odd_aspect_ratios_keep_a_square_square() {
+        let (pos, faces) = square();
+        let view = Viewport::fit([&pos[..]]);
+        for (w, h) in [(120, 50), (50, 120), (97, 33)] {
+            let size = ImageSize {
+                width: w,
+                height: h,
+            };
+            let img = render(&pos, &plain(&faces), &view, size);
+            let (ew, eh) = ink_extent(&img);
+            assert!(ew.abs_diff(eh) <= 1, "{w}x{h}: square drawn {ew}x{eh}");
+            assert!(ew >= w.min(h) * 8 / 10, "{w}x{h}: square drawn {ew}x{eh}");
+        }
+    }
+
+    /// A 2x2 texture: red top left, green top right, blue bottom left, white bottom right.
+    fn quadrants() -> Image {
+        Image {
+            width: 2,
+            height: 2,
+            rgba: vec![
+                255, 0, 0, 255, 0, 255, 0, 255, //
+                0, 0, 255, 255, 255, 255, 255, 255,
+            ],
+        }
+    }
+
+    #[test]
+    fn texture_quadrants_land_in_the_right_place() {
+        let (pos, faces) = square();
+        // uv = position: (0, 0) is the texture's bottom left.
+        let uv: Vec<[[f64; 2]; 3]> = faces.iter().map(|f| f.map(|i| pos[i as usize])).collect();
+        let texture = quadrants();
+        let drawing = Drawing {
+            faces: &faces,
+            corner_uv: Some(&uv),
+            texture: Some(&texture),
+        };
+        let img = render(&pos, &drawing, &VIEW, SIZE);
+        for (p, rgb) in [
+            ([0.25, 0.75], [255, 0, 0]),
+            ([0.75, 0.75], [0, 255, 0]),
+            ([0.25, 0.25], [0, 0, 255]),
+            ([0.75, 0.25], [255, 255, 255]),
+        ] {
+            let (x, y) = pixel_of(&VIEW, SIZE, p);
+            assert!(near(px(&img, x, y), rgb, 16), "{p:?}: {:?}", px(&img, x, y));
+        }
+        // Texture only: no edge lines, outside stays white.
+        assert_eq!(px(&img, 2, 2), [255; 4]);
+    }
+
+    #[test]
+    fn textured_triangles_leave_no_seam() {
+        let (pos, faces) = square();
+        let uv: Vec<[[f64; 2]; 3]> = faces.iter().map(|f| f.map(|i| pos[i as usize])).collect();
+        let grey = Image {
+            width: 1,
+            height: 1,
+            rgba: vec![90, 120, 150, 255],
+        };
+        let drawing = Drawing {
+            faces: &faces,
+            corner_uv: Some(&uv),
+            texture: Some(&grey),
+        };
+        let img = render(&pos, &drawing, &VIEW, SIZE);
+        // Every pixel with its centre inside the square, the diagonal included, is the
+        // texture's colour exactly.
+        let (s, ox, oy) = VIEW.transform(SIZE);
+        for y in 0..64 {
+            for x in 0..64 {
+                let wx = (f64::from(x) + 0.5 - ox) / s;
+                let wy = (oy - f64::from(y) - 0.5) / s;
+                if (0.02..0.98).contains(&wx) && (0.02..0.98).contains(&wy) {
+                    assert_eq!(px(&img, x, y), [90, 120, 150, 255], "({x},{y})");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_faces_and_empty_sizes_do_not_panic() {
+        let pos = [[0.0, 0.0], [1.0, 0.0], [f64::NAN, 1.0]];
+        let faces = [[0, 1, 2], [0, 1, 7]];
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        assert!(img.rgba.iter().all(|&b| b == 255));
+        let empty = render(
+            &pos,
+            &plain(&faces),
+            &VIEW,
+            ImageSize {
+                width: 0,
+                height: 5,
+            },
+        );
+        assert!(empty.rgba.is_empty());
+        assert!(matches!(encode_png(&empty), Err(RenderError::Empty { .. })));
+    }
+
+    fn noise(width: u32, height: u32, seed: u32) -> Image {
+        let mut state = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+        let rgba = (0..width * height * 4)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                (state >> 24) as u8
+            })
+            .collect();
+        Image {
+            width,
+            height,
+            rgba,
+        }
+    }
+
+    #[test]
+    fn png_round_trips_exactly() {
+        let (pos, faces) = square();
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let bytes = encode_png(&img).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"));
+        assert_eq!(decode_image(&bytes).unwrap(), img);
+        // Transparency and arbitrary values survive too.
+        let img = noise(7, 3, 1);
+        assert_eq!(decode_image(&encode_png(&img).unwrap()).unwrap(), img);
+    }
+
+    #[test]
+    fn grey_pngs_widen_to_rgba() {
+        let mut bytes = Vec::new();
+        let mut encoder = png::Encoder::new(&mut bytes, 2, 1);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(&[10, 200]).unwrap();
+        writer.finish().unwrap();
+        let img = decode_image(&bytes).unwrap();
+        assert_eq!(img.rgba, vec![10, 10, 10, 255, 200, 200, 200, 255]);
+    }
+
+    /// A baseline greyscale JPEG of 16x8 pixels: two flat 8x8 blocks, grey 64 then 192,
+    /// written bit by bit (DC coefficients only, quantisation 1).
+    fn two_block_jpeg() -> Vec<u8> {
+        let mut out = vec![0xff, 0xd8];
+        // Quantisation table 0: all ones.
+        out.extend([0xff, 0xdb, 0, 67, 0]);
+        out.extend([1u8; 64]);
+        // Frame: 8 bits, height 8, width 16, one component (id 1, 1x1, table 0).
+        out.extend([0xff, 0xc0, 0, 11, 8, 0, 8, 0, 16, 1, 1, 0x11, 0]);
+        // DC table 0: two codes of length 2, categories 10 ("00") and 11 ("01").
+        out.extend([0xff, 0xc4, 0, 21, 0x00, 0, 2]);
+        out.extend([0u8; 14]);
+        out.extend([10, 11]);
+        // AC table 0: one code of length 1, end of block ("0").
+        out.extend([0xff, 0xc4, 0, 20, 0x10, 1]);
+        out.extend([0u8; 15]);
+        out.extend([0x00]);
+        // Scan header.
+        out.extend([0xff, 0xda, 0, 8, 1, 1, 0x00, 0, 63, 0]);
+        // DC of a flat block of grey g is 8 (g - 128): -512, then a difference of +1024.
+        // -512 in category 10 is written as 511; +1024 in category 11 as itself.
+        let bits = format!("00{:010b}0", 511) + &format!("01{:011b}0", 1024);
+        let padded = format!("{bits:1<32}");
+        for chunk in padded.as_bytes().chunks(8) {
+            let byte = u8::from_str_radix(std::str::from_utf8(chunk).unwrap(), 2).unwrap();
+            out.push(byte);
+            if byte == 0xff {
+                out.push(0);
+            }
+        }
+        out.extend([0xff, 0xd9]);
+        out
+    }
+
+    #[test]
+    fn jpegs_decode_to_rgba() {
+        let img = decode_image(&two_block_jpeg()).unwrap();
+        assert_eq!((img.width, img.height), (16, 8));
+        assert!(
+            near(px(&img, 3, 4), [64, 64, 64], 2),
+            "{:?}",
+            px(&img, 3, 4)
+        );
+        assert!(
+            near(px(&img, 12, 4), [192, 192, 192], 2),
+            "{:?}",
+            px(&img, 12, 4)
+        );
+    }
+
+    #[test]
+    fn decode_errors_are_one_line_and_name_the_file() {
+        let err = decode_image(b"GIF89a...").unwrap_err();
+        assert!(matches!(err, RenderError::UnknownFormat { path: None }));
+        assert_eq!(err.to_string(), "not a PNG or JPEG image");
+
+        let mut png = encode_png(&noise(4, 4, 2)).unwrap();
+        png.truncate(png.len() - 20);
+        let err = decode_image(&png).unwrap_err();
+        assert!(
+            matches!(err, RenderError::Decode { format: "PNG", .. }),
+            "{err}"
+        );
+
+        let dir = std::env::temp_dir().join(format!("bdmorph-raster-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let missing = dir.join("missing.png");
+        let err = read_image(&missing).unwrap_err();
+        assert!(matches!(err, RenderError::Read { .. }));
+        assert!(err
+            .to_string()
+            .starts_with(&format!("{}: cannot read", missing.display())));
+
+        let bogus = dir.join("bogus.jpg");
+        std::fs::write(&bogus, b"hello").unwrap();
+        let err = read_image(&bogus).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("{}: not a PNG or JPEG image", bogus.display())
+        );
+        let damaged = dir.join("damaged.png");
+        std::fs::write(&damaged, &png).unwrap();
+        let message = read_image(&damaged).unwrap_err().to_string();
+        assert!(message.starts_with(&format!("{}: cannot decode PNG image: ", damaged.display())));
+        assert!(!message.contains('\n'));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn gif_loops_forever_with_every_frame() {
+        let frames: Vec<Image> = (0..3).map(|i| noise(20, 10, i)).collect();
+        let bytes = encode_gif(&frames, 7).unwrap();
+        assert!(bytes.starts_with(b"GIF89a"));
+        assert!(bytes.windows(11).any(|w| w == b"NETSCAPE2.0"));
+
+        let mut options = gif::DecodeOptions::new();
+        options.set_color_output(gif::ColorOutput::RGBA);
+        let mut decoder = options.read_info(Cursor::new(&bytes)).unwrap();
+        assert_eq!((decoder.width(), decoder.height()), (20, 10));
+        let mut count = 0;
+        while let Some(frame) = decoder.read_next_frame().unwrap() {
+            assert_eq!((frame.width, frame.height, frame.delay), (20, 10, 7));
+            count += 1;
+        }
+        assert_eq!(count, 3);
+        assert_eq!(decoder.repeat(), gif::Repeat::Infinite);
+    }
+
+    #[test]
+    fn gif_keeps_few_colours_exact() {
+        let (pos, faces) = square();
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let bytes = encode_gif(std::slice::from_ref(&img), 10).unwrap();
+        let mut options = gif::DecodeOptions::new();
+        options.set_color_output(gif::ColorOutput::RGBA);
+        let mut decoder = options.read_info(Cursor::new(&bytes)).unwrap();
+        let frame = decoder.read_next_frame().unwrap().unwrap();
+        assert_eq!(&frame.buffer[..], &img.rgba[..]);
+    }
+
+    #[test]
+    fn gif_refuses_mixed_sizes_and_no_frames() {
+        let err = encode_gif(&[noise(4, 4, 0), noise(4, 5, 1)], 5).unwrap_err();
+        assert!(matches!(
+            err,
+            RenderError::FrameSize {
+                index: 1,
+                height: 5,
+                first_height: 4,
+                ..
+            }
+        ));
+        assert!(err.to_string().contains("4x5"));
+        assert!(matches!(encode_gif(&[], 5), Err(RenderError::Empty { .. })));
+        let mut broken = noise(4, 4, 0);
+        broken.rgba.pop();
+        assert!(matches!(
+            encode_gif(&[broken], 5),
+            Err(RenderError::BadBuffer {
+                expected: 64,
+                actual: 63,
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn strip_tiles_frames_in_rows_with_white_gaps() {
+        let frames: Vec<Image> = (0..5)
+            .map(|i| Image {
+                width: 10,
+                height: 8,
+                rgba: [i as u8 * 40, 0, 0, 255].repeat(80),
+            })
+            .collect();
+        let sheet = strip(&frames, 3);
+        assert_eq!((sheet.width, sheet.height), (3 * 10 + 2 * 4, 2 * 8 + 4));
+        assert_eq!(sheet.rgba.len(), (sheet.width * sheet.height * 4) as usize);
+        // Frame 4 is the second of the second row; the gap and the missing sixth are white.
+        assert_eq!(px(&sheet, 14 + 5, 12 + 3), [160, 0, 0, 255]);
+        assert_eq!(px(&sheet, 11, 3), [255; 4]);
+        assert_eq!(px(&sheet, 5, 9), [255; 4]);
+        assert_eq!(px(&sheet, 28 + 5, 12 + 3), [255; 4]);
+        // One column, and more columns than frames.
+        assert_eq!(
+            (strip(&frames, 0).width, strip(&frames, 0).height),
+            (10, 5 * 8 + 4 * 4)
+        );
+        assert_eq!(strip(&frames, 9).width, 5 * 10 + 4 * 4);
+        assert_eq!(strip(&[], 3).rgba.len(), 0);
+    }
+}

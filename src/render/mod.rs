@@ -59,7 +59,9 @@ impl std::str::FromStr for ImageSize {
         let parse = |v: &str| -> Result<u32, String> {
             match v.trim().parse::<u32>() {
                 Ok(n) if (1..=16384).contains(&n) => Ok(n),
-                _ => Err(format!("size '{s}': '{v}' is not a pixel count between 1 and 16384")),
+                _ => Err(format!(
+                    "size '{s}': '{v}' is not a pixel count between 1 and 16384"
+                )),
             }
         };
         Ok(ImageSize {
@@ -100,7 +102,9 @@ impl Viewport {
                 max: [1.0, 1.0],
             };
         }
-        let extent = (max[0] - min[0]).max(max[1] - min[1]).max(f64::MIN_POSITIVE);
+        let extent = (max[0] - min[0])
+            .max(max[1] - min[1])
+            .max(f64::MIN_POSITIVE);
         let m = 0.05 * extent;
         Viewport {
             min: [min[0] - m, min[1] - m],

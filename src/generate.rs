@@ -211,6 +211,143 @@ fn centre_and_radius(mesh: &PlanarMesh) -> ([f64; 2], f64) {
     (c, if r > 0.0 { r } else { 1.0 })
 }
 
+/// The outline of a gingerbread figure (head, arms, legs), counter-clockwise, about 3.6 units
+/// wide and 4.3 tall, feet at `y = -1.5`.
+pub fn figure_outline() -> Vec<[f64; 2]> {
+    // The right half from the crotch up to the neck; the head arc; the left half mirrored.
+    let right: [[f64; 2]; 13] = [
+        [0.15, -1.3],
+        [0.2, -1.5],
+        [0.75, -1.5],
+        [0.8, -1.35],
+        [0.6, -0.2],
+        [0.62, 0.9],
+        [0.6, 1.1],
+        [1.4, 1.15],
+        [1.65, 1.2],
+        [1.75, 1.4],
+        [1.65, 1.6],
+        [1.3, 1.62],
+        [0.5, 1.6],
+    ];
+    let mut outline = vec![[0.0, -0.3]];
+    outline.extend(right);
+    let (centre, radius) = ([0.0, 2.3], 0.5);
+    for i in 0..=20 {
+        let a = (-55.0 + 290.0 * f64::from(i) / 20.0_f64).to_radians();
+        outline.push([centre[0] + radius * a.cos(), centre[1] + radius * a.sin()]);
+    }
+    outline.extend(right.iter().rev().map(|p| [-p[0], p[1]]));
+    outline
+}
+
+/// A gingerbread figure triangulated by a refined constrained Delaunay triangulation (spade):
+/// triangles of area at most `max_area` (in units of the outline, see [`figure_outline`]) and
+/// no angle below 25 degrees. `max_area = 0.01` gives about 900 vertices.
+pub fn figure(max_area: f64) -> PlanarMesh {
+    use spade::{
+        AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+    };
+    let outline = figure_outline();
+    let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
+    // The outline is simple and finite, so insertion cannot fail; an error leaves an empty mesh.
+    if cdt
+        .add_constraint_edges(outline.iter().map(|p| Point2::new(p[0], p[1])), true)
+        .is_err()
+    {
+        return PlanarMesh {
+            positions: Vec::new(),
+            faces: Vec::new(),
+        };
+    }
+    let result = cdt.refine(
+        RefinementParameters::<f64>::new()
+            .exclude_outer_faces(true)
+            .with_max_allowed_area(max_area.max(1e-5))
+            .with_angle_limit(AngleLimit::from_deg(25.0)),
+    );
+    let excluded: std::collections::HashSet<_> = result.excluded_faces.into_iter().collect();
+    // Keep the inner faces and number only the vertices they use, in first-use order.
+    let mut index = vec![u32::MAX; cdt.num_vertices()];
+    let mut positions = Vec::new();
+    let mut faces = Vec::new();
+    for face in cdt.inner_faces() {
+        if excluded.contains(&face.fix()) {
+            continue;
+        }
+        let tri = face.vertices().map(|v| {
+            let i = v.fix().index();
+            if index[i] == u32::MAX {
+                index[i] = positions.len() as u32;
+                let p = v.position();
+                positions.push([p.x, p.y]);
+            }
+            index[i]
+        });
+        faces.push(tri);
+    }
+    let mut mesh = PlanarMesh { positions, faces };
+    for f in &mut mesh.faces {
+        if mesh_signed_area(&mesh.positions, f) < 0.0 {
+            f.swap(1, 2);
+        }
+    }
+    mesh
+}
+
+fn mesh_signed_area(p: &[[f64; 2]], f: &[u32; 3]) -> f64 {
+    let [a, b, c] = f.map(|v| p[v as usize]);
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Cubic smoothstep from 0 at `edge0` to 1 at `edge1` (either order).
+fn smoothstep(edge0: f64, edge1: f64, x: f64) -> f64 {
+    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+fn rotate_about(p: [f64; 2], pivot: [f64; 2], angle: f64) -> [f64; 2] {
+    let (s, c) = angle.sin_cos();
+    let (x, y) = (p[0] - pivot[0], p[1] - pivot[1]);
+    [pivot[0] + c * x - s * y, pivot[1] + s * x + c * y]
+}
+
+/// A waving pose of [`figure`]: the right arm raised, the left lowered, the legs apart and the
+/// head tilted, each by a rotation blended in smoothly along the limb (`amount = 1` for the
+/// full pose). For meshes of the figure's outline only.
+pub fn wave(mesh: &PlanarMesh, amount: f64) -> PlanarMesh {
+    map(mesh, |p| {
+        // Every weight is a function of the rest position p, and the regions barely overlap,
+        // so the map stays smooth and its Jacobian positive.
+        let arm = smoothstep(0.65, 1.25, p[0].abs()) * smoothstep(0.6, 1.0, p[1]);
+        let leg = smoothstep(-0.3, -1.0, p[1]);
+        let head = smoothstep(1.65, 2.0, p[1]) * (1.0 - smoothstep(0.5, 0.65, p[0].abs()));
+        let right = p[0] > 0.0;
+        let mut q = p;
+        if arm > 0.0 {
+            // The right arm waves up, the left one hangs down a little.
+            let (pivot, angle) = if right {
+                ([0.55, 1.35], 0.9)
+            } else {
+                ([-0.55, 1.35], 0.5)
+            };
+            q = rotate_about(q, pivot, amount * angle * arm);
+        }
+        if leg > 0.0 {
+            let (pivot, angle) = if right {
+                ([0.35, -0.25], 0.35)
+            } else {
+                ([-0.35, -0.25], -0.35)
+            };
+            q = rotate_about(q, pivot, amount * angle * leg);
+        }
+        if head > 0.0 {
+            q = rotate_about(q, [0.0, 1.75], amount * 0.3 * head);
+        }
+        q
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,6 +377,20 @@ mod tests {
         let f = fan(9, 0.3);
         assert!(all_ccw(&f));
         f.validate().expect("valid fan");
+    }
+
+    #[test]
+    fn figure_is_a_valid_disk_and_waves_without_flips() {
+        let m = figure(0.01);
+        assert!(m.positions.len() > 500, "{} vertices", m.positions.len());
+        m.validate().expect("valid figure");
+        bdmorph_compiler::compile(&m.positions, &m.faces).expect("a disk");
+        let w = wave(&m, 1.0);
+        assert!(
+            all_ccw(&w),
+            "the waving pose keeps every triangle counter-clockwise"
+        );
+        assert_eq!(figure(0.01), m, "deterministic");
     }
 
     #[test]

@@ -365,17 +365,19 @@ fn obj_face(
             if parts.next().is_some() || !(vn.is_empty() || vn.parse::<i64>().is_ok()) {
                 return Err(bad());
             }
-            face[corners] = obj_index("vertex", vertex, counts[0], forward_v, at).map_err(|e| match e {
-                IndexError::Syntax => bad(),
-                IndexError::Read(e) => e,
-            })?;
+            face[corners] =
+                obj_index("vertex", vertex, counts[0], forward_v, at).map_err(|e| match e {
+                    IndexError::Syntax => bad(),
+                    IndexError::Read(e) => e,
+                })?;
             if vt.is_empty() {
                 all_tex = false;
             } else {
-                tex[corners] = obj_index("texture", vt, counts[1], forward_t, at).map_err(|e| match e {
-                    IndexError::Syntax => at.expected("a texture index after '/'", word),
-                    IndexError::Read(e) => e,
-                })?;
+                tex[corners] =
+                    obj_index("texture", vt, counts[1], forward_t, at).map_err(|e| match e {
+                        IndexError::Syntax => at.expected("a texture index after '/'", word),
+                        IndexError::Read(e) => e,
+                    })?;
             }
         }
         corners += 1;
@@ -407,9 +409,9 @@ fn obj_index(
     let read = IndexError::Read;
     let zero_based = match index {
         0 => {
-            return Err(read(at.parse(format!(
-                "{what} index 0 is invalid (OBJ counts from 1)"
-            ))))
+            return Err(read(
+                at.parse(format!("{what} index 0 is invalid (OBJ counts from 1)")),
+            ))
         }
         i if i > count => {
             forward.push((at.line, i));
@@ -1001,7 +1003,10 @@ mod tests {
         assert_eq!(back.texcoords, Some(t));
         // A face without vt drops texture coordinates for the whole mesh.
         let partial = "v 0 0\nv 1 0\nv 0 1\nvt 0 0\nf 1/1 2/1 3/1\nf 1 2 3\n";
-        assert_eq!(parse_obj(partial, Path::new("p.obj")).unwrap().texcoords, None);
+        assert_eq!(
+            parse_obj(partial, Path::new("p.obj")).unwrap().texcoords,
+            None
+        );
         // A texture index out of range names its line.
         let bad = "v 0 0\nv 1 0\nv 0 1\nvt 0 0\nf 1/1 2/9 3/1\n";
         let err = parse_obj(bad, Path::new("b.obj")).unwrap_err().to_string();

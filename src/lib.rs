@@ -33,6 +33,7 @@
 #![warn(missing_docs)]
 
 pub mod generate;
+pub mod info;
 pub mod io;
 pub mod mesh;
 pub mod morph;

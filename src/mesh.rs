@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::io::{self, ReadError, SurfaceMesh};
+use crate::io::{self, ReadError, SurfaceMesh, TexCoords};
 
 /// A planar triangle mesh: one 2D position per vertex, triangles as 0-based vertex indices,
 /// counter-clockwise.
@@ -93,6 +93,37 @@ impl PlanarMesh {
     /// Reads a planar mesh from an OBJ or OFF file (z must be 0 when present).
     pub fn read(path: &Path) -> Result<PlanarMesh, MeshError> {
         PlanarMesh::from_surface(io::read_mesh(path)?, path)
+    }
+
+    /// Reads a planar mesh and its texture coordinates (when the file has them for every
+    /// corner).
+    pub fn read_textured(path: &Path) -> Result<(PlanarMesh, Option<TexCoords>), MeshError> {
+        let mut surface = io::read_mesh(path)?;
+        let texcoords = surface.texcoords.take();
+        Ok((PlanarMesh::from_surface(surface, path)?, texcoords))
+    }
+
+    /// Texture coordinates from the positions: the bounding box mapped to the unit square,
+    /// keeping the aspect ratio (for texturing a mesh that has no `vt`).
+    pub fn normalized_texcoords(&self) -> TexCoords {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for p in &self.positions {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let scale = if extent > 0.0 { 1.0 / extent } else { 1.0 };
+        TexCoords {
+            uv: self
+                .positions
+                .iter()
+                .map(|p| [(p[0] - lo[0]) * scale, (p[1] - lo[1]) * scale])
+                .collect(),
+            corners: self.faces.clone(),
+        }
     }
 
     /// Drops z from a mesh that lies in the plane z = 0.

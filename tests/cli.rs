@@ -191,16 +191,271 @@ fn errors_are_one_line_name_the_file_and_write_nothing() {
 fn demo_writes_frames() {
     let dir = scratch("demo");
     let out = dir.join("demo");
-    let r = bin().args(["demo", "-o"]).arg(&out).output().expect("runs");
+    let r = bin()
+        .args(["demo", "--frames", "6", "--size", "80x80", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     for name in [
+        "viewer.html",
+        "morph.gif",
+        "frames.png",
         "source.obj",
         "target.obj",
-        "frame_0000.obj",
-        "frame_0010.obj",
     ] {
         assert!(out.join(name).is_file(), "{name}");
     }
     let stdout = String::from_utf8(r.stdout).expect("utf8");
-    assert!(stdout.contains("0 flipped triangles"));
+    assert!(stdout.contains("0 flipped triangles"), "{stdout}");
+    assert!(stdout.contains("viewer.html"), "{stdout}");
+    let strip = bdmorph::render::raster::read_image(&out.join("frames.png")).expect("png");
+    assert!(
+        strip.width > 4 * 80 && strip.height >= 80,
+        "five pictures side by side"
+    );
+}
+
+fn run_ok(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+#[test]
+fn info_reports_counts_and_morphability() {
+    let dir = scratch("info");
+    let (_, pa, _, _) = pair(&dir);
+    let out = run_ok(bin().arg("info").arg(&pa));
+    let text = String::from_utf8(out.stdout).expect("utf8");
+    assert!(text.contains("vertices 127, faces 216"), "{text}");
+    assert!(text.contains("boundary loops 1"), "{text}");
+    assert!(text.contains("morphable: yes"), "{text}");
+    // A ring has two boundary loops and cannot be morphed.
+    let ring = dir.join("ring.obj");
+    let mut obj = String::new();
+    for i in 0..8 {
+        let a = f64::from(i) * std::f64::consts::TAU / 8.0;
+        obj += &format!(
+            "v {} {}\nv {} {}\n",
+            2.0 * a.cos(),
+            2.0 * a.sin(),
+            a.cos(),
+            a.sin()
+        );
+    }
+    for i in 0..8u32 {
+        let (o0, i0, o1, i1) = (
+            2 * i + 1,
+            2 * i + 2,
+            2 * ((i + 1) % 8) + 1,
+            2 * ((i + 1) % 8) + 2,
+        );
+        obj += &format!("f {o0} {o1} {i1}\nf {o0} {i1} {i0}\n");
+    }
+    std::fs::write(&ring, obj).expect("write");
+    let text = String::from_utf8(run_ok(bin().arg("info").arg(&ring)).stdout).expect("utf8");
+    assert!(text.contains("boundary loops 2"), "{text}");
+    assert!(
+        text.contains("morphable: no") && text.contains("holes"),
+        "{text}"
+    );
+}
+
+#[test]
+fn every_output_format_is_written() {
+    let dir = scratch("formats");
+    let (_, pa, _, pb) = pair(&dir);
+    let single = |name: &str| {
+        let out = dir.join(name);
+        run_ok(
+            morph()
+                .arg(&pa)
+                .arg(&pb)
+                .args(["--t", "0.5", "--size", "64x48", "-o"])
+                .arg(&out),
+        );
+        std::fs::read(&out).expect("written")
+    };
+    assert!(single("f.svg").starts_with(b"<svg"));
+    assert!(single("f.png").starts_with(b"\x89PNG\r\n\x1a\n"));
+    assert!(single("f.obj").starts_with(b"#"));
+    let animation = |name: &str| {
+        let out = dir.join(name);
+        run_ok(
+            morph()
+                .arg(&pa)
+                .arg(&pb)
+                .args(["--frames", "5", "--size", "64x64", "-o"])
+                .arg(&out),
+        );
+        std::fs::read(&out).expect("written")
+    };
+    assert!(animation("m.gif").starts_with(b"GIF89a"));
+    let page = String::from_utf8(animation("m.html")).expect("utf8");
+    assert!(page.contains("<canvas") && !page.contains("<script src"));
+    // Per-frame pictures in a directory.
+    let pngs = dir.join("pngs");
+    run_ok(
+        morph()
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--frames", "3", "--format", "png", "--size", "32x32", "-o"])
+            .arg(&pngs),
+    );
+    for i in 0..3 {
+        assert!(pngs.join(format!("frame_{i:04}.png")).is_file());
+    }
+    let svgs = dir.join("svgs");
+    run_ok(
+        morph()
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--frames", "2", "--format", "svg", "-o"])
+            .arg(&svgs),
+    );
+    assert!(svgs.join("frame_0001.svg").is_file());
+}
+
+#[test]
+fn textures_change_the_picture_and_texture_coordinates_ride_along() {
+    let dir = scratch("texture");
+    let a = generate::disk(6, 0.2);
+    let b = generate::twist(&a, 0.8);
+    // The source carries vt (its normalised positions); the target does not need them.
+    let tex = a.normalized_texcoords();
+    let pa = dir.join("a.obj");
+    io::write_obj_2d_textured(&pa, &a.positions, &a.faces, Some(&tex), &[]).expect("write");
+    let pb = write(&dir, "b.obj", &b);
+    // A red/blue checkerboard texture.
+    let mut rgba = Vec::new();
+    for y in 0..8u32 {
+        for x in 0..8u32 {
+            rgba.extend_from_slice(if (x / 2 + y / 2) % 2 == 0 {
+                &[220, 30, 30, 255]
+            } else {
+                &[30, 30, 220, 255]
+            });
+        }
+    }
+    let img = bdmorph::render::Image {
+        width: 8,
+        height: 8,
+        rgba,
+    };
+    let texture = dir.join("checker.png");
+    std::fs::write(
+        &texture,
+        bdmorph::render::raster::encode_png(&img).expect("png"),
+    )
+    .expect("write");
+    let plain = dir.join("plain.png");
+    let textured = dir.join("textured.png");
+    run_ok(
+        morph()
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--t", "0.5", "--size", "64x64", "-o"])
+            .arg(&plain),
+    );
+    run_ok(
+        morph()
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--t", "0.5", "--size", "64x64", "--texture"])
+            .arg(&texture)
+            .arg("-o")
+            .arg(&textured),
+    );
+    let decode = |p: &Path| bdmorph::render::raster::read_image(p).expect("decodes");
+    let (p, t) = (decode(&plain), decode(&textured));
+    let reddish = |i: &bdmorph::render::Image| {
+        i.rgba
+            .chunks(4)
+            .filter(|c| c[0] > 150 && c[1] < 90 && c[2] < 90)
+            .count()
+    };
+    assert!(
+        reddish(&t) > 100 && reddish(&t) > 10 * reddish(&p).max(1),
+        "texture visible"
+    );
+    // OBJ frames carry the source's vt.
+    let frames = dir.join("objs");
+    run_ok(
+        morph()
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--frames", "2", "-o"])
+            .arg(&frames),
+    );
+    let text = std::fs::read_to_string(frames.join("frame_0001.obj")).expect("written");
+    assert!(
+        text.contains("\nvt ") && text.contains('/'),
+        "vt lines and f a/ta corners"
+    );
+    let back = io::read_mesh(&frames.join("frame_0001.obj")).expect("parses");
+    assert_eq!(back.texcoords, Some(tex));
+}
+
+#[test]
+fn output_mistakes_are_refused_before_anything_is_written() {
+    let dir = scratch("mistakes");
+    let (_, pa, _, pb) = pair(&dir);
+    let fails = |args: &[&str], needle: &str| {
+        let r = morph().arg(&pa).arg(&pb).args(args).output().expect("runs");
+        let err = String::from_utf8(r.stderr).expect("utf8");
+        assert!(!r.status.success(), "{args:?} should fail");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+    };
+    let o = |name: &str| dir.join(name).display().to_string();
+    fails(
+        &["--t", "0.5", "-o", &o("x.jpg")],
+        "unknown output extension",
+    );
+    fails(&["--frames", "3", "-o", &o("x.png")], "names a directory");
+    fails(
+        &[
+            "--t",
+            "0.5",
+            "--texture",
+            &o("missing.png"),
+            "-o",
+            &o("y.png"),
+        ],
+        "missing.png",
+    );
+    fails(&["--t", "0.5", "--size", "big", "-o", &o("z.png")], "WxH");
+    for name in ["x.jpg", "x.png", "y.png", "z.png"] {
+        assert!(!dir.join(name).exists(), "{name} must not be written");
+    }
+    // A quad is refused with its line.
+    let quad = dir.join("quad.obj");
+    std::fs::write(&quad, "v 0 0\nv 1 0\nv 1 1\nv 0 1\nf 1 2 3 4\n").expect("write");
+    let r = morph()
+        .arg(&quad)
+        .arg(&quad)
+        .args(["--t", "0.5", "--stats"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(!r.status.success() && err.contains("quad.obj:5"), "{err}");
+}
+
+#[test]
+fn help_and_version() {
+    let out = run_ok(bin().arg("--version"));
+    assert!(String::from_utf8(out.stdout)
+        .expect("utf8")
+        .starts_with("bdmorph "));
+    let out = run_ok(bin().args(["morph", "--help"]));
+    let help = String::from_utf8(out.stdout).expect("utf8");
+    assert!(
+        help.contains("Examples:") && help.contains("refused, not triangulated"),
+        "{help}"
+    );
 }

@@ -1,0 +1,210 @@
+//! Output formats: choosing one, rendering every frame to bytes, writing atomically.
+
+use std::path::{Path, PathBuf};
+
+use bdmorph::io::{self, TexCoords};
+use bdmorph::render::{html, raster, svg, Drawing, Image, ImageSize, Viewport};
+
+/// An output format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Wavefront OBJ: `v x y 0` lines in the source's order, the source's faces (and `vt`).
+    Obj,
+    /// SVG: filled triangles with edges.
+    Svg,
+    /// PNG: an anti-aliased picture, optionally textured.
+    Png,
+    /// GIF: an animated loop of all frames.
+    Gif,
+    /// HTML: a self-contained viewer with a slider and play/pause.
+    Html,
+}
+
+impl Format {
+    /// The format named by a file extension, if any.
+    pub fn from_extension(path: &Path) -> Option<Result<Format, String>> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "obj" => Ok(Format::Obj),
+            "svg" => Ok(Format::Svg),
+            "png" => Ok(Format::Png),
+            "gif" => Ok(Format::Gif),
+            "html" | "htm" => Ok(Format::Html),
+            other => Err(format!(
+                "{}: unknown output extension '.{other}' (use .obj, .svg, .png, .gif or .html, or --format)",
+                path.display()
+            )),
+        })
+    }
+
+    /// Whether one file holds every frame.
+    pub fn is_animation(self) -> bool {
+        matches!(self, Format::Gif | Format::Html)
+    }
+
+    fn extension(self) -> &'static str {
+        match self {
+            Format::Obj => "obj",
+            Format::Svg => "svg",
+            Format::Png => "png",
+            Format::Gif => "gif",
+            Format::Html => "html",
+        }
+    }
+}
+
+/// Where and how the frames are written.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The file, or the directory of per-frame files.
+    pub path: PathBuf,
+    /// The format.
+    pub format: Format,
+    /// Per-frame files in a directory.
+    pub directory: bool,
+}
+
+impl Plan {
+    /// Decides the output from `-o`, `--format` and the number of frames.
+    pub fn new(path: &Path, format: Option<Format>, frames: usize) -> Result<Plan, String> {
+        let from_ext = Format::from_extension(path).transpose()?;
+        let format = format.or(from_ext).unwrap_or(Format::Obj);
+        let directory = frames > 1 && !format.is_animation();
+        if directory && from_ext.is_some() {
+            return Err(format!(
+                "{}: with --frames, -o names a directory for {} frames (frame_0000.{}, ...); \
+                 give a directory, or a .gif or .html file",
+                path.display(),
+                format.extension(),
+                format.extension()
+            ));
+        }
+        Ok(Plan {
+            path: path.to_path_buf(),
+            format,
+            directory,
+        })
+    }
+
+    /// Whether the format draws pictures (and so can use a texture).
+    pub fn draws(&self) -> bool {
+        self.format != Format::Obj
+    }
+}
+
+/// How frames look, shared by every renderer.
+pub struct Look<'a> {
+    /// Triangles.
+    pub faces: &'a [[u32; 3]],
+    /// The source's texture coordinates (written to OBJ frames).
+    pub texcoords: Option<&'a TexCoords>,
+    /// The texture and the coordinates of each corner in it, when texturing.
+    pub texture: Option<(&'a Image, &'a [[[f64; 2]; 3]])>,
+    /// Picture size.
+    pub size: ImageSize,
+    /// Playback speed of animations.
+    pub fps: u32,
+    /// A title or header line.
+    pub title: &'a str,
+}
+
+/// Renders every frame into files in memory: `(path, bytes)`.
+pub fn render(
+    plan: &Plan,
+    look: &Look,
+    frames: &[(f64, Vec<[f64; 2]>)],
+    mut progress: impl FnMut(),
+) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
+    let view = Viewport::fit(frames.iter().map(|(_, p)| p.as_slice()));
+    let drawing = Drawing {
+        faces: look.faces,
+        corner_uv: look.texture.map(|(_, uv)| uv),
+        texture: look.texture.map(|(img, _)| img),
+    };
+    let name = |i: usize| {
+        if plan.directory {
+            plan.path
+                .join(format!("frame_{i:04}.{}", plan.format.extension()))
+        } else {
+            plan.path.clone()
+        }
+    };
+    let err = |e: raster::RenderError| e.to_string();
+    let mut files = Vec::new();
+    match plan.format {
+        Format::Obj => {
+            for (i, (t, pos)) in frames.iter().enumerate() {
+                let mut bytes = Vec::new();
+                let t_line = format!("t = {t}");
+                io::format_obj_2d_textured(
+                    &mut bytes,
+                    pos,
+                    look.faces,
+                    look.texcoords,
+                    &[look.title, &t_line],
+                )
+                .map_err(|e| format!("{}: {e}", name(i).display()))?;
+                files.push((name(i), bytes));
+                progress();
+            }
+        }
+        Format::Svg => {
+            for (i, (_, pos)) in frames.iter().enumerate() {
+                files.push((
+                    name(i),
+                    svg::svg(pos, &drawing, &view, look.size).into_bytes(),
+                ));
+                progress();
+            }
+        }
+        Format::Png => {
+            for (i, (_, pos)) in frames.iter().enumerate() {
+                let img = raster::render(pos, &drawing, &view, look.size);
+                files.push((name(i), raster::encode_png(&img).map_err(err)?));
+                progress();
+            }
+        }
+        Format::Gif => {
+            let mut images = Vec::with_capacity(frames.len());
+            for (_, pos) in frames {
+                images.push(raster::render(pos, &drawing, &view, look.size));
+                progress();
+            }
+            let delay = (100 / look.fps.clamp(1, 100)) as u16;
+            files.push((name(0), raster::encode_gif(&images, delay).map_err(err)?));
+        }
+        Format::Html => {
+            let texture_png = match look.texture {
+                Some((img, _)) => Some(raster::encode_png(img).map_err(err)?),
+                None => None,
+            };
+            let refs: Vec<(f64, &[[f64; 2]])> =
+                frames.iter().map(|(t, p)| (*t, p.as_slice())).collect();
+            let page = html::html(
+                look.title,
+                &refs,
+                look.faces,
+                drawing.corner_uv,
+                texture_png.as_deref(),
+                &view,
+            );
+            files.push((name(0), page.into_bytes()));
+            for _ in frames {
+                progress();
+            }
+        }
+    }
+    Ok(files)
+}
+
+/// Writes rendered files, each atomically; creates the directory of per-frame output.
+pub fn write(plan: &Plan, files: &[(PathBuf, Vec<u8>)]) -> Result<(), String> {
+    if plan.directory {
+        std::fs::create_dir_all(&plan.path)
+            .map_err(|e| format!("{}: cannot create directory: {e}", plan.path.display()))?;
+    }
+    for (path, bytes) in files {
+        io::write_bytes_atomic(path, bytes).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}

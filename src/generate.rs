@@ -194,14 +194,7 @@ pub fn stretch(mesh: &PlanarMesh, s: f64) -> PlanarMesh {
 }
 
 fn centre_and_radius(mesh: &PlanarMesh) -> ([f64; 2], f64) {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for p in &mesh.positions {
-        for d in 0..2 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let (lo, hi) = mesh.bounds();
     let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
     let r = mesh
         .positions

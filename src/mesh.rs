@@ -106,14 +106,7 @@ impl PlanarMesh {
     /// Texture coordinates from the positions: the bounding box mapped to the unit square,
     /// keeping the aspect ratio (for texturing a mesh that has no `vt`).
     pub fn normalized_texcoords(&self) -> TexCoords {
-        let mut lo = [f64::INFINITY; 2];
-        let mut hi = [f64::NEG_INFINITY; 2];
-        for p in &self.positions {
-            for d in 0..2 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
+        let (lo, hi) = self.bounds();
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
         let scale = if extent > 0.0 { 1.0 / extent } else { 1.0 };
         TexCoords {
@@ -148,8 +141,8 @@ impl PlanarMesh {
         0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
     }
 
-    /// Size of the mesh: the diagonal of its bounding box.
-    pub fn diameter(&self) -> f64 {
+    /// The bounding box: lower-left and upper-right corners (infinite when empty).
+    pub fn bounds(&self) -> ([f64; 2], [f64; 2]) {
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for p in &self.positions {
@@ -158,6 +151,12 @@ impl PlanarMesh {
                 hi[d] = hi[d].max(p[d]);
             }
         }
+        (lo, hi)
+    }
+
+    /// Size of the mesh: the diagonal of its bounding box.
+    pub fn diameter(&self) -> f64 {
+        let (lo, hi) = self.bounds();
         (hi[0] - lo[0]).hypot(hi[1] - lo[1])
     }
 

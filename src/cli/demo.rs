@@ -12,13 +12,7 @@ use super::{times, DemoArgs};
 /// the unit square (see [`PlanarMesh::normalized_texcoords`]), so shapes are placed in the
 /// outline's own coordinates.
 fn gingerbread_texture(size: u32, mesh: &PlanarMesh) -> Image {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in &mesh.positions {
-        for d in 0..2 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let (lo, hi) = mesh.bounds();
     let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
     let icing = [250u8, 250, 245, 255];
     let button = [210u8, 40, 60, 255];

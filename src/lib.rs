@@ -42,7 +42,7 @@ pub mod render;
 
 pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
 pub use bdmorph_isa::{disassemble, Program};
-pub use bdmorph_vm::{NewtonOptions, Vm, VmError};
+pub use bdmorph_vm::{NewtonOptions, TriangleReport, Vm, VmError};
 pub use mesh::{MeshError, PlanarMesh};
 pub use morph::{Frame, FrameStats, Morph, MorphError, MorphOptions};
 

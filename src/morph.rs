@@ -1,6 +1,6 @@
 //! The morph object: compile once, then frames for any `t`.
 
-use bdmorph_vm::{NewtonOptions, Program, Vm, VmError};
+use bdmorph_vm::{NewtonOptions, Program, TriangleReport, Vm, VmError};
 
 use crate::mesh::{MeshError, PlanarMesh};
 
@@ -87,7 +87,7 @@ pub enum MorphError {
         t: f64,
     },
     /// Newton's method did not reach the tolerance.
-    #[error("frame t = {t}: Newton did not converge (gradient norm {gradient_norm:e} after {iterations} iterations)")]
+    #[error("frame t = {t}: Newton did not converge (gradient norm {gradient_norm:e} after {iterations} iterations){}", Worst(worst))]
     NotConverged {
         /// The frame.
         t: f64,
@@ -95,14 +95,19 @@ pub enum MorphError {
         iterations: u32,
         /// Gradient norm reached.
         gradient_norm: f64,
+        /// The triangles closest to breaking the triangle inequality where Newton gave up,
+        /// worst first.
+        worst: Vec<TriangleReport>,
     },
     /// The solver failed otherwise (non-finite values, a Hessian that is not positive definite).
-    #[error("frame t = {t}: {source}")]
+    #[error("frame t = {t}: {source}{}", Worst(worst))]
     Solver {
         /// The frame.
         t: f64,
         /// The VM's error.
         source: VmError,
+        /// The triangles closest to breaking the triangle inequality where the solver failed.
+        worst: Vec<TriangleReport>,
     },
     /// The output buffer has the wrong length.
     #[error("output buffer holds {got} positions, the mesh has {expected} vertices")]
@@ -112,6 +117,23 @@ pub enum MorphError {
         /// Buffer length.
         got: usize,
     },
+}
+
+/// Formats the worst triangles of a failed frame for an error message.
+struct Worst<'a>(&'a [TriangleReport]);
+
+impl std::fmt::Display for Worst<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0.is_empty() {
+            return Ok(());
+        }
+        write!(f, "; worst triangles:")?;
+        for (i, tri) in self.0.iter().take(3).enumerate() {
+            let sep = if i == 0 { " " } else { ", " };
+            write!(f, "{sep}{tri}")?;
+        }
+        Ok(())
+    }
 }
 
 /// A compiled morph between two planar meshes with the same triangles.
@@ -175,8 +197,12 @@ impl Morph {
         options: MorphOptions,
     ) -> Result<Morph, MorphError> {
         source.validate_pair(target)?;
-        let vm = Vm::new(program).map_err(|e| MorphError::Solver { t: 0.0, source: e })?;
-        let solver = |e| MorphError::Solver { t: 0.0, source: e };
+        let solver = |source| MorphError::Solver {
+            t: 0.0,
+            source,
+            worst: Vec::new(),
+        };
+        let vm = Vm::new(program).map_err(solver)?;
         let sq_source = vm.squared_lengths(&source.positions).map_err(solver)?;
         let sq_target = vm.squared_lengths(&target.positions).map_err(solver)?;
         let root = vm.program().embed_root();
@@ -193,6 +219,11 @@ impl Morph {
         }
         while angle_turn <= -std::f64::consts::PI {
             angle_turn += std::f64::consts::TAU;
+        }
+        // A half turn is ambiguous: round-off in atan2 must not pick the direction, so within
+        // 1e-9 of pi the turn is counter-clockwise.
+        if (angle_turn.abs() - std::f64::consts::PI).abs() < 1e-9 {
+            angle_turn = std::f64::consts::PI;
         }
         Ok(Morph {
             faces: source.faces.clone(),
@@ -247,23 +278,35 @@ impl Morph {
                 got: out.len(),
             });
         }
-        let solver = |source| MorphError::Solver { t, source };
+        let solver = |source| MorphError::Solver {
+            t,
+            source,
+            worst: Vec::new(),
+        };
         self.vm
             .set_metric_lerp(&self.sq_source, &self.sq_target, t)
             .map_err(solver)?;
         if !self.options.warm_start {
             self.vm.reset_u();
         }
-        let report = self.vm.newton(&self.options.newton).map_err(|e| match e {
-            VmError::NotConverged {
-                iterations,
-                gradient_norm,
-            } => MorphError::NotConverged {
-                t,
-                iterations,
-                gradient_norm,
-            },
-            other => MorphError::Solver { t, source: other },
+        let report = self.vm.newton(&self.options.newton).map_err(|e| {
+            let worst = self.vm.failure_triangles().to_vec();
+            match e {
+                VmError::NotConverged {
+                    iterations,
+                    gradient_norm,
+                } => MorphError::NotConverged {
+                    t,
+                    iterations,
+                    gradient_norm,
+                    worst,
+                },
+                other => MorphError::Solver {
+                    t,
+                    source: other,
+                    worst,
+                },
+            }
         })?;
         let anchor = [
             (1.0 - t) * self.anchor_source[0] + t * self.anchor_target[0],

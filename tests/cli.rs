@@ -459,3 +459,37 @@ fn help_and_version() {
         "{help}"
     );
 }
+
+#[test]
+fn frames_that_fail_are_reported_and_not_written() {
+    let dir = scratch("failing-frames");
+    let (_, pa, _, pb) = pair(&dir);
+    let out = dir.join("frames");
+    // One Newton step is not enough at t = 0.5; t = 0 and t = 1 (warm from u = 0, and the
+    // target is flat) need none.
+    let r = morph()
+        .arg(&pa)
+        .arg(&pb)
+        .args(["--frames", "3", "--max-iterations", "1", "--stats", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(!r.status.success());
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(
+        err.contains("frame t = 0.5") && err.contains("frame skipped"),
+        "{err}"
+    );
+    assert!(err.contains("worst triangles"), "{err}");
+    assert!(err.contains("1 of 3 frames could not be computed"), "{err}");
+    assert!(out.join("frame_0000.obj").is_file());
+    assert!(!out.join("frame_0001.obj").exists());
+    assert!(out.join("frame_0002.obj").is_file());
+    let stdout = String::from_utf8(r.stdout).expect("utf8");
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("{\"t\":0.5,\"error\":\"")),
+        "{stdout}"
+    );
+}

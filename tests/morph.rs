@@ -255,10 +255,13 @@ fn non_convergence_is_a_typed_error_and_does_not_spoil_the_next_frame() {
         Err(MorphError::NotConverged {
             iterations,
             gradient_norm,
+            worst,
             ..
         }) => {
             assert_eq!(iterations, 1);
             assert!(gradient_norm > 1e-10);
+            assert!(!worst.is_empty() && worst.len() <= 5);
+            assert!(worst.windows(2).all(|w| w[0].margin <= w[1].margin));
         }
         other => panic!("expected NotConverged, got {other:?}"),
     }

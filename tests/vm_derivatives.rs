@@ -163,3 +163,73 @@ fn hessian_is_the_derivative_of_the_gradient() {
         }
     }
 }
+
+#[test]
+fn gradient_is_the_derivative_of_the_energy() {
+    for (name, a, b) in corpus() {
+        if a.positions.len() > 2000 {
+            continue;
+        }
+        let program = bdmorph::compile(&a.positions, &a.faces).expect("compiles");
+        let mut vm = Vm::new(program).expect("vm");
+        let (sa, sb) = (
+            vm.squared_lengths(&a.positions).expect("sizes"),
+            vm.squared_lengths(&b.positions).expect("sizes"),
+        );
+        vm.set_metric_lerp(&sa, &sb, 0.45).expect("metric");
+        let n = vm.program().n_unknowns();
+        let u0 = some_u(n);
+        vm.set_u(&u0).expect("u");
+        vm.evaluate();
+        let g = vm.gradient().to_vec();
+        // The energy sums thousands of O(1) terms, so its round-off (~1e-12) needs a wide step;
+        // central differences keep the truncation error at O(eps^2).
+        let eps = 1e-4;
+        for (j, &gj) in g.iter().enumerate() {
+            let mut up = u0.clone();
+            up[j] += eps;
+            vm.set_u(&up).expect("u");
+            vm.evaluate();
+            let plus = vm.energy();
+            up[j] -= 2.0 * eps;
+            vm.set_u(&up).expect("u");
+            vm.evaluate();
+            let fd = (plus - vm.energy()) / (2.0 * eps);
+            assert!(
+                (fd - gj).abs() < 1e-6 * (1.0 + gj.abs()),
+                "{name}: dE/du{j} = {fd} but g = {gj}"
+            );
+        }
+    }
+}
+
+#[test]
+fn energy_is_convex_along_lines_even_through_degenerate_metrics() {
+    // Far from the solution some triangles break the triangle inequality; the extended
+    // energy stays convex (second differences non-negative) and finite.
+    let a = generate::disk(6, 0.2);
+    let b = generate::twist(&a, 1.0);
+    let program = bdmorph::compile(&a.positions, &a.faces).expect("compiles");
+    let mut vm = Vm::new(program).expect("vm");
+    let (sa, sb) = (
+        vm.squared_lengths(&a.positions).expect("sizes"),
+        vm.squared_lengths(&b.positions).expect("sizes"),
+    );
+    vm.set_metric_lerp(&sa, &sb, 0.5).expect("metric");
+    let n = vm.program().n_unknowns();
+    let dir: Vec<f64> = (0..n)
+        .map(|k| if k % 3 == 0 { 3.0 } else { -1.5 })
+        .collect();
+    let mut energy_at = |s: f64| {
+        let u: Vec<f64> = dir.iter().map(|d| s * d).collect();
+        vm.set_u(&u).expect("u");
+        vm.evaluate();
+        vm.energy()
+    };
+    let values: Vec<f64> = (-10..=10).map(|i| energy_at(f64::from(i) * 0.2)).collect();
+    assert!(values.iter().all(|e| e.is_finite()));
+    for w in values.windows(3) {
+        let second = w[0] - 2.0 * w[1] + w[2];
+        assert!(second >= -1e-9 * w[1].abs().max(1.0), "not convex: {w:?}");
+    }
+}

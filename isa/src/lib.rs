@@ -60,7 +60,7 @@ pub enum Op {
     /// (half angle, cotangent of the angle).
     HalfTan = 4,
     /// `HALF_TAN.COT a b c`: as [`Op::HalfTan`] for a corner at a boundary vertex, whose angle
-    /// never enters a gradient: only the cotangent is computed (the half angle is stored as 0).
+    /// enters the energy and the Hessian weights but no gradient entry.
     HalfTanCot = 5,
     /// `VERTEX_INFO n m  i_1..i_n  (a_1 b_1)..(a_n b_n)`: interior vertex `k` of valence `n`.
     /// `i_*` are the temporaries of its `n` corners (back-offsets into `T`), giving

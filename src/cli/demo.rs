@@ -72,11 +72,11 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     let mut iterations = 0;
     let mut flips = 0;
     let bar = progress_bar(times.len(), args.quiet, "morphing");
-    for &t in &times {
+    for (index, &t) in times.iter().enumerate() {
         let f = morph.frame(t).map_err(|e| e.to_string())?;
         iterations += f.stats.newton_iterations;
         flips += f.stats.flipped_triangles;
-        frames.push((t, f.positions.to_vec()));
+        frames.push((index, t, f.positions.to_vec()));
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -97,10 +97,10 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
         files.extend(output::render(&plan, &look, &frames, || {})?);
     }
     // A strip of five pictures, t = 0, 0.25, ..., 1.
-    let picks: Vec<(f64, Vec<[f64; 2]>)> = (0..5)
-        .map(|k| frames[k * (frames.len() - 1) / 4].clone())
+    let picks: Vec<&[[f64; 2]]> = (0..5)
+        .map(|k| frames[k * (frames.len() - 1) / 4].2.as_slice())
         .collect();
-    let view = bdmorph::render::Viewport::fit(frames.iter().map(|(_, p)| p.as_slice()));
+    let view = bdmorph::render::Viewport::fit(frames.iter().map(|(_, _, p)| p.as_slice()));
     let drawing = bdmorph::render::Drawing {
         faces: morph.faces(),
         corner_uv: Some(&corner_uv),
@@ -108,7 +108,7 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     };
     let images: Vec<Image> = picks
         .iter()
-        .map(|(_, p)| raster::render(p, &drawing, &view, args.size))
+        .map(|p| raster::render(p, &drawing, &view, args.size))
         .collect();
     let strip = raster::strip(&images, images.len());
     files.push((

@@ -72,8 +72,27 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let bar = progress_bar(times.len(), args.quiet, "morphing");
     let mut frames = Vec::with_capacity(if plan.is_some() { times.len() } else { 0 });
     let mut stdout = std::io::stdout().lock();
-    for &t in &times {
-        let frame = morph.frame(t).map_err(|e| e.to_string())?;
+    let mut failed = 0usize;
+    for (index, &t) in times.iter().enumerate() {
+        let frame = match morph.frame(t) {
+            Ok(frame) => frame,
+            // One frame: its error is the command's. Several: report it, write the others.
+            Err(e) if times.len() == 1 => return Err(e.to_string()),
+            Err(e) => {
+                failed += 1;
+                if args.stats {
+                    writeln!(
+                        stdout,
+                        "{{\"t\":{t},\"error\":\"{}\"}}",
+                        json_escape(&e.to_string())
+                    )
+                    .map_err(|e| e.to_string())?;
+                }
+                bar.suspend(|| eprintln!("bdmorph: error: {e}; frame skipped"));
+                bar.inc(1);
+                continue;
+            }
+        };
         if args.stats {
             writeln!(stdout, "{}", frame.stats.to_json()).map_err(|e| e.to_string())?;
         }
@@ -86,14 +105,28 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             });
         }
         if plan.is_some() {
-            frames.push((t, frame.positions.to_vec()));
+            frames.push((index, t, frame.positions.to_vec()));
         }
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let Some(plan) = plan else {
-        return Ok(());
+    let n_times = times.len();
+    let writes = plan.is_some();
+    let failures = move || {
+        format!(
+            "{failed} of {n_times} frames could not be computed (see above); the others were {}",
+            if writes { "written" } else { "computed" }
+        )
     };
+    let Some(plan) = plan else {
+        return if failed > 0 { Err(failures()) } else { Ok(()) };
+    };
+    if frames.is_empty() {
+        return Err(format!(
+            "no frame could be computed; nothing was written to {}",
+            plan.path.display()
+        ));
+    }
 
     let corner_uv = texture.as_ref().map(|_| {
         texcoords
@@ -125,5 +158,22 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             eprintln!("wrote {}", plan.path.display());
         }
     }
+    if failed > 0 {
+        return Err(failures());
+    }
     Ok(())
+}
+
+/// Escapes a message for a JSON string.
+fn json_escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out
 }

@@ -108,14 +108,18 @@ pub struct Look<'a> {
     pub title: &'a str,
 }
 
+/// One computed frame: its index among the requested frames (which names its file), its time
+/// and its positions.
+pub type Frame = (usize, f64, Vec<[f64; 2]>);
+
 /// Renders every frame into files in memory: `(path, bytes)`.
 pub fn render(
     plan: &Plan,
     look: &Look,
-    frames: &[(f64, Vec<[f64; 2]>)],
+    frames: &[Frame],
     mut progress: impl FnMut(),
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
-    let view = Viewport::fit(frames.iter().map(|(_, p)| p.as_slice()));
+    let view = Viewport::fit(frames.iter().map(|(_, _, p)| p.as_slice()));
     let drawing = Drawing {
         faces: look.faces,
         corner_uv: look.texture.map(|(_, uv)| uv),
@@ -133,7 +137,7 @@ pub fn render(
     let mut files = Vec::new();
     match plan.format {
         Format::Obj => {
-            for (i, (t, pos)) in frames.iter().enumerate() {
+            for &(i, t, ref pos) in frames {
                 let mut bytes = Vec::new();
                 let t_line = format!("t = {t}");
                 io::format_obj_2d_textured(
@@ -149,7 +153,7 @@ pub fn render(
             }
         }
         Format::Svg => {
-            for (i, (_, pos)) in frames.iter().enumerate() {
+            for &(i, _, ref pos) in frames {
                 files.push((
                     name(i),
                     svg::svg(pos, &drawing, &view, look.size).into_bytes(),
@@ -158,7 +162,7 @@ pub fn render(
             }
         }
         Format::Png => {
-            for (i, (_, pos)) in frames.iter().enumerate() {
+            for &(i, _, ref pos) in frames {
                 let img = raster::render(pos, &drawing, &view, look.size);
                 files.push((name(i), raster::encode_png(&img).map_err(err)?));
                 progress();
@@ -166,7 +170,7 @@ pub fn render(
         }
         Format::Gif => {
             let mut images = Vec::with_capacity(frames.len());
-            for (_, pos) in frames {
+            for (_, _, pos) in frames {
                 images.push(raster::render(pos, &drawing, &view, look.size));
                 progress();
             }
@@ -179,7 +183,7 @@ pub fn render(
                 None => None,
             };
             let refs: Vec<(f64, &[[f64; 2]])> =
-                frames.iter().map(|(t, p)| (*t, p.as_slice())).collect();
+                frames.iter().map(|(_, t, p)| (*t, p.as_slice())).collect();
             let page = html::html(
                 look.title,
                 &refs,

@@ -4,6 +4,7 @@
 use bdmorph_isa::{operand, Op, Program};
 
 use crate::kernel::half_angle_and_cot;
+use crate::lobachevsky::lobachevsky;
 
 const EDGE_LEN_II: u16 = Op::EdgeLenIi as u16;
 const EDGE_LEN_IB: u16 = Op::EdgeLenIb as u16;
@@ -15,28 +16,49 @@ const VERTEX_INFO: u16 = Op::VertexInfo as u16;
 /// Buffers the iteration stream writes; all sized once from the program.
 pub(crate) struct Registers<'a> {
     pub l0: &'a [f64],
+    pub log_l0: &'a [f64],
+    pub u: &'a [f64],
     pub scale: &'a [f64],
     pub len: &'a mut [f64],
+    pub log_len: &'a mut [f64],
     pub temps: &'a mut [[f64; 2]],
     pub grad: &'a mut [f64],
     pub hvals: &'a mut [f64],
 }
 
+/// The CETM energy from one pass (up to a constant: triangles with only boundary vertices are
+/// left out), and the sum of the magnitudes of its terms, a scale for its round-off.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Energy {
+    pub value: f64,
+    pub magnitude: f64,
+}
+
 /// Runs the iteration stream of a verified program.
+///
+/// Besides gradient and Hessian it sums the energy
+/// `E(u) = sum_T [ sum_corners (alpha / 2 - pi / 4) lambda_opp + Л(alpha) ] + pi sum_k u_k`,
+/// with `lambda = 2 ln L` the scaled log length of the edge opposite each corner, so that
+/// `dE/du_k = pi - (1/2) sum alpha` is the gradient. Degenerate triangles take angles 0 and pi,
+/// which is the convex, C^1 extension of the CETM paper.
 ///
 /// Operand indices are bounds-checked by ordinary slice indexing: a verified program never
 /// fails them. An unchecked variant has not been measured yet, so none is used.
-pub(crate) fn run(program: &Program, r: Registers<'_>) {
+pub(crate) fn run(program: &Program, r: Registers<'_>) -> Energy {
     let code = program.iteration();
     let col_ptr = &program.hessian().col_ptr;
     let Registers {
         l0,
+        log_l0,
+        u,
         scale,
         len,
+        log_len,
         temps,
         grad,
         hvals,
     } = r;
+    let mut energy = Energy::default();
     let (mut pc, mut li, mut ti, mut k) = (0usize, 0usize, 0usize, 0usize);
     let unknown = |k: usize, zz: u32| (k as i64 + operand::unzigzag(zz)) as usize;
     while pc < code.len() {
@@ -47,22 +69,32 @@ pub(crate) fn run(program: &Program, r: Registers<'_>) {
                 let a = unknown(k, operand::read(code, &mut pc));
                 let b = unknown(k, operand::read(code, &mut pc));
                 len[li] = l0[li] * scale[a] * scale[b];
+                log_len[li] = log_l0[li] + 0.5 * (u[a] + u[b]);
                 li += 1;
             }
             EDGE_LEN_IB => {
                 let a = unknown(k, operand::read(code, &mut pc));
                 len[li] = l0[li] * scale[a];
+                log_len[li] = log_l0[li] + 0.5 * u[a];
                 li += 1;
             }
             EDGE_LEN_BB => {
                 len[li] = l0[li];
+                log_len[li] = log_l0[li];
                 li += 1;
             }
             HALF_TAN | HALF_TAN_COT => {
                 let a = len[li - operand::read(code, &mut pc) as usize];
                 let b = len[li - operand::read(code, &mut pc) as usize];
-                let c = len[li - operand::read(code, &mut pc) as usize];
-                let t = half_angle_and_cot(a, b, c, op == HALF_TAN);
+                let opposite = li - operand::read(code, &mut pc) as usize;
+                let c = len[opposite];
+                // Every corner's angle enters the energy; only interior corners' the gradient
+                // (HALF_TAN.COT marks the others, for readers of the stream).
+                let t = half_angle_and_cot(a, b, c, true);
+                let linear = (t[0] - std::f64::consts::FRAC_PI_4) * 2.0 * log_len[opposite];
+                let lob = lobachevsky(2.0 * t[0]);
+                energy.value += linear + lob;
+                energy.magnitude += linear.abs() + lob.abs();
                 debug_assert!(t[0].is_finite() && t[1].is_finite(), "T{ti} = {t:?}");
                 temps[ti] = t;
                 ti += 1;
@@ -88,6 +120,8 @@ pub(crate) fn run(program: &Program, r: Registers<'_>) {
                 }
                 debug_assert!(diag.is_finite() && grad[k].is_finite(), "unknown {k}");
                 hvals[col] = diag;
+                energy.value += std::f64::consts::PI * u[k];
+                energy.magnitude += (std::f64::consts::PI * u[k]).abs();
                 k += 1;
             }
             _ => unreachable!(
@@ -96,4 +130,5 @@ pub(crate) fn run(program: &Program, r: Registers<'_>) {
             ),
         }
     }
+    energy
 }

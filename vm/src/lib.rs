@@ -42,11 +42,35 @@ mod embed;
 mod error;
 mod evaluate;
 pub mod kernel;
+pub mod lobachevsky;
 mod newton;
 
 pub use bdmorph_isa::Program;
 pub use error::VmError;
 pub use newton::{NewtonOptions, NewtonReport};
+
+/// A triangle of the current metric, as reported when a frame fails.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleReport {
+    /// Its vertices, counter-clockwise.
+    pub vertices: [u32; 3],
+    /// Its edge lengths (opposite each vertex).
+    pub lengths: [f64; 3],
+    /// `min(a + b - c) / (a + b + c)` over its sides: at most 1/3 (equilateral), 0 when
+    /// degenerate, negative when the lengths break the triangle inequality.
+    pub margin: f64,
+}
+
+impl std::fmt::Display for TriangleReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [a, b, c] = self.vertices;
+        write!(f, "({a} {b} {c}) margin {:.2e}", self.margin)?;
+        if self.margin < 0.0 {
+            write!(f, " (breaks the triangle inequality)")?;
+        }
+        Ok(())
+    }
+}
 
 use faer::dyn_stack::MemBuffer;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
@@ -60,7 +84,10 @@ pub struct Vm {
     factor: Vec<f64>,
     workspace: MemBuffer,
     l0: Vec<f64>,
+    log_l0: Vec<f64>,
     len: Vec<f64>,
+    log_len: Vec<f64>,
+    energy: evaluate::Energy,
     scale: Vec<f64>,
     temps: Vec<[f64; 2]>,
     u: Vec<f64>,
@@ -71,6 +98,7 @@ pub struct Vm {
     step: Vec<f64>,
     dirs: Vec<[f64; 2]>,
     metric_set: bool,
+    failure: Vec<TriangleReport>,
 }
 
 impl std::fmt::Debug for Vm {
@@ -104,7 +132,10 @@ impl Vm {
             factor,
             workspace,
             l0: vec![0.0; program.n_edges()],
+            log_l0: vec![0.0; program.n_edges()],
             len: vec![0.0; program.n_edges()],
+            log_len: vec![0.0; program.n_edges()],
+            energy: evaluate::Energy::default(),
             scale: vec![1.0; n],
             temps: vec![[0.0; 2]; program.n_temps()],
             u: vec![0.0; n],
@@ -115,6 +146,7 @@ impl Vm {
             step: vec![0.0; n],
             dirs: vec![[0.0; 2]; program.n_edges()],
             metric_set: false,
+            failure: Vec::new(),
             program,
         })
     }
@@ -167,6 +199,7 @@ impl Vm {
                 });
             }
             self.l0[slot] = v.sqrt();
+            self.log_l0[slot] = 0.5 * v.ln();
         }
         // Slots outside the iteration stream join boundary vertices: their length is l0.
         let n_it = self.program.n_iter_edges();
@@ -175,18 +208,21 @@ impl Vm {
         Ok(())
     }
 
-    /// Runs the iteration stream once at the current `u`: fills the edge lengths, the gradient
-    /// and the Hessian values. Allocates nothing.
+    /// Runs the iteration stream once at the current `u`: fills the edge lengths, the gradient,
+    /// the Hessian values and the energy. Allocates nothing.
     pub fn evaluate(&mut self) {
         for (s, &u) in self.scale.iter_mut().zip(&self.u) {
             *s = (0.5 * u).exp();
         }
-        evaluate::run(
+        self.energy = evaluate::run(
             &self.program,
             evaluate::Registers {
                 l0: &self.l0,
+                log_l0: &self.log_l0,
+                u: &self.u,
                 scale: &self.scale,
                 len: &mut self.len,
+                log_len: &mut self.log_len,
                 temps: &mut self.temps,
                 grad: &mut self.grad,
                 hvals: &mut self.hvals,
@@ -209,6 +245,13 @@ impl Vm {
         self.check_len("u", self.u.len(), u.len())?;
         self.u.copy_from_slice(u);
         Ok(())
+    }
+
+    /// The CETM energy at the last evaluation, up to a constant that depends only on the
+    /// metric (triangles whose vertices are all on the boundary are left out). Convex in `u`;
+    /// its gradient is [`Vm::gradient`].
+    pub fn energy(&self) -> f64 {
+        self.energy.value
     }
 
     /// The gradient from the last [`Vm::evaluate`] (or Newton iteration).
@@ -250,6 +293,43 @@ impl Vm {
         };
         embed::run(&self.program, &self.len, &mut self.dirs, anchor, dir, out);
         Ok(())
+    }
+
+    /// The `count` triangles closest to breaking the triangle inequality under the current
+    /// lengths, worst first. Allocates; meant for error reports.
+    pub fn worst_triangles(&self, count: usize) -> Vec<TriangleReport> {
+        let mut all: Vec<TriangleReport> = self
+            .program
+            .embed()
+            .iter()
+            .map(|s| {
+                let (ab, bc, ca) = (
+                    self.len[s.e_ab as usize],
+                    self.len[s.e_bc as usize],
+                    self.len[s.e_ca as usize],
+                );
+                let sum = ab + bc + ca;
+                let margin = (ab + bc - ca).min(bc + ca - ab).min(ca + ab - bc) / sum;
+                TriangleReport {
+                    vertices: [s.a, s.b, s.c],
+                    lengths: [bc, ca, ab],
+                    margin: if margin.is_finite() {
+                        margin
+                    } else {
+                        f64::NEG_INFINITY
+                    },
+                }
+            })
+            .collect();
+        all.sort_by(|x, y| x.margin.total_cmp(&y.margin));
+        all.truncate(count);
+        all
+    }
+
+    /// The worst triangles at the iterate where the last failed [`Vm::newton`] gave up (empty
+    /// after a success).
+    pub fn failure_triangles(&self) -> &[TriangleReport] {
+        &self.failure
     }
 
     /// Number of triangles with non-positive signed area in `positions`.

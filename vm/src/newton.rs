@@ -19,6 +19,9 @@ pub struct NewtonOptions {
     pub tolerance: f64,
     /// Give up after this many Newton steps (default 50).
     pub max_iterations: u32,
+    /// Largest change of any `u` the first trial of a step may make (default 2, a factor
+    /// e = 2.7 on lengths); longer Newton steps are scaled down to it before the line search.
+    pub step_cap: f64,
 }
 
 impl Default for NewtonOptions {
@@ -26,6 +29,7 @@ impl Default for NewtonOptions {
         NewtonOptions {
             tolerance: 1e-10,
             max_iterations: 50,
+            step_cap: 2.0,
         }
     }
 }
@@ -50,6 +54,9 @@ pub struct NewtonReport {
     pub iterations: u32,
     /// Gradient norm at the returned `u`.
     pub gradient_norm: f64,
+    /// Step halvings the line search needed over all iterations (0 when every full Newton
+    /// step was accepted).
+    pub backtracks: u32,
 }
 
 /// Symbolic factorisation and a workspace large enough for every numeric factorisation and
@@ -80,8 +87,10 @@ impl Vm {
     /// Solves for the flat metric from the current `u` (the previous frame's, a warm start).
     ///
     /// Each iteration evaluates the gradient and Hessian, stops when `||g||_2` is below the
-    /// tolerance, and otherwise takes the Newton step `u -= H^-1 g`, halved until `||g||`
-    /// decreases (a safeguard; the full step is taken whenever it reduces `||g||`). On error `u` is restored
+    /// tolerance, and otherwise takes the Newton step `u -= H^-1 g`, halved until the CETM
+    /// energy decreases enough (Armijo); the full step is taken whenever it is accepted.
+    /// The energy is convex and bounded below on a valid metric, so this converges from any
+    /// start. On error `u` is restored
     /// to its value at the call, so a failed frame does not spoil the next warm start.
     /// Allocates nothing.
     pub fn newton(&mut self, options: &NewtonOptions) -> Result<NewtonReport, VmError> {
@@ -89,8 +98,11 @@ impl Vm {
             return Err(VmError::MetricNotSet);
         }
         self.u_saved.copy_from_slice(&self.u);
+        self.failure.clear();
         let result = self.newton_loop(options);
         if result.is_err() {
+            // Where it gave up, before restoring u: the triangles that make the metric hard.
+            self.failure = self.worst_triangles(5);
             self.u.copy_from_slice(&self.u_saved);
             // Leave lengths, gradient and Hessian consistent with the restored u.
             self.evaluate();
@@ -101,16 +113,18 @@ impl Vm {
     fn newton_loop(&mut self, options: &NewtonOptions) -> Result<NewtonReport, VmError> {
         let n = self.u.len();
         let mut iteration = 0u32;
+        let mut backtracks = 0u32;
         self.evaluate();
         let mut gradient_norm = norm(&self.grad);
         loop {
-            if !gradient_norm.is_finite() {
+            if !gradient_norm.is_finite() || !self.energy.value.is_finite() {
                 return Err(VmError::NonFinite { iteration });
             }
             if gradient_norm < options.tolerance {
                 return Ok(NewtonReport {
                     iterations: iteration,
                     gradient_norm,
+                    backtracks,
                 });
             }
             if iteration >= options.max_iterations {
@@ -121,28 +135,41 @@ impl Vm {
             }
             self.newton_step(n)?;
             iteration += 1;
-            // Damping: the Newton direction d = -H^-1 g descends ||g||^2 / 2 (its derivative
-            // along d is -||g||^2), so halve the step until ||g|| decreases. The full step is
-            // tried first and nearly always accepted; the evaluation at the accepted point is
-            // the next iteration's.
+            // Armijo backtracking on the convex energy E. The Newton direction d descends E:
+            // its slope g.d = -g H^-1 g < 0. The first trial is the full step, shortened only
+            // when some |d_k| exceeds the cap; the evaluation at the accepted point is the
+            // next iteration's, so an accepted full step costs nothing extra.
+            let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, d)| g * d).sum();
+            let longest = self.step.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+            let mut alpha = if longest > options.step_cap {
+                options.step_cap / longest
+            } else {
+                1.0
+            };
+            let (energy0, grad0) = (self.energy, gradient_norm);
             self.u_base.copy_from_slice(&self.u);
-            let mut alpha = 1.0;
             loop {
                 for ((u, b), s) in self.u.iter_mut().zip(&self.u_base).zip(&self.step) {
                     *u = b + alpha * s;
                 }
                 self.evaluate();
                 let trial = norm(&self.grad);
-                if trial.is_finite() && trial <= (1.0 - 1e-4 * alpha) * gradient_norm {
+                let e1 = self.energy.value;
+                let armijo = e1 <= energy0.value + 1e-4 * alpha * slope;
+                // Near the solution the decrease of E drops below its round-off; there the
+                // gradient norm decides.
+                let noise = 1e-14 * energy0.magnitude.max(self.energy.magnitude);
+                let flat = (e1 - energy0.value).abs() <= noise && trial < grad0;
+                if e1.is_finite() && trial.is_finite() && (armijo || flat) {
                     gradient_norm = trial;
                     break;
                 }
                 alpha *= 0.5;
+                backtracks += 1;
                 if alpha < 1e-12 {
-                    // No decrease along the Newton direction: round-off floor or a failure.
                     return Err(VmError::NotConverged {
                         iterations: iteration,
-                        gradient_norm,
+                        gradient_norm: grad0,
                     });
                 }
             }

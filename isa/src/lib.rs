@@ -30,6 +30,8 @@
 #![warn(missing_docs)]
 
 mod disasm;
+#[cfg(test)]
+mod fixture;
 pub mod operand;
 mod program;
 mod verify;

@@ -201,9 +201,10 @@ impl Program {
             self.n_faces
         );
         let counts = self.counts();
-        let len = counts.file_len();
-        let mut out = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
-        out.extend_from_slice(&MAGIC);
+        let len = usize::try_from(counts.file_len()).expect("the program is in memory");
+        let mut out = vec![0; len];
+        let mut w = Writer { rest: &mut out };
+        w.take(MAGIC.len()).copy_from_slice(&MAGIC);
         let header = [
             FORMAT_VERSION,
             key.n_vertices,
@@ -218,22 +219,26 @@ impl Program {
             counts.nnz,
             counts.steps,
         ];
-        put_u32s(&mut out, header);
-        put_u32s(&mut out, self.edges.iter().flatten().copied());
-        put_u32s(&mut out, self.unknown_vertex.iter().copied());
-        for &w in &self.iteration {
-            out.extend_from_slice(&w.to_le_bytes());
+        let one = |&x: &u32| [x];
+        w.records(header.iter().map(one));
+        w.records(self.edges.iter().copied());
+        w.records(self.unknown_vertex.iter().map(one));
+        let words = w.take(2 * self.iteration.len());
+        for (c, x) in words.chunks_exact_mut(2).zip(&self.iteration) {
+            c.copy_from_slice(&x.to_le_bytes());
         }
-        put_u32s(&mut out, self.hessian.col_ptr.iter().copied());
-        put_u32s(&mut out, self.hessian.row_idx.iter().copied());
+        w.records(self.hessian.col_ptr.iter().map(one));
+        w.records(self.hessian.row_idx.iter().map(one));
         let root = self.embed_root;
-        put_u32s(&mut out, [root.p0, root.p1, root.edge]);
-        for s in &self.embed {
-            put_u32s(&mut out, [s.a, s.b, s.c, s.e_ab, s.e_bc, s.e_ca, s.flags]);
-        }
-        let crc = crc32c(&out);
-        out.extend_from_slice(&crc.to_le_bytes());
-        debug_assert_eq!(out.len() as u64, len);
+        w.records(std::iter::once([root.p0, root.p1, root.edge]));
+        w.records(
+            self.embed
+                .iter()
+                .map(|s| [s.a, s.b, s.c, s.e_ab, s.e_bc, s.e_ca, s.flags]),
+        );
+        debug_assert_eq!(w.rest.len(), CHECKSUM_LEN);
+        let (content, checksum) = out.split_at_mut(len - CHECKSUM_LEN);
+        checksum.copy_from_slice(&crc32c(content).to_le_bytes());
         out
     }
 
@@ -317,24 +322,24 @@ impl Program {
         // The length matches the counts exactly, so each read below is in bounds and each
         // allocation is bounded by the file's size.
         let mut r = Reader::new(&content[HEADER_LEN..]);
-        let edges = r.vec(counts.edges, |r| [r.u32(), r.u32()]);
-        let unknown_vertex = r.vec(counts.unknowns, Reader::u32);
-        let iteration = r.vec(counts.words, Reader::u16);
-        let col_ptr = r.vec(counts.unknowns + 1, Reader::u32);
-        let row_idx = r.vec(counts.nnz, Reader::u32);
-        let embed_root = EmbedRoot {
-            p0: r.u32(),
-            p1: r.u32(),
-            edge: r.u32(),
-        };
-        let embed = r.vec(counts.steps, |r| EmbedStep {
-            a: r.u32(),
-            b: r.u32(),
-            c: r.u32(),
-            e_ab: r.u32(),
-            e_bc: r.u32(),
-            e_ca: r.u32(),
-            flags: r.u32(),
+        let n = |count: u32| count as usize;
+        let edges = r.records(n(counts.edges), |c: [u32; 2]| c);
+        let unknown_vertex = r.records(n(counts.unknowns), |[x]: [u32; 1]| x);
+        let iteration = r.u16s(n(counts.words));
+        let col_ptr = r.records(n(counts.unknowns) + 1, |[x]: [u32; 1]| x);
+        let row_idx = r.records(n(counts.nnz), |[x]: [u32; 1]| x);
+        let [p0, p1, edge] = r.records(1, |c: [u32; 3]| c)[0];
+        let embed_root = EmbedRoot { p0, p1, edge };
+        let embed = r.records(n(counts.steps), |[a, b, c, e_ab, e_bc, e_ca, flags]| {
+            EmbedStep {
+                a,
+                b,
+                c,
+                e_ab,
+                e_bc,
+                e_ca,
+                flags,
+            }
         });
         debug_assert!(r.bytes.is_empty());
         let program = Program::from_parts(ProgramParts {
@@ -365,9 +370,27 @@ impl Program {
     }
 }
 
-fn put_u32s(out: &mut Vec<u8>, values: impl IntoIterator<Item = u32>) {
-    for x in values {
-        out.extend_from_slice(&x.to_le_bytes());
+/// Writes little-endian values into a buffer of exactly the right length.
+struct Writer<'a> {
+    rest: &'a mut [u8],
+}
+
+impl<'a> Writer<'a> {
+    /// The next `len` bytes.
+    fn take(&mut self, len: usize) -> &'a mut [u8] {
+        let (head, rest) = std::mem::take(&mut self.rest).split_at_mut(len);
+        self.rest = rest;
+        head
+    }
+
+    /// Records of `K` values each.
+    fn records<const K: usize>(&mut self, items: impl ExactSizeIterator<Item = [u32; K]>) {
+        let head = self.take(4 * K * items.len());
+        for (c, item) in head.chunks_exact_mut(4 * K).zip(items) {
+            for (d, x) in c.chunks_exact_mut(4).zip(item) {
+                d.copy_from_slice(&x.to_le_bytes());
+            }
+        }
     }
 }
 
@@ -417,16 +440,34 @@ impl<'a> Reader<'a> {
         out
     }
 
-    fn u16(&mut self) -> u16 {
-        u16::from_le_bytes(self.take())
-    }
-
     fn u32(&mut self) -> u32 {
         u32::from_le_bytes(self.take())
     }
 
-    fn vec<T>(&mut self, n: u32, mut item: impl FnMut(&mut Self) -> T) -> Vec<T> {
-        (0..n).map(|_| item(self)).collect()
+    fn slice(&mut self, len: usize) -> &'a [u8] {
+        let (head, rest) = self.bytes.split_at(len);
+        self.bytes = rest;
+        head
+    }
+
+    /// `n` words.
+    fn u16s(&mut self, n: usize) -> Vec<u16> {
+        self.slice(2 * n)
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect()
+    }
+
+    /// `n` records of `K` values each, converted by `f`.
+    fn records<const K: usize, T>(&mut self, n: usize, f: impl Fn([u32; K]) -> T) -> Vec<T> {
+        self.slice(4 * K * n)
+            .chunks_exact(4 * K)
+            .map(|c| {
+                f(std::array::from_fn(|i| {
+                    u32::from_le_bytes([c[4 * i], c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]])
+                }))
+            })
+            .collect()
     }
 }
 

@@ -41,7 +41,7 @@ pub mod reference;
 pub mod render;
 
 pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
-pub use bdmorph_isa::{disassemble, Program};
+pub use bdmorph_isa::{disassemble, LoadError, MeshKey, Program};
 pub use bdmorph_vm::{NewtonOptions, TriangleReport, Vm, VmError};
 pub use mesh::{MeshError, PlanarMesh};
 pub use morph::{Frame, FrameStats, Morph, MorphError, MorphOptions};

@@ -20,10 +20,7 @@ fn main() -> ExitCode {
                 e.exit();
             }
             // One line, like every other error; `--help` has the details.
-            let text = e.to_string();
-            let first = text.lines().next().unwrap_or("invalid arguments");
-            let first = first.strip_prefix("error: ").unwrap_or(first);
-            eprintln!("bdmorph: error: {first} (see --help)");
+            eprintln!("bdmorph: error: {} (see --help)", one_line(&e.to_string()));
             return ExitCode::from(2);
         }
     };
@@ -33,5 +30,44 @@ fn main() -> ExitCode {
             eprintln!("bdmorph: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The first line of a clap error, without its `error: ` prefix. When that line ends with a
+/// colon ("the following required arguments were not provided:"), the indented lines that
+/// follow it (the arguments) are joined to it.
+fn one_line(text: &str) -> String {
+    let mut lines = text.lines();
+    let first = lines.next().unwrap_or("invalid arguments");
+    let mut out = first.strip_prefix("error: ").unwrap_or(first).to_owned();
+    if out.ends_with(':') {
+        let items: Vec<&str> = lines
+            .take_while(|l| l.starts_with(' '))
+            .map(str::trim)
+            .collect();
+        if !items.is_empty() {
+            out.push(' ');
+            out.push_str(&items.join(", "));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[test]
+    fn clap_errors_become_one_line() {
+        assert_eq!(
+            one_line("error: unexpected argument 'x' found\n\nUsage: bdmorph\n"),
+            "unexpected argument 'x' found"
+        );
+        assert_eq!(
+            one_line(
+                "error: the following required arguments were not provided:\n  --output <PROGRAM>\n  <SOURCE>\n\nUsage: bdmorph compile\n"
+            ),
+            "the following required arguments were not provided: --output <PROGRAM>, <SOURCE>"
+        );
     }
 }

@@ -16,7 +16,9 @@
 //!
 //! A `Program` can only be built through [`Program::from_parts`], which runs the verifier
 //! pass: every operand index, every CSC slot and every embed dependency is checked once, so the
-//! executor can trust the program.
+//! executor can trust the program. [`Program::to_bytes`] and [`Program::from_bytes`] store a
+//! program in a file with a versioned header, the [`MeshKey`] of its mesh and a checksum (see
+//! [`mod@file`]); loading ends with the same verifier.
 //!
 //! ```
 //! use bdmorph_isa::{Op, operand};
@@ -30,11 +32,15 @@
 #![warn(missing_docs)]
 
 mod disasm;
+pub mod file;
+#[cfg(test)]
+mod fixture;
 pub mod operand;
 mod program;
 mod verify;
 
 pub use disasm::disassemble;
+pub use file::{LoadError, MeshKey};
 pub use program::{EmbedRoot, EmbedStep, HessianPattern, Program, ProgramParts, ProgramStats};
 pub use verify::{instructions, VerifyError};
 

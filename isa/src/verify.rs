@@ -184,6 +184,24 @@ pub(crate) fn verify(p: &Program) -> Result<(), VerifyError> {
         },
     )?;
 
+    check(
+        [p.iteration.len(), p.hessian.row_idx.len(), p.embed.len()]
+            .iter()
+            .all(|&n| u32::try_from(n).is_ok()),
+        VerifyError::Sizes {
+            what: "a stream longer than 2^32 - 1 entries",
+        },
+    )?;
+    // The root places two vertices and each embed step at most one, and every vertex must be
+    // placed: this bounds the vertex count by the program's own length before anything is
+    // allocated per vertex (a loaded header could claim 2^32 vertices).
+    check(
+        nv <= p.embed.len().saturating_add(2),
+        VerifyError::Sizes {
+            what: "more vertices than the embed stream can place",
+        },
+    )?;
+
     // Unknowns: distinct vertices in range.
     let mut unknown_of = vec![u32::MAX; nv];
     for (k, &v) in p.unknown_vertex.iter().enumerate() {
@@ -372,4 +390,36 @@ fn verify_embed(p: &Program) -> Result<(), VerifyError> {
             step: p.embed.len(),
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::fixture::hexagon_parts;
+    use crate::{Program, VerifyError};
+
+    #[test]
+    fn the_fixture_is_valid() {
+        let parts = hexagon_parts();
+        let program = Program::from_parts(parts.clone()).expect("valid");
+        assert_eq!(program.to_parts(), parts);
+    }
+
+    #[test]
+    fn a_huge_vertex_count_is_refused_before_allocating_per_vertex() {
+        for n_vertices in [9, u32::MAX] {
+            let mut parts = hexagon_parts();
+            parts.n_vertices = n_vertices;
+            assert!(matches!(
+                Program::from_parts(parts),
+                Err(VerifyError::Sizes { what }) if what.contains("embed stream can place")
+            ));
+        }
+        // 8 vertices pass this bound (6 steps + 2) but vertex 7 is never placed.
+        let mut parts = hexagon_parts();
+        parts.n_vertices = 8;
+        assert_eq!(
+            Program::from_parts(parts),
+            Err(VerifyError::Embed { step: 6 })
+        );
+    }
 }

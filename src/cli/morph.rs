@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::output::{self, Look, Plan};
 use super::{times, MorphArgs};
 
-fn read(path: &Path) -> Result<(PlanarMesh, Option<bdmorph::io::TexCoords>), String> {
+pub(super) fn read(path: &Path) -> Result<(PlanarMesh, Option<bdmorph::io::TexCoords>), String> {
     let (mesh, tex) = PlanarMesh::read_textured(path).map_err(|e| e.to_string())?;
     mesh.validate()
         .map_err(|e| format!("{}: {e}", path.display()))?;
@@ -61,7 +61,14 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let options = MorphOptions::default()
         .with_tolerance(args.tolerance)
         .with_max_iterations(args.max_iterations);
-    let mut morph = Morph::new(&source, &target, options).map_err(|e| {
+    let morph = match &args.program {
+        Some(path) => {
+            let program = super::compile::load(path, &args.source, &source)?;
+            Morph::with_program(program, &source, &target, options)
+        }
+        None => Morph::new(&source, &target, options),
+    };
+    let mut morph = morph.map_err(|e| {
         format!(
             "{} -> {}: {e}",
             args.source.display(),

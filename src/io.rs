@@ -105,6 +105,18 @@ pub enum ReadError {
         /// OBJ index, all of the file's vertices otherwise.
         vertex_count: usize,
     },
+    /// A face refers to a texture coordinate (`vt`) that does not exist.
+    #[error("{}:{line}: texture coordinate {index} does not exist ({count} 'vt' lines)", Shown(.path))]
+    TexCoordOutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number of the face.
+        line: usize,
+        /// The index as written in the file (1-based or negative).
+        index: i64,
+        /// The number of texture coordinates it was checked against (as for vertices).
+        count: usize,
+    },
     /// A polygon with more than 3 corners (refused, not triangulated).
     #[error("{}:{line}: face has {corners} corners; only triangles are supported", Shown(.path))]
     NotATriangle {
@@ -121,12 +133,43 @@ pub enum ReadError {
         /// The file.
         path: PathBuf,
     },
-    /// The file has no vertices or no faces.
-    #[error("{}: the mesh has no vertices or no faces", Shown(.path))]
+    /// The file is empty (or holds only whitespace).
+    #[error("{}: the file is empty", Shown(.path))]
     Empty {
         /// The file.
         path: PathBuf,
     },
+    /// The file has no faces (and maybe no vertices either).
+    #[error("{}: the mesh has {}", Shown(.path), NoFacesOf(*.vertices))]
+    NoFaces {
+        /// The file.
+        path: PathBuf,
+        /// The number of vertices it has (for OFF: declares).
+        vertices: usize,
+    },
+    /// A control character that no text file holds (NUL, for instance): a binary file.
+    #[error("{}:{line}: binary data (byte 0x{byte:02x}), not a text mesh file", Shown(.path))]
+    Binary {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the first such byte.
+        line: usize,
+        /// The byte.
+        byte: u8,
+    },
+}
+
+/// "no vertices and no faces" or "N vertices but no faces".
+struct NoFacesOf(usize);
+
+impl fmt::Display for NoFacesOf {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            0 => f.write_str("no vertices and no faces"),
+            1 => f.write_str("1 vertex but no faces"),
+            n => write!(f, "{n} vertices but no faces"),
+        }
+    }
 }
 
 /// Why a mesh file could not be written.
@@ -160,7 +203,9 @@ impl fmt::Display for Shown<'_> {
 /// Reads an `.obj` or `.off` file (extension compared case-insensitively).
 ///
 /// Bytes that are not UTF-8 (say Latin-1 in a comment) are replaced, not rejected: they only
-/// matter where numbers are expected, and there they give a parse error with a line.
+/// matter where numbers are expected, and there they give a parse error with a line. Control
+/// characters that text does not hold (NUL, for instance) are refused as binary data
+/// ([`ReadError::Binary`]), whichever the parser.
 pub fn read_mesh(path: &Path) -> Result<SurfaceMesh, ReadError> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     let parse = match ext.to_ascii_lowercase().as_str() {
@@ -202,6 +247,16 @@ impl At<'_> {
         }
     }
 
+    fn texture_out_of_range(self, index: i64, count: usize) -> ReadError {
+        let (path, line) = (self.path.into(), self.line);
+        ReadError::TexCoordOutOfRange {
+            path,
+            line,
+            index,
+            count,
+        }
+    }
+
     /// "expected {what}, found '{word}'".
     fn expected(self, what: impl fmt::Display, word: &str) -> ReadError {
         self.parse(format!("expected {what}, found '{}'", snippet(word)))
@@ -217,8 +272,37 @@ impl At<'_> {
     }
 }
 
-fn empty(path: &Path) -> ReadError {
-    ReadError::Empty { path: path.into() }
+/// Refuses binary data and empty text, before parsing.
+fn check_text(text: &str, path: &Path) -> Result<(), ReadError> {
+    // Control characters other than tab, line breaks, vertical tab, form feed and a DOS
+    // end-of-file mark (0x1a).
+    let control = |b: &u8| matches!(b, 0..=8 | 0x0e..=0x19 | 0x1b..=0x1f | 0x7f);
+    if let Some(at) = text.bytes().position(|b| control(&b)) {
+        let bytes = text.as_bytes();
+        return Err(ReadError::Binary {
+            path: path.into(),
+            line: 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count(),
+            byte: bytes[at],
+        });
+    }
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.trim_ascii().is_empty() {
+        return Err(ReadError::Empty { path: path.into() });
+    }
+    Ok(())
+}
+
+fn no_faces(path: &Path, vertices: usize) -> ReadError {
+    ReadError::NoFaces {
+        path: path.into(),
+        vertices,
+    }
+}
+
+/// Whether `word` is an integer literal (so that failing to parse it means out of range).
+fn is_integer(word: &str) -> bool {
+    let digits = word.strip_prefix(['+', '-']).unwrap_or(word);
+    !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit())
 }
 
 /// A token for an error message, shortened so that a garbage line cannot flood the terminal.
@@ -264,6 +348,7 @@ fn words(line: &str) -> SplitAsciiWhitespace<'_> {
 /// `o`, `s`, `usemtl`, `mtllib`, `l`, ...) is ignored. Polygons with more than three corners
 /// are refused ([`ReadError::NotATriangle`]), not triangulated.
 pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
+    check_text(text, path)?;
     let mut positions: Vec<[f64; 3]> = Vec::new();
     let mut faces: Vec<[u32; 3]> = Vec::new();
     let mut uv: Vec<[f64; 2]> = Vec::new();
@@ -290,13 +375,20 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
             _ => {}
         }
     }
-    for (pending, count) in [(&forward, positions.len()), (&forward_uv, uv.len())] {
+    for (texture, pending, count) in [
+        (false, &forward, positions.len()),
+        (true, &forward_uv, uv.len()),
+    ] {
         if let Some(&(line, index)) = pending.iter().find(|&&(_, i)| i as u64 > count as u64) {
-            return Err(At { path, line }.out_of_range(index, count));
+            let at = At { path, line };
+            return Err(match texture {
+                false => at.out_of_range(index, count),
+                true => at.texture_out_of_range(index, count),
+            });
         }
     }
-    if positions.is_empty() || faces.is_empty() {
-        return Err(empty(path));
+    if faces.is_empty() || positions.is_empty() {
+        return Err(no_faces(path, positions.len()));
     }
     let texcoords = uv_corners
         .filter(|_| !uv.is_empty())
@@ -366,7 +458,7 @@ fn obj_face(
                 return Err(bad());
             }
             face[corners] =
-                obj_index("vertex", vertex, counts[0], forward_v, at).map_err(|e| match e {
+                obj_index(false, vertex, counts[0], forward_v, at).map_err(|e| match e {
                     IndexError::Syntax => bad(),
                     IndexError::Read(e) => e,
                 })?;
@@ -374,7 +466,7 @@ fn obj_face(
                 all_tex = false;
             } else {
                 tex[corners] =
-                    obj_index("texture", vt, counts[1], forward_t, at).map_err(|e| match e {
+                    obj_index(true, vt, counts[1], forward_t, at).map_err(|e| match e {
                         IndexError::Syntax => at.expected("a texture index after '/'", word),
                         IndexError::Read(e) => e,
                     })?;
@@ -394,19 +486,31 @@ enum IndexError {
     Read(ReadError),
 }
 
-/// Resolves one 1-based (or negative, relative) OBJ index against the `count` elements read
-/// so far; positive indices beyond them are remembered in `forward` and checked at the end.
+/// Resolves one 1-based (or negative, relative) OBJ index of a vertex or a `texture`
+/// coordinate against the `count` elements read so far; positive indices beyond them are
+/// remembered in `forward` and checked at the end.
 fn obj_index(
-    what: &str,
+    texture: bool,
     word: &str,
     count: usize,
     forward: &mut Vec<(usize, i64)>,
     at: At,
 ) -> Result<u32, IndexError> {
-    let index: i64 = word.parse().map_err(|_| IndexError::Syntax)?;
-    let vertex_count = count;
-    let count = i64::try_from(count).unwrap_or(i64::MAX);
+    let what = if texture { "texture" } else { "vertex" };
+    let out_of_range = |index| match texture {
+        false => at.out_of_range(index, count),
+        true => at.texture_out_of_range(index, count),
+    };
+    let index: i64 = match word.parse() {
+        Ok(index) => index,
+        Err(_) if is_integer(word) => {
+            let message = format!("{what} index {} is out of range", snippet(word));
+            return Err(IndexError::Read(at.parse(message)));
+        }
+        Err(_) => return Err(IndexError::Syntax),
+    };
     let read = IndexError::Read;
+    let count = i64::try_from(count).unwrap_or(i64::MAX);
     let zero_based = match index {
         0 => {
             return Err(read(
@@ -419,9 +523,9 @@ fn obj_index(
         }
         i if i > 0 => i - 1,
         i if i + count >= 0 => i + count,
-        i => return Err(read(at.out_of_range(i, vertex_count))),
+        i => return Err(read(out_of_range(i))),
     };
-    u32::try_from(zero_based).map_err(|_| read(at.out_of_range(index, vertex_count)))
+    u32::try_from(zero_based).map_err(|_| read(out_of_range(index)))
 }
 
 /// The words of OFF text with `#` comments removed, keeping track of the line number.
@@ -463,6 +567,9 @@ impl<'t, 'p> Tokens<'t, 'p> {
         };
         match word.parse() {
             Ok(value) => Ok((value, at)),
+            Err(_) if is_integer(word) => {
+                Err(at.parse(format!("{what} is out of range: {}", snippet(word))))
+            }
             Err(_) => Err(at.expected(what, word)),
         }
     }
@@ -481,6 +588,7 @@ impl<'t, 'p> Tokens<'t, 'p> {
 /// follows its last value on the same line (edge count, colours, normals) is ignored, so one
 /// line must not hold several records.
 pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
+    check_text(text, path)?;
     let (lines, words) = (lines(text), "".split_ascii_whitespace());
     let mut t = Tokens {
         path,
@@ -489,7 +597,7 @@ pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
         line: 1,
     };
     let Some(first) = t.next() else {
-        return Err(empty(path));
+        return Err(no_faces(path, 0)); // only comments
     };
     let nv: usize = match first.strip_suffix("OFF") {
         Some(p) if p.bytes().all(|b| b"STCN".contains(&b)) => {
@@ -501,8 +609,8 @@ pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
     };
     let (nf, _): (usize, _) = t.parse(format_args!("the face count"))?;
     t.skip_rest_of_line();
-    if nv == 0 || nf == 0 {
-        return Err(empty(path));
+    if nf == 0 {
+        return Err(no_faces(path, nv));
     }
     // Capped, so that a bogus count cannot reserve absurd amounts of memory.
     let mut positions = Vec::with_capacity(nv.min(text.len() / 6));
@@ -802,7 +910,10 @@ mod tests {
             ("f -1 -2 -4\nv 1 1\n", "t.obj:4: vertex -4 does not exist (3 vertices)"),
             ("f 1 2 3\nf 1 2 5\nv 1 1\n# end", "t.obj:5: vertex 5 does not exist (4 vertices)"),
             ("v 1 1\nf 1 2 4 3\n", "t.obj:5: face has 4 corners; only triangles are supported"),
-            ("# no faces\n", "t.obj: the mesh has no vertices or no faces"),
+            ("# no faces\n", "t.obj: the mesh has 3 vertices but no faces"),
+            ("f 1 2 99999999999999999999\n", "t.obj:4: vertex index 99999999999999999999 is out of range"),
+            ("f 1 2/-99999999999999999999 3\n", "t.obj:4: texture index -99999999999999999999 is out of range"),
+            ("v 1 1\0\n", "t.obj:4: binary data (byte 0x00), not a text mesh file"),
         ];
         for (body, expected) in cases {
             assert_eq!(fails(obj(&format!("{tri}{body}"))), expected);
@@ -819,6 +930,18 @@ mod tests {
         );
         assert!(debug(obj("v 1 x")).starts_with(r#"Parse { path: "t.obj", line: 1, "#));
         assert_eq!(debug(obj("")), r#"Empty { path: "t.obj" }"#);
+        assert_eq!(fails(obj(" \r\n\t\n")), "t.obj: the file is empty");
+        let comments = fails(obj("# nothing\ng group\n"));
+        assert_eq!(comments, "t.obj: the mesh has no vertices and no faces");
+        assert_eq!(
+            fails(obj("v 0 0\n")),
+            "t.obj: the mesh has 1 vertex but no faces"
+        );
+        // Latin-1 in a comment and a DOS end-of-file mark are text; other controls are not.
+        let latin1 = String::from_utf8_lossy(b"# caf\xe9\nv 0 0\nv 1 0\nv 0 1\nf 1 2 3\n\x1a");
+        assert!(obj(&latin1).is_ok());
+        let binary = debug(obj("\u{feff}# ok\r\n\x7fELF"));
+        assert_eq!(binary, r#"Binary { path: "t.obj", line: 2, byte: 127 }"#);
         let unnamed = fails(parse_obj("v 1 abc", Path::new("")));
         assert_eq!(
             unnamed,
@@ -857,6 +980,7 @@ mod tests {
             ("3 0 1", "t.off:6: unexpected end of file: expected a vertex index of face 0"),
             ("x 0 1 2", "t.off:6: expected the corner count of face 0, found 'x'"),
             ("3 0 1 y", "t.off:6: expected a vertex index of face 0, found 'y'"),
+            ("3 0 1 -9223372036854775809", "t.off:6: a vertex index of face 0 is out of range: -9223372036854775809"),
         ];
         for (body, expected) in cases {
             assert_eq!(fails(off(&format!("{head}{body}"))), expected);
@@ -869,8 +993,14 @@ mod tests {
             ("PLY\n3 1 0\n", "t.off:1: expected 'OFF' or the vertex count, found 'PLY'"),
             ("\n\nOFF\nthree 1 0\n", "t.off:4: expected the vertex count, found 'three'"),
             ("OFF 3", "t.off:1: unexpected end of file: expected the face count"),
-            ("OFF\n0 0 0\n", "t.off: the mesh has no vertices or no faces"),
-            ("# only a comment\n", "t.off: the mesh has no vertices or no faces"),
+            ("OFF\n0 0 0\n", "t.off: the mesh has no vertices and no faces"),
+            ("OFF\n3 0 0\n", "t.off: the mesh has 3 vertices but no faces"),
+            ("# only a comment\n", "t.off: the mesh has no vertices and no faces"),
+            ("\n \n", "t.off: the file is empty"),
+            ("OFF\n3 1\n0 0 0\n\0", "t.off:4: binary data (byte 0x00), not a text mesh file"),
+            ("OFF\n-3 1 0\n", "t.off:2: the vertex count is out of range: -3"),
+            ("OFF 99999999999999999999 1", "t.off:1: the vertex count is out of range: 99999999999999999999"),
+            ("OFF\n0 1 0\n3 0 1 2\n", "t.off:3: vertex 0 does not exist (0 vertices)"),
         ];
         for (text, expected) in cases {
             assert_eq!(fails(off(text)), expected);
@@ -1010,7 +1140,16 @@ mod tests {
         // A texture index out of range names its line.
         let bad = "v 0 0\nv 1 0\nv 0 1\nvt 0 0\nf 1/1 2/9 3/1\n";
         let err = parse_obj(bad, Path::new("b.obj")).unwrap_err().to_string();
-        assert!(err.starts_with("b.obj:5:"), "{err}");
+        assert_eq!(
+            err,
+            "b.obj:5: texture coordinate 9 does not exist (1 'vt' lines)"
+        );
+        let bad = "v 0 0\nv 1 0\nv 0 1\nvt 0 0\nf 1/1 2/-2 3/1\n";
+        let err = parse_obj(bad, Path::new("b.obj")).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "b.obj:5: texture coordinate -2 does not exist (1 'vt' lines)"
+        );
     }
 
     #[test]

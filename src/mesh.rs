@@ -22,7 +22,7 @@ pub enum MeshError {
     #[error(transparent)]
     Read(#[from] ReadError),
     /// A 3D mesh where a planar one is needed.
-    #[error("{path}: vertex {vertex} has z = {z}; a planar mesh (z = 0) is required")]
+    #[error("{path}: vertex {vertex} has z = {}; a planar mesh (z = 0) is required", Short(*.z))]
     NotPlanar {
         /// The file.
         path: String,
@@ -87,6 +87,20 @@ pub enum MeshError {
     /// disk).
     #[error(transparent)]
     Topology(#[from] bdmorph_compiler::CompileError),
+}
+
+/// A number for a message: `{}` unless that would be long (`1e300` rather than 301 digits).
+struct Short(f64);
+
+impl std::fmt::Display for Short {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || (1e-5..1e16).contains(&x.abs()) || !x.is_finite() {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
 }
 
 impl PlanarMesh {
@@ -218,5 +232,20 @@ impl PlanarMesh {
         }
         self.validate()?;
         target.validate()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        let shown = |x: f64| Short(x).to_string();
+        assert_eq!(shown(0.5), "0.5");
+        assert_eq!(shown(-2.0), "-2");
+        assert_eq!(shown(1e308), "1e308");
+        assert_eq!(shown(-1e-300), "-1e-300");
+        assert_eq!(shown(f64::NAN), "NaN");
     }
 }

@@ -65,6 +65,12 @@ pub enum CompileError {
         /// How many faces share it.
         faces: usize,
     },
+    /// The same triangle is listed twice (in either orientation).
+    #[error("{} and {} are the same triangle (duplicate face)", faces[0], faces[1])]
+    DuplicateFace {
+        /// The first listing and the repeat, in face order.
+        faces: [FaceId; 2],
+    },
     /// Two faces traverse an edge in the same direction.
     #[error("{} and {} both run from {a} to {b}: inconsistent orientation", faces[0], faces[1])]
     InconsistentOrientation {

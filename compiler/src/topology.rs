@@ -73,6 +73,7 @@ impl Topology {
                 });
             }
         }
+        check_duplicates(faces)?;
         let n_he = faces.len() * 3;
         let from = |he: u32| faces[he as usize / 3][he as usize % 3];
         let to = |he: u32| from(next(he));
@@ -255,6 +256,23 @@ impl Topology {
     }
 }
 
+/// Refuses a triangle listed twice, in either orientation, naming the first repeat in face
+/// order. (Otherwise it would show up as an inconsistent orientation or a closed surface.)
+fn check_duplicates(faces: &[[u32; 3]]) -> Result<(), CompileError> {
+    let mut seen = std::collections::HashMap::with_capacity(faces.len());
+    for (f, t) in faces.iter().enumerate() {
+        let mut key = *t;
+        key.sort_unstable();
+        if let Some(&first) = seen.get(&key) {
+            return Err(CompileError::DuplicateFace {
+                faces: [FaceId(first), FaceId(f as u32)],
+            });
+        }
+        seen.insert(key, f as u32);
+    }
+    Ok(())
+}
+
 /// Iterator over a vertex's outgoing half-edges, counter-clockwise.
 pub(crate) struct Fan<'a> {
     topo: &'a Topology,
@@ -320,6 +338,15 @@ mod tests {
             Topology::new(4, &[[0, 1, 2], [0, 1, 3]]),
             Err(CompileError::InconsistentOrientation { .. })
         ));
+        // The same triangle twice, as listed, rotated or reversed.
+        for repeat in [[0, 1, 2], [1, 2, 0], [2, 1, 0]] {
+            assert_eq!(
+                Topology::new(4, &[[0, 1, 2], [0, 2, 3], repeat]).err(),
+                Some(CompileError::DuplicateFace {
+                    faces: [FaceId(0), FaceId(2)]
+                })
+            );
+        }
         assert!(matches!(
             Topology::new(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
             Err(CompileError::NonManifoldEdge { faces: 3, .. })

@@ -47,6 +47,15 @@ fn corrupted_sizes_and_tables_are_rejected() {
     p.n_temps += 1;
     assert!(matches!(rejected(p), VerifyError::Sizes { .. }));
 
+    // More vertices than the embed stream can place, refused before any table is sized by
+    // the count (this one would take 16 GiB).
+    let mut p = parts();
+    p.n_vertices = u32::MAX;
+    assert!(matches!(rejected(p), VerifyError::Sizes { .. }));
+    let mut p = parts();
+    p.n_vertices = p.embed.len() as u32 + 3;
+    assert!(matches!(rejected(p), VerifyError::Sizes { .. }));
+
     let mut p = parts();
     p.edges[3] = [p.n_vertices, 0];
     assert!(matches!(rejected(p), VerifyError::BadEdge { slot: 3 }));

@@ -171,6 +171,14 @@ pub(crate) fn verify(p: &Program) -> Result<(), VerifyError> {
     let ne = p.edges.len();
     let nu = p.unknown_vertex.len();
     check(p.n_faces > 0, VerifyError::Sizes { what: "no faces" })?;
+    // The root places two vertices and each embed step at most one. Checked before any table
+    // is sized by the vertex count, so that a bogus count cannot allocate gigabytes.
+    check(
+        nv <= p.embed.len().saturating_add(2),
+        VerifyError::Sizes {
+            what: "more vertices than the embed stream can place",
+        },
+    )?;
     check(
         (p.n_iter_edges as usize) <= ne,
         VerifyError::Sizes {

@@ -1,0 +1,11 @@
+//! `Program::from_parts` on small parts decoded from the bytes; the VM runs what it accepts.
+#![no_main]
+
+#[path = "../../tests/fuzz_checks/mod.rs"]
+mod fuzz_checks;
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    fuzz_checks::verifier(fuzz_checks::parts_from_bytes(data));
+});

@@ -506,7 +506,9 @@ const fn crc_tables() -> [[u32; 256]; 8] {
 }
 
 /// CRC-32C (Castagnoli) of `bytes`, eight bytes per step.
-fn crc32c(bytes: &[u8]) -> u32 {
+/// CRC-32C (Castagnoli) of `bytes`: the checksum that ends a program file. Public so that
+/// tools (and fuzzers) can write files with a valid checksum around other damage.
+pub fn crc32c(bytes: &[u8]) -> u32 {
     let t = &CRC_TABLES;
     let mut crc = !0u32;
     let mut chunks = bytes.chunks_exact(8);

@@ -340,6 +340,13 @@ pub(crate) fn verify(p: &Program) -> Result<(), VerifyError> {
 
 fn verify_embed(p: &Program) -> Result<(), VerifyError> {
     let nv = p.n_vertices as usize;
+    // One step per triangle: the walk reaches every face exactly once.
+    check(
+        p.embed.len() == p.n_faces as usize,
+        VerifyError::Embed {
+            step: p.embed.len(),
+        },
+    )?;
     let mut known = vec![false; p.edges.len()];
     let mut placed = vec![false; nv];
     let root = p.embed_root;

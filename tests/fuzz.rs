@@ -5,10 +5,11 @@
 //! in `fuzz/`).
 //!
 //! Case counts are small so that `cargo test` stays fast. For a long run set
-//! `PROPTEST_CASES`, which replaces every count here:
+//! `PROPTEST_CASES`, which replaces every count here (the test profile is optimised and keeps
+//! debug assertions, which the VM uses to check its values):
 //!
 //! ```text
-//! PROPTEST_CASES=200000 cargo test --release --test fuzz
+//! PROPTEST_CASES=1000000 cargo test --test fuzz
 //! ```
 //!
 //! Inputs that once failed are kept at the end as `fuzz_*_regression_*` tests.
@@ -378,7 +379,7 @@ fn corrupt(text: &str, edits: &[(usize, u8, u8)]) -> Vec<u8> {
 }
 
 proptest! {
-    #![proptest_config(config(512))]
+    #![proptest_config(config(4096))]
 
     #[test]
     fn fuzz_obj_reader_arbitrary_bytes(bytes in vec(any::<u8>(), 0..300)) {
@@ -500,7 +501,7 @@ fn edited_disk() -> impl Strategy<Value = (Vec<[f64; 2]>, Vec<[u32; 3]>)> {
 }
 
 proptest! {
-    #![proptest_config(config(512))]
+    #![proptest_config(config(4096))]
 
     #[test]
     fn fuzz_compiler_arbitrary_connectivity((positions, faces) in arbitrary_mesh()) {
@@ -554,7 +555,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
 }
 
 proptest! {
-    #![proptest_config(config(512))]
+    #![proptest_config(config(4096))]
 
     #[test]
     fn fuzz_verifier_mutated_programs(base in any::<usize>(), mutations in vec(mutation(), 1..6)) {
@@ -575,6 +576,25 @@ proptest! {
     fn fuzz_verifier_mutated_from_bytes(bytes in vec(any::<u8>(), 0..80)) {
         check::verifier(check::mutated_from_bytes(&bytes));
     }
+}
+
+/// A declared count far beyond what the input holds reserves nothing like it, and reading
+/// stops at the end of the input.
+#[test]
+fn huge_declared_counts_allocate_little_and_end_quickly() {
+    for text in [
+        "OFF\n18446744073709551615 18446744073709551615 0\n0 0 0\n",
+        "OFF\n1000000000000 1 0\n0 0 0\n1 0 0\n",
+        "OFF\n3 1000000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n",
+        "OFF 4294967296 4294967296\n",
+    ] {
+        read(text, Format::Off);
+        let err = bdmorph::io::parse_off(text, std::path::Path::new("")).expect_err(text);
+        assert!(err.to_string().contains("unexpected end of file"), "{err}");
+    }
+    // OBJ declares no counts; indices far beyond the vertices cost nothing per index either.
+    let text = format!("v 0 0\nv 1 0\nv 0 1\n{}", "f 4294967296 2 3\n".repeat(1000));
+    read(&text, Format::Obj);
 }
 
 #[test]

@@ -708,3 +708,16 @@ proptest! {
         bounded_allocation(bytes.len(), || program_file(&bytes));
     }
 }
+
+/// From cargo-fuzz `compiler` (libFuzzer, 13 s, 115,062 runs; artifact
+/// crash-c6099d3a25f8d47d398e601fb2828cb1cef4b84b): coordinates near 1e150 passed the metric
+/// check, and the layout overflowed to infinite positions (a debug assertion in the embed
+/// stream; silent infinities in release). The VM now refuses such a layout before writing.
+#[test]
+fn fuzz_compiler_regression_layout_overflow() {
+    let data = [
+        15u8, 252, 254, 254, 255, 0, 130, 130, 132, 103, 0, 55, 201, 38, 219, 211, 141, 164, 0, 26,
+    ];
+    let (positions, faces) = check::mesh_from_bytes(&data);
+    check::compile_and_run(&positions, &faces);
+}

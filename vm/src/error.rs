@@ -33,6 +33,13 @@ pub enum VmError {
     /// The symbolic factorisation failed (out of memory).
     #[error("symbolic Cholesky factorisation failed: {0}")]
     Symbolic(String),
+    /// The layout would leave the range of f64: the anchor's distance from the origin plus
+    /// the lengths of all edges exceed 1e300. Nothing is written.
+    #[error("the layout would overflow: positions up to {reach:e} from the origin")]
+    LayoutOverflow {
+        /// The anchor's distance from the origin plus the sum of all edge lengths.
+        reach: f64,
+    },
     /// A caller's array has the wrong length.
     #[error("{what}: expected length {expected}, got {got}")]
     Length {

@@ -278,6 +278,7 @@ impl Vm {
     /// Lays the current metric out in the plane: the anchor vertex at `anchor`, the anchor
     /// edge along `direction` (normalised here), every other vertex from the propagated edge
     /// directions. `out` receives one position per vertex. Call after [`Vm::newton`].
+    /// Fails without writing when the positions could overflow ([`VmError::LayoutOverflow`]).
     pub fn embed(
         &mut self,
         anchor: [f64; 2],
@@ -291,6 +292,12 @@ impl Vm {
         } else {
             [1.0, 0.0]
         };
+        // Every position lies within the anchor's distance plus the sum of all edge lengths;
+        // refuse before writing anything if that could overflow.
+        let reach = anchor[0].hypot(anchor[1]) + self.len.iter().sum::<f64>();
+        if reach.is_nan() || reach >= 1e300 {
+            return Err(VmError::LayoutOverflow { reach });
+        }
         embed::run(&self.program, &self.len, &mut self.dirs, anchor, dir, out);
         Ok(())
     }

@@ -12,6 +12,10 @@ pub struct MorphOptions {
     pub newton: NewtonOptions,
     /// Start each frame's Newton solve from the previous frame's solution (default true).
     pub warm_start: bool,
+    /// With warm starts, extrapolate the start in `t` through the last three solved frames
+    /// (quadratically; linearly through two when three would amplify them) when the new `t`
+    /// is within twice the last spacing (default true).
+    pub extrapolate: bool,
 }
 
 impl Default for MorphOptions {
@@ -19,6 +23,7 @@ impl Default for MorphOptions {
         MorphOptions {
             newton: NewtonOptions::default(),
             warm_start: true,
+            extrapolate: true,
         }
     }
 }
@@ -39,6 +44,17 @@ impl MorphOptions {
         self.warm_start = warm_start;
         self
     }
+    /// Turns the extrapolation of warm starts on or off.
+    pub fn with_extrapolate(mut self, extrapolate: bool) -> Self {
+        self.extrapolate = extrapolate;
+        self
+    }
+    /// Allows or forbids reusing an earlier numeric factor in Newton's method (see
+    /// [`NewtonOptions::reuse_factor`]).
+    pub fn with_reuse_factor(mut self, reuse_factor: bool) -> Self {
+        self.newton = self.newton.with_reuse_factor(reuse_factor);
+        self
+    }
 }
 
 /// Statistics of one frame.
@@ -46,22 +62,66 @@ impl MorphOptions {
 pub struct FrameStats {
     /// The frame's time.
     pub t: f64,
-    /// Newton iterations (numeric factorisations) the frame took.
+    /// Newton iterations (linear solves) the frame took.
     pub newton_iterations: u32,
+    /// Numeric Cholesky factorisations among them (the others reused an earlier factor).
+    pub factorizations: u32,
+    /// Conjugate-gradient iterations of the steps that reused a factor.
+    pub cg_iterations: u32,
     /// Gradient norm of the flattening energy at the solution.
     pub gradient_norm: f64,
     /// Triangles with non-positive signed area in the result.
     pub flipped_triangles: usize,
+    /// Wall-clock time of the frame (metric, Newton, layout, flip count), in seconds.
+    pub seconds: f64,
 }
 
 impl FrameStats {
     /// The statistics as one line of JSON.
     pub fn to_json(&self) -> String {
         format!(
-            "{{\"t\":{},\"newton_iterations\":{},\"gradient_norm\":{:e},\"flipped_triangles\":{}}}",
-            self.t, self.newton_iterations, self.gradient_norm, self.flipped_triangles
+            "{{\"t\":{},\"newton_iterations\":{},\"factorizations\":{},\"cg_iterations\":{},\"gradient_norm\":{:e},\"flipped_triangles\":{},\"seconds\":{:e}}}",
+            self.t,
+            self.newton_iterations,
+            self.factorizations,
+            self.cg_iterations,
+            self.gradient_norm,
+            self.flipped_triangles,
+            self.seconds
         )
     }
+}
+
+/// Solved frames kept for extrapolating the next start.
+const HISTORY: usize = 3;
+
+/// Weights of the Lagrange polynomial through the nodes' times evaluated at `t`, and their
+/// count; `None` when two nodes share a time or the weights would amplify the nodes' values
+/// (sum of magnitudes above 8: one step of uniform quadratic extrapolation gives 7).
+fn lagrange_weights(t: f64, nodes: &[Solved]) -> Option<([f64; HISTORY], usize)> {
+    let mut w = [0.0; HISTORY];
+    for (i, a) in nodes.iter().enumerate() {
+        let mut wi = 1.0;
+        for (j, b) in nodes.iter().enumerate() {
+            if i != j {
+                let d = a.t - b.t;
+                if d == 0.0 {
+                    return None;
+                }
+                wi *= (t - b.t) / d;
+            }
+        }
+        w[i] = wi;
+    }
+    let size: f64 = w.iter().map(|x| x.abs()).sum();
+    (size.is_finite() && size <= 8.0).then_some((w, nodes.len()))
+}
+
+/// A solved frame kept for extrapolating the next start.
+#[derive(Clone, Debug)]
+struct Solved {
+    t: f64,
+    u: Vec<f64>,
 }
 
 /// A computed frame: positions (one per vertex, in the source's order) and statistics.
@@ -164,6 +224,11 @@ pub struct Morph {
     angle_turn: f64,
     options: MorphOptions,
     positions: Vec<[f64; 2]>,
+    /// The last solved frames, newest last; the last `solved` of them are valid.
+    history: [Solved; HISTORY],
+    solved: usize,
+    /// The start `u` of the frame being solved.
+    start: Vec<f64>,
 }
 
 impl std::fmt::Debug for Morph {
@@ -235,6 +300,12 @@ impl Morph {
             angle_turn,
             options,
             positions: vec![[0.0; 2]; source.positions.len()],
+            history: [(); HISTORY].map(|_| Solved {
+                t: 0.0,
+                u: vec![0.0; vm.u().len()],
+            }),
+            solved: 0,
+            start: vec![0.0; vm.u().len()],
             vm,
         })
     }
@@ -269,6 +340,7 @@ impl Morph {
     /// Computes the frame at `t` into `out` (one position per vertex). Allocates nothing; on
     /// error `out` is left untouched.
     pub fn frame_into(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<FrameStats, MorphError> {
+        let started = std::time::Instant::now();
         if !(0.0..=1.0).contains(&t) {
             return Err(MorphError::TimeOutOfRange { t });
         }
@@ -286,10 +358,16 @@ impl Morph {
         self.vm
             .set_metric_lerp(&self.sq_source, &self.sq_target, t)
             .map_err(solver)?;
-        if !self.options.warm_start {
-            self.vm.reset_u();
+        let extrapolated = self.choose_start(t);
+        let mut result = self.vm.newton(&self.options.newton);
+        if result.is_err() && extrapolated {
+            // An extrapolated start is a guess: fall back to the last solution before failing.
+            self.vm
+                .set_u(&self.history[HISTORY - 1].u)
+                .expect("history has one value per unknown");
+            result = self.vm.newton(&self.options.newton);
         }
-        let report = self.vm.newton(&self.options.newton).map_err(|e| {
+        let report = result.map_err(|e| {
             let worst = self.vm.failure_triangles().to_vec();
             match e {
                 VmError::NotConverged {
@@ -314,11 +392,72 @@ impl Morph {
         ];
         let (s, c) = (self.angle_source + t * self.angle_turn).sin_cos();
         self.vm.embed(anchor, [c, s], out).map_err(solver)?;
+        self.remember(t);
         Ok(FrameStats {
             t,
             newton_iterations: report.iterations,
+            factorizations: report.factorizations,
+            cg_iterations: report.cg_iterations,
             gradient_norm: report.gradient_norm,
             flipped_triangles: self.vm.count_flipped(out),
+            seconds: started.elapsed().as_secs_f64(),
         })
+    }
+
+    /// Sets the VM's start `u` for a frame at `t`; true when it was extrapolated.
+    fn choose_start(&mut self, t: f64) -> bool {
+        if !self.options.warm_start {
+            self.vm.reset_u();
+            return false;
+        }
+        if self.solved == 0 {
+            return false;
+        }
+        let last = &self.history[HISTORY - 1];
+        let weights = if self.options.extrapolate && self.solved >= 2 {
+            let prev = &self.history[HISTORY - 2];
+            let near = (t - last.t).abs() <= 2.0 * (last.t - prev.t).abs();
+            let nodes = &self.history[HISTORY - self.solved..];
+            let cubic = lagrange_weights(t, nodes);
+            let linear = lagrange_weights(t, &nodes[nodes.len() - 2..]);
+            match (near, cubic, linear) {
+                (false, ..) => None,
+                (true, Some(w), _) => Some(w),
+                (true, None, Some(w)) => Some(w),
+                (true, None, None) => None,
+            }
+        } else {
+            None
+        };
+        let Some((weights, count)) = weights else {
+            self.vm
+                .set_u(&last.u)
+                .expect("history has one value per unknown");
+            return false;
+        };
+        let nodes = &self.history[HISTORY - count..];
+        self.start.fill(0.0);
+        for (node, w) in nodes.iter().zip(&weights[..count]) {
+            for (s, u) in self.start.iter_mut().zip(&node.u) {
+                *s += w * u;
+            }
+        }
+        self.vm
+            .set_u(&self.start)
+            .expect("start has one value per unknown");
+        true
+    }
+
+    /// Records the VM's solution for `t` as the newest solved frame. Allocates nothing.
+    fn remember(&mut self, t: f64) {
+        if self.solved > 0 && self.history[HISTORY - 1].t == t {
+            // The same frame again: do not let a repeat collapse the spacing.
+            self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
+            return;
+        }
+        self.history.rotate_left(1);
+        self.history[HISTORY - 1].t = t;
+        self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
+        self.solved = (self.solved + 1).min(HISTORY);
     }
 }

@@ -97,6 +97,40 @@ fn smooth_deformations_never_flip_and_converge_tightly() {
 }
 
 #[test]
+fn frame_levers_change_the_work_not_the_frames() {
+    // Extrapolated starts and reused factors against plain warm starts with a factorisation
+    // per step, over a sweep that turns around at t = 1: the same frames, fewer factors.
+    for (name, a, b) in pairs() {
+        let plain = MorphOptions::default()
+            .with_extrapolate(false)
+            .with_reuse_factor(false);
+        let mut reference = Morph::new(&a, &b, plain).expect("plain");
+        let mut fast = Morph::new(&a, &b, MorphOptions::default()).expect("default");
+        let (mut factors_plain, mut factors_fast, mut cg) = (0, 0, 0);
+        let ts = (0..=10).chain((3..10).rev()).map(|i| f64::from(i) / 10.0);
+        for t in ts {
+            let r = reference.frame(t).expect("plain frame");
+            let (r_stats, r_pos) = (r.stats, r.positions.to_vec());
+            let f = fast.frame(t).expect("fast frame");
+            assert!(f.stats.gradient_norm < 1e-10 && r_stats.gradient_norm < 1e-10);
+            assert_eq!(f.stats.flipped_triangles, 0, "{name} t = {t}");
+            let d = max_distance(&r_pos, f.positions);
+            assert!(d < 1e-9 * a.diameter(), "{name} t = {t}: {d:e}");
+            assert_eq!(r_stats.factorizations, r_stats.newton_iterations);
+            assert_eq!(r_stats.cg_iterations, 0);
+            factors_plain += r_stats.factorizations;
+            factors_fast += f.stats.factorizations;
+            cg += f.stats.cg_iterations;
+        }
+        assert!(
+            2 * factors_fast < factors_plain && cg > 0,
+            "{name}: {factors_fast} factorisations (and {cg} CG iterations) against \
+             {factors_plain}"
+        );
+    }
+}
+
+#[test]
 fn cold_and_warm_starts_agree() {
     let (_, a, b) = pairs().remove(0);
     let mut warm = Morph::new(&a, &b, MorphOptions::default()).expect("warm");

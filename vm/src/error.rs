@@ -27,6 +27,9 @@ pub enum VmError {
         /// Index of the failing pivot in the factorisation's order.
         pivot: usize,
     },
+    /// A solve was asked for before any numeric factorisation.
+    #[error("no numeric factor yet: factor a Hessian before solving with it")]
+    NoFactor,
     /// Newton was asked to run before a metric was set (or after setting one failed).
     #[error("no metric: call set_metric or set_metric_lerp before newton")]
     MetricNotSet,

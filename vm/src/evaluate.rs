@@ -1,5 +1,6 @@
 //! The iteration-stream executor: one pass computes every edge length, every half-angle
-//! tangent, the gradient and the Hessian's CSC values, with no mesh structure at hand.
+//! tangent, the gradient and the Hessian's CSC values (and, when asked, the energy), with no
+//! mesh structure at hand.
 
 use bdmorph_isa::{operand, Op, Program};
 
@@ -42,9 +43,13 @@ pub(crate) struct Energy {
 /// `dE/du_k = pi - (1/2) sum alpha` is the gradient. Degenerate triangles take angles 0 and pi,
 /// which is the convex, C^1 extension of the CETM paper.
 ///
+/// With `ENERGY = false` the energy is left at zero and boundary corners skip their angle
+/// (only the energy needs it): the pass a Newton iteration runs when its line search can decide
+/// on the gradient alone.
+///
 /// Operand indices are bounds-checked by ordinary slice indexing: a verified program never
 /// fails them. An unchecked variant has not been measured yet, so none is used.
-pub(crate) fn run(program: &Program, r: Registers<'_>) -> Energy {
+pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> Energy {
     let code = program.iteration();
     let col_ptr = &program.hessian().col_ptr;
     let Registers {
@@ -69,18 +74,24 @@ pub(crate) fn run(program: &Program, r: Registers<'_>) -> Energy {
                 let a = unknown(k, operand::read(code, &mut pc));
                 let b = unknown(k, operand::read(code, &mut pc));
                 len[li] = l0[li] * scale[a] * scale[b];
-                log_len[li] = log_l0[li] + 0.5 * (u[a] + u[b]);
+                if ENERGY {
+                    log_len[li] = log_l0[li] + 0.5 * (u[a] + u[b]);
+                }
                 li += 1;
             }
             EDGE_LEN_IB => {
                 let a = unknown(k, operand::read(code, &mut pc));
                 len[li] = l0[li] * scale[a];
-                log_len[li] = log_l0[li] + 0.5 * u[a];
+                if ENERGY {
+                    log_len[li] = log_l0[li] + 0.5 * u[a];
+                }
                 li += 1;
             }
             EDGE_LEN_BB => {
                 len[li] = l0[li];
-                log_len[li] = log_l0[li];
+                if ENERGY {
+                    log_len[li] = log_l0[li];
+                }
                 li += 1;
             }
             HALF_TAN | HALF_TAN_COT => {
@@ -90,11 +101,13 @@ pub(crate) fn run(program: &Program, r: Registers<'_>) -> Energy {
                 let c = len[opposite];
                 // Every corner's angle enters the energy; only interior corners' the gradient
                 // (HALF_TAN.COT marks the others, for readers of the stream).
-                let t = half_angle_and_cot(a, b, c, true);
-                let linear = (t[0] - std::f64::consts::FRAC_PI_4) * 2.0 * log_len[opposite];
-                let lob = lobachevsky(2.0 * t[0]);
-                energy.value += linear + lob;
-                energy.magnitude += linear.abs() + lob.abs();
+                let t = half_angle_and_cot(a, b, c, ENERGY || op == HALF_TAN);
+                if ENERGY {
+                    let linear = (t[0] - std::f64::consts::FRAC_PI_4) * 2.0 * log_len[opposite];
+                    let lob = lobachevsky(2.0 * t[0]);
+                    energy.value += linear + lob;
+                    energy.magnitude += linear.abs() + lob.abs();
+                }
                 debug_assert!(t[0].is_finite() && t[1].is_finite(), "T{ti} = {t:?}");
                 temps[ti] = t;
                 ti += 1;
@@ -120,8 +133,10 @@ pub(crate) fn run(program: &Program, r: Registers<'_>) -> Energy {
                 }
                 debug_assert!(diag.is_finite() && grad[k].is_finite(), "unknown {k}");
                 hvals[col] = diag;
-                energy.value += std::f64::consts::PI * u[k];
-                energy.magnitude += (std::f64::consts::PI * u[k]).abs();
+                if ENERGY {
+                    energy.value += std::f64::consts::PI * u[k];
+                    energy.magnitude += (std::f64::consts::PI * u[k]).abs();
+                }
                 k += 1;
             }
             _ => unreachable!(

@@ -38,6 +38,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod cg;
 mod embed;
 mod error;
 mod evaluate;
@@ -96,8 +97,10 @@ pub struct Vm {
     grad: Vec<f64>,
     hvals: Vec<f64>,
     step: Vec<f64>,
+    cg: cg::CgBuffers,
     dirs: Vec<[f64; 2]>,
     metric_set: bool,
+    factor_ready: bool,
     failure: Vec<TriangleReport>,
 }
 
@@ -144,8 +147,10 @@ impl Vm {
             grad: vec![0.0; n],
             hvals: vec![0.0; h.nnz()],
             step: vec![0.0; n],
+            cg: cg::CgBuffers::new(n),
             dirs: vec![[0.0; 2]; program.n_edges()],
             metric_set: false,
+            factor_ready: false,
             failure: Vec::new(),
             program,
         })
@@ -211,10 +216,24 @@ impl Vm {
     /// Runs the iteration stream once at the current `u`: fills the edge lengths, the gradient,
     /// the Hessian values and the energy. Allocates nothing.
     pub fn evaluate(&mut self) {
+        self.evaluate_with::<true>();
+    }
+
+    /// As [`Vm::evaluate`] without the energy (left NaN): the cheaper pass Newton iterations
+    /// run. Allocates nothing.
+    pub fn evaluate_gradient(&mut self) {
+        self.evaluate_with::<false>();
+        self.energy = evaluate::Energy {
+            value: f64::NAN,
+            magnitude: f64::NAN,
+        };
+    }
+
+    fn evaluate_with<const ENERGY: bool>(&mut self) {
         for (s, &u) in self.scale.iter_mut().zip(&self.u) {
             *s = (0.5 * u).exp();
         }
-        self.energy = evaluate::run(
+        self.energy = evaluate::run::<ENERGY>(
             &self.program,
             evaluate::Registers {
                 l0: &self.l0,
@@ -249,7 +268,9 @@ impl Vm {
 
     /// The CETM energy at the last evaluation, up to a constant that depends only on the
     /// metric (triangles whose vertices are all on the boundary are left out). Convex in `u`;
-    /// its gradient is [`Vm::gradient`].
+    /// its gradient is [`Vm::gradient`]. NaN when the last pass did not compute it
+    /// ([`Vm::evaluate_gradient`], or the last pass of a successful [`Vm::newton`]): call
+    /// [`Vm::evaluate`] first.
     pub fn energy(&self) -> f64 {
         self.energy.value
     }
@@ -381,6 +402,9 @@ mod tests {
             vm.newton(&NewtonOptions::default()),
             Err(VmError::MetricNotSet)
         );
+        assert!(matches!(vm.solve(), Err(VmError::NoFactor)));
+        vm.evaluate_gradient();
+        assert!(vm.energy().is_nan(), "the cheap pass leaves no energy");
         assert!(matches!(
             vm.squared_lengths(&pos[..3]),
             Err(VmError::Length {

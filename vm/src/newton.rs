@@ -4,14 +4,15 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltError;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
 use crate::{Vm, VmError};
 
-/// Stopping rule of [`Vm::newton`].
+/// Stopping rule and factor policy of [`Vm::newton`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct NewtonOptions {
@@ -22,6 +23,11 @@ pub struct NewtonOptions {
     /// Largest change of any `u` the first trial of a step may make (default 2, a factor
     /// e = 2.7 on lengths); longer Newton steps are scaled down to it before the line search.
     pub step_cap: f64,
+    /// Reuse the last numeric Cholesky factor (of an earlier iterate or an earlier frame) as
+    /// the preconditioner of conjugate gradients on the current Hessian, refactoring only when
+    /// they need more than a few iterations (default `true`). The tolerance is unchanged: only
+    /// the work per step differs. With `false` every step factors the current Hessian.
+    pub reuse_factor: bool,
 }
 
 impl Default for NewtonOptions {
@@ -30,6 +36,7 @@ impl Default for NewtonOptions {
             tolerance: 1e-10,
             max_iterations: 50,
             step_cap: 2.0,
+            reuse_factor: true,
         }
     }
 }
@@ -45,19 +52,41 @@ impl NewtonOptions {
         self.max_iterations = max_iterations;
         self
     }
+    /// Sets whether an earlier numeric factor may be reused (see [`Self::reuse_factor`]).
+    pub fn with_reuse_factor(mut self, reuse_factor: bool) -> Self {
+        self.reuse_factor = reuse_factor;
+        self
+    }
 }
 
 /// What a successful Newton solve did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NewtonReport {
-    /// Newton steps taken (factorisations); 0 when the start was already flat.
+    /// Newton steps taken (linear solves); 0 when the start was already flat.
     pub iterations: u32,
+    /// Numeric Cholesky factorisations among them (the rest reused an earlier factor).
+    pub factorizations: u32,
+    /// Conjugate-gradient iterations of the steps that reused a factor.
+    pub cg_iterations: u32,
+    /// Gradient norm at the start.
+    pub initial_gradient_norm: f64,
+    /// Passes of the iteration stream, line-search trials included.
+    pub passes: u32,
     /// Gradient norm at the returned `u`.
     pub gradient_norm: f64,
     /// Step halvings the line search needed over all iterations (0 when every full Newton
     /// step was accepted).
     pub backtracks: u32,
 }
+
+/// A step is accepted on the gradient alone when it brings `||g||` below this fraction of the
+/// smallest norm seen so far in the solve.
+const ACCEPT_RATIO: f64 = 0.5;
+/// A step whose conjugate gradients needed more iterations than this marks the factor stale:
+/// the next step refactors.
+const REFACTOR_AFTER_CG: u32 = 10;
+/// Conjugate-gradient iterations allowed per step (any iterate is a descent direction).
+const MAX_CG: u32 = 25;
 
 /// Symbolic factorisation and a workspace large enough for every numeric factorisation and
 /// solve that follows.
@@ -87,58 +116,91 @@ impl Vm {
     /// Solves for the flat metric from the current `u` (the previous frame's, a warm start).
     ///
     /// Each iteration evaluates the gradient and Hessian, stops when `||g||_2` is below the
-    /// tolerance, and otherwise takes the Newton step `u -= H^-1 g`, halved until the CETM
-    /// energy decreases enough (Armijo); the full step is taken whenever it is accepted.
-    /// The energy is convex and bounded below on a valid metric, so this converges from any
-    /// start. On error `u` is restored
-    /// to its value at the call, so a failed frame does not spoil the next warm start.
-    /// Allocates nothing.
+    /// tolerance, and otherwise steps along `d = -H^-1 g`, with `H` the current Hessian or,
+    /// when [`NewtonOptions::reuse_factor`] allows, the last factored one (any positive
+    /// definite `H` gives a descent direction). A trial step is accepted outright when it
+    /// brings `||g||` below half the smallest norm seen so far in this solve: that can happen
+    /// only finitely often before the tolerance is met, and it spares the energy evaluation,
+    /// which costs more than the rest of a pass. Otherwise a reused factor is dropped and the
+    /// current Hessian factored; with a fresh factor the step is halved until the CETM energy
+    /// decreases enough (Armijo). Between the outright acceptances the energy decreases, and it
+    /// is convex and bounded below on a valid metric, so the solve converges from any start.
+    ///
+    /// On error `u` is restored to its value at the call, so a failed frame does not spoil the
+    /// next warm start. Allocates nothing.
     pub fn newton(&mut self, options: &NewtonOptions) -> Result<NewtonReport, VmError> {
         if !self.metric_set {
             return Err(VmError::MetricNotSet);
         }
         self.u_saved.copy_from_slice(&self.u);
         self.failure.clear();
-        let result = self.newton_loop(options);
-        if result.is_err() {
+        let mut report = NewtonReport {
+            iterations: 0,
+            factorizations: 0,
+            cg_iterations: 0,
+            initial_gradient_norm: f64::NAN,
+            passes: 0,
+            gradient_norm: f64::NAN,
+            backtracks: 0,
+        };
+        let result = self.newton_loop(options, &mut report);
+        if let Err(e) = result {
             // Where it gave up, before restoring u: the triangles that make the metric hard.
             self.failure = self.worst_triangles(5);
             self.u.copy_from_slice(&self.u_saved);
             // Leave lengths, gradient and Hessian consistent with the restored u.
             self.evaluate();
+            return Err(e);
         }
-        result
+        Ok(report)
     }
 
-    fn newton_loop(&mut self, options: &NewtonOptions) -> Result<NewtonReport, VmError> {
+    fn newton_loop(
+        &mut self,
+        options: &NewtonOptions,
+        report: &mut NewtonReport,
+    ) -> Result<(), VmError> {
         let n = self.u.len();
-        let mut iteration = 0u32;
-        let mut backtracks = 0u32;
-        self.evaluate();
+        self.evaluate_gradient();
+        report.passes += 1;
         let mut gradient_norm = norm(&self.grad);
+        let mut best = gradient_norm;
+        report.initial_gradient_norm = gradient_norm;
         loop {
-            if !gradient_norm.is_finite() || !self.energy.value.is_finite() {
-                return Err(VmError::NonFinite { iteration });
+            report.gradient_norm = gradient_norm;
+            if !gradient_norm.is_finite() {
+                return Err(VmError::NonFinite {
+                    iteration: report.iterations,
+                });
             }
             if gradient_norm < options.tolerance {
-                return Ok(NewtonReport {
-                    iterations: iteration,
-                    gradient_norm,
-                    backtracks,
-                });
+                return Ok(());
             }
-            if iteration >= options.max_iterations {
+            if report.iterations >= options.max_iterations {
                 return Err(VmError::NotConverged {
-                    iterations: iteration,
+                    iterations: report.iterations,
                     gradient_norm,
                 });
             }
-            self.newton_step(n)?;
-            iteration += 1;
-            // Armijo backtracking on the convex energy E. The Newton direction d descends E:
-            // its slope g.d = -g H^-1 g < 0. The first trial is the full step, shortened only
-            // when some |d_k| exceeds the cap; the evaluation at the accepted point is the
-            // next iteration's, so an accepted full step costs nothing extra.
+            let fresh = !(self.factor_ready && options.reuse_factor);
+            if fresh {
+                self.factorize()?;
+                report.factorizations += 1;
+                self.solve_step(n);
+            } else {
+                // Inexact Newton: solve only as accurately as this step can use (forcing term
+                // min(0.01, ||g||)), and no more accurately than the tolerance needs.
+                let forcing = gradient_norm
+                    .min(0.01)
+                    .max(0.1 * options.tolerance / gradient_norm)
+                    .min(0.5);
+                let used = self.pcg_step(forcing, MAX_CG);
+                report.cg_iterations += used;
+                if used > REFACTOR_AFTER_CG {
+                    self.factor_ready = false;
+                }
+            }
+            report.iterations += 1;
             let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, d)| g * d).sum();
             let longest = self.step.iter().fold(0.0f64, |m, d| m.max(d.abs()));
             let mut alpha = if longest > options.step_cap {
@@ -146,13 +208,36 @@ impl Vm {
             } else {
                 1.0
             };
-            let (energy0, grad0) = (self.energy, gradient_norm);
             self.u_base.copy_from_slice(&self.u);
+            let grad0 = gradient_norm;
+
+            // The trial step, judged on the gradient alone.
+            self.move_along(alpha);
+            self.evaluate_gradient();
+            report.passes += 1;
+            let trial = norm(&self.grad);
+            if trial.is_finite() && trial <= ACCEPT_RATIO * best {
+                gradient_norm = trial;
+                best = best.min(trial);
+                continue;
+            }
+            // Not good enough: back to the base point, with its energy this time.
+            self.u.copy_from_slice(&self.u_base);
+            self.evaluate();
+            report.passes += 1;
+            if !fresh {
+                // The reused factor has gone stale: factor the current Hessian and retry.
+                self.factor_ready = false;
+                report.iterations -= 1;
+                continue;
+            }
+            // Armijo backtracking on the convex energy E along the fresh Newton direction,
+            // whose slope g.d = -g H^-1 g is negative.
+            let energy0 = self.energy;
             loop {
-                for ((u, b), s) in self.u.iter_mut().zip(&self.u_base).zip(&self.step) {
-                    *u = b + alpha * s;
-                }
+                self.move_along(alpha);
                 self.evaluate();
+                report.passes += 1;
                 let trial = norm(&self.grad);
                 let e1 = self.energy.value;
                 let armijo = e1 <= energy0.value + 1e-4 * alpha * slope;
@@ -162,17 +247,25 @@ impl Vm {
                 let flat = (e1 - energy0.value).abs() <= noise && trial < grad0;
                 if e1.is_finite() && trial.is_finite() && (armijo || flat) {
                     gradient_norm = trial;
+                    best = best.min(trial);
                     break;
                 }
                 alpha *= 0.5;
-                backtracks += 1;
+                report.backtracks += 1;
                 if alpha < 1e-12 {
                     return Err(VmError::NotConverged {
-                        iterations: iteration,
+                        iterations: report.iterations,
                         gradient_norm: grad0,
                     });
                 }
             }
+        }
+    }
+
+    /// `u = u_base + alpha * step`.
+    fn move_along(&mut self, alpha: f64) {
+        for ((u, b), s) in self.u.iter_mut().zip(&self.u_base).zip(&self.step) {
+            *u = b + alpha * s;
         }
     }
 
@@ -185,16 +278,18 @@ impl Vm {
     /// Fails with [`VmError::NotPositiveDefinite`] when the Hessian is not numerically
     /// positive definite (for instance before any evaluation, when its values are all zero).
     pub fn factor_and_solve(&mut self) -> Result<&[f64], VmError> {
-        self.newton_step(self.u.len())?;
+        self.factorize()?;
+        self.solve_step(self.u.len());
         Ok(&self.step)
     }
 
-    /// Factors the Hessian of the last evaluation and solves `H step = -g` in place.
-    fn newton_step(&mut self, n: usize) -> Result<(), VmError> {
+    /// Factors the Hessian of the last evaluation numerically into the preallocated factor.
+    /// Allocates nothing.
+    pub fn factorize(&mut self) -> Result<(), VmError> {
+        self.factor_ready = false;
         let stack = MemStack::new(&mut self.workspace);
         let matrix = SparseColMatRef::new(self.pattern.as_ref(), &self.hvals);
-        let llt = self
-            .symbolic
+        self.symbolic
             .factorize_numeric_llt(
                 &mut self.factor,
                 matrix,
@@ -209,9 +304,28 @@ impl Vm {
                     VmError::NotPositiveDefinite { pivot: index }
                 }
             })?;
+        self.factor_ready = true;
+        Ok(())
+    }
+
+    /// Solves `H step = -g` with the last numeric factor (which may be of an earlier Hessian),
+    /// returning the step. Fails with [`VmError::NoFactor`] before any factorisation.
+    /// Allocates nothing.
+    pub fn solve(&mut self) -> Result<&[f64], VmError> {
+        if !self.factor_ready {
+            return Err(VmError::NoFactor);
+        }
+        self.solve_step(self.u.len());
+        Ok(&self.step)
+    }
+
+    /// `step = -H^-1 g` with the current factor, which must be ready.
+    fn solve_step(&mut self, n: usize) {
+        debug_assert!(self.factor_ready);
         for (s, g) in self.step.iter_mut().zip(&self.grad) {
             *s = -g;
         }
+        let llt = LltRef::new(&self.symbolic, &self.factor);
         let stack = MemStack::new(&mut self.workspace);
         llt.solve_in_place_with_conj(
             Conj::No,
@@ -219,7 +333,6 @@ impl Vm {
             Par::Seq,
             stack,
         );
-        Ok(())
     }
 }
 

@@ -1,0 +1,134 @@
+//! Sweeps `t` over 0, 0.1, ..., 1 and back on a generated disk of about N vertices (default
+//! 10,000) and prints, per configuration of the frame levers, the mean and median time per
+//! warm frame, Newton iterations, factorisations and stream passes.
+//!
+//! ```sh
+//! cargo run --release --example frame_sweep -- 100000
+//! ```
+
+use std::time::Instant;
+
+/// CPU time of this thread in seconds (Linux `schedstat`), which a loaded machine does not
+/// inflate the way it inflates wall-clock time; falls back to wall-clock time elsewhere.
+fn cpu_seconds(wall: Instant) -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or_else(|| wall.elapsed().as_secs_f64(), |ns| ns * 1e-9)
+}
+
+use bdmorph::{generate, Morph, MorphOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let n: usize = match std::env::args().nth(1) {
+        Some(s) => s.parse()?,
+        None => 10_000,
+    };
+    let rounds: usize = match std::env::args().nth(2) {
+        Some(s) => s.parse()?,
+        None => 3,
+    };
+    let a = generate::disk(generate::rings_for(n), 0.25);
+    let b = generate::twist(&generate::bend(&a, 0.6), 1.2);
+    let program = bdmorph::compile(&a.positions, &a.faces)?;
+    println!(
+        "{} vertices, {} triangles; warm frames at a t step of 0.1, swept 0 -> 1 -> 0, {rounds} \
+         rounds",
+        program.n_vertices(),
+        program.n_faces()
+    );
+    let configs = [
+        (
+            "plain warm start",
+            MorphOptions::default()
+                .with_extrapolate(false)
+                .with_reuse_factor(false),
+        ),
+        (
+            "+ extrapolation",
+            MorphOptions::default().with_reuse_factor(false),
+        ),
+        (
+            "+ factor reuse",
+            MorphOptions::default().with_extrapolate(false),
+        ),
+        ("both (default)", MorphOptions::default()),
+    ];
+    {
+        // Phases on the state of t = 0.5.
+        let mut vm = bdmorph::Vm::new(program.clone())?;
+        let (sa, sb) = (
+            vm.squared_lengths(&a.positions)?,
+            vm.squared_lengths(&b.positions)?,
+        );
+        vm.set_metric_lerp(&sa, &sb, 0.5)?;
+        vm.newton(&bdmorph::NewtonOptions::default())?;
+        let median = |f: &mut dyn FnMut()| {
+            let mut v: Vec<f64> = (0..15)
+                .map(|_| {
+                    let s = Instant::now();
+                    f();
+                    s.elapsed().as_secs_f64() * 1e3
+                })
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let full = median(&mut || vm.evaluate());
+        let grad = median(&mut || vm.evaluate_gradient());
+        let fact = median(&mut || vm.factorize().expect("definite"));
+        let solve = median(&mut || {
+            vm.solve().expect("factored");
+        });
+        println!(
+            "phases (median ms): pass with energy {full:.3}, pass without {grad:.3} ({:.1} ns \
+             per triangle), numeric factorisation {fact:.3}, solve {solve:.3}",
+            grad * 1e6 / program.n_faces() as f64
+        );
+    }
+    let ts: Vec<f64> = (0..=10)
+        .chain((0..10).rev())
+        .map(|i| f64::from(i) / 10.0)
+        .collect();
+    // A third argument picks one configuration by its position (e.g. for a profiler).
+    let only: Option<usize> = std::env::args().nth(3).and_then(|s| s.parse().ok());
+    for (i, (name, options)) in configs.into_iter().enumerate() {
+        if only.is_some_and(|o| o != i) {
+            continue;
+        }
+        let mut morph = Morph::with_program(program.clone(), &a, &b, options)?;
+        let mut out = vec![[0.0; 2]; a.positions.len()];
+        morph.frame_into(0.0, &mut out)?;
+        let (mut its, mut facts, mut cgs, mut frames) = (0u64, 0u64, 0u64, 0u64);
+        let mut times = Vec::new();
+        let origin = Instant::now();
+        let cpu_start = cpu_seconds(origin);
+        for _ in 0..rounds {
+            for &t in &ts[1..] {
+                let start = Instant::now();
+                let stats = morph.frame_into(t, &mut out)?;
+                times.push(start.elapsed().as_secs_f64());
+                its += u64::from(stats.newton_iterations);
+                facts += u64::from(stats.factorizations);
+                cgs += u64::from(stats.cg_iterations);
+                frames += 1;
+                assert_eq!(stats.flipped_triangles, 0);
+            }
+        }
+        let cpu = (cpu_seconds(origin) - cpu_start) / frames as f64;
+        times.sort_by(f64::total_cmp);
+        let mean = times.iter().sum::<f64>() / times.len() as f64;
+        println!(
+            "{name:>18}: median {:8.3} ms, mean {:8.3} ms (CPU {:8.3} ms) per frame; {:.2} \
+             iterations, {:.2} \
+             factorisations, {:.2} CG iterations per frame",
+            times[times.len() / 2] * 1e3,
+            mean * 1e3,
+            cpu * 1e3,
+            its as f64 / frames as f64,
+            facts as f64 / frames as f64,
+            cgs as f64 / frames as f64,
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,199 @@
+//! Conjugate gradients on the current Hessian, preconditioned by an earlier numeric Cholesky
+//! factor: the Newton step without a new factorisation.
+
+use faer::dyn_stack::MemStack;
+use faer::sparse::linalg::cholesky::LltRef;
+use faer::{Conj, MatMut, Par};
+
+use crate::Vm;
+
+/// Work vectors of the conjugate-gradient solve, one value per unknown each.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CgBuffers {
+    pub r: Vec<f64>,
+    pub z: Vec<f64>,
+    pub p: Vec<f64>,
+    pub hp: Vec<f64>,
+}
+
+impl CgBuffers {
+    pub fn new(n: usize) -> CgBuffers {
+        CgBuffers {
+            r: vec![0.0; n],
+            z: vec![0.0; n],
+            p: vec![0.0; n],
+            hp: vec![0.0; n],
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `y = H x` for the symmetric matrix whose lower triangle (diagonal first in each column) is
+/// stored in `col_ptr`, `row_idx`, `values`.
+pub(crate) fn symmetric_product(
+    col_ptr: &[u32],
+    row_idx: &[u32],
+    values: &[f64],
+    x: &[f64],
+    y: &mut [f64],
+) {
+    y.fill(0.0);
+    for j in 0..x.len() {
+        let (start, end) = (col_ptr[j] as usize, col_ptr[j + 1] as usize);
+        let xj = x[j];
+        let mut acc = values[start] * xj;
+        for slot in start + 1..end {
+            let i = row_idx[slot] as usize;
+            let v = values[slot];
+            y[i] += v * xj;
+            acc += v * x[i];
+        }
+        y[j] += acc;
+    }
+}
+
+impl Vm {
+    /// Solves `H step = -g` for the current Hessian by conjugate gradients preconditioned by
+    /// the last numeric factor (which must be ready), until the residual is below
+    /// `relative * ||g||` or after `max_iterations`; returns the iterations used. Every
+    /// iterate, the last included, is a descent direction of the energy (it lowers the
+    /// quadratic model from 0). Allocates nothing.
+    pub(crate) fn pcg_step(&mut self, relative: f64, max_iterations: u32) -> u32 {
+        let n = self.u.len();
+        let h = self.program.hessian();
+        let llt = LltRef::new(&self.symbolic, &self.factor);
+        let CgBuffers { r, z, p, hp } = &mut self.cg;
+        let x = &mut self.step;
+        x.fill(0.0);
+        for (r, g) in r.iter_mut().zip(&self.grad) {
+            *r = -g;
+        }
+        let target = relative * dot(r, r).sqrt();
+        let precondition =
+            |r: &[f64], z: &mut [f64], workspace: &mut faer::dyn_stack::MemBuffer| {
+                z.copy_from_slice(r);
+                llt.solve_in_place_with_conj(
+                    Conj::No,
+                    MatMut::from_column_major_slice_mut(z, n, 1),
+                    Par::Seq,
+                    MemStack::new(workspace),
+                );
+            };
+        precondition(r, z, &mut self.workspace);
+        p.copy_from_slice(z);
+        let mut rz = dot(r, z);
+        for iteration in 1..=max_iterations {
+            symmetric_product(&h.col_ptr, &h.row_idx, &self.hvals, p, hp);
+            let php = dot(p, hp);
+            if !(php > 0.0 && rz > 0.0) {
+                return iteration;
+            }
+            let alpha = rz / php;
+            for ((x, r), (p, hp)) in x.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(&*hp)) {
+                *x += alpha * p;
+                *r -= alpha * hp;
+            }
+            if dot(r, r).sqrt() <= target {
+                return iteration;
+            }
+            precondition(r, z, &mut self.workspace);
+            let rz_next = dot(r, z);
+            let beta = rz_next / rz;
+            rz = rz_next;
+            for (p, z) in p.iter_mut().zip(&*z) {
+                *p = z + beta * *p;
+            }
+        }
+        max_iterations
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::NewtonOptions;
+
+    /// A jittered 7 x 7 grid of vertices (25 interior ones), two triangles per cell.
+    fn patch(jitter: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+        let side = 7u32;
+        let mut positions = Vec::new();
+        for j in 0..side {
+            for i in 0..side {
+                let interior = i > 0 && j > 0 && i + 1 < side && j + 1 < side;
+                let wobble = if interior {
+                    jitter * f64::from(i * 7 + j * 3).sin()
+                } else {
+                    0.0
+                };
+                positions.push([f64::from(i) + wobble, f64::from(j) - wobble]);
+            }
+        }
+        let mut faces = Vec::new();
+        for j in 0..side - 1 {
+            for i in 0..side - 1 {
+                let v = j * side + i;
+                faces.push([v, v + 1, v + side + 1]);
+                faces.push([v, v + side + 1, v + side]);
+            }
+        }
+        (positions, faces)
+    }
+
+    #[test]
+    fn preconditioned_cg_solves_the_current_newton_system() {
+        let (a, faces) = patch(0.05);
+        let b: Vec<[f64; 2]> = a
+            .iter()
+            .map(|p| [p[0] * (1.0 + 0.1 * p[1]), p[1] + 0.05 * p[0] * p[0]])
+            .collect();
+        let program = bdmorph_compiler::compile(&a, &faces).expect("compiles");
+        let mut vm = Vm::new(program).expect("vm");
+        let n = vm.program().n_unknowns();
+        assert_eq!(n, 25);
+        let (sa, sb) = (
+            vm.squared_lengths(&a).expect("a"),
+            vm.squared_lengths(&b).expect("b"),
+        );
+        // The factor of t = 0.2's solution preconditions the system of t = 0.7 at u = 0.
+        vm.set_metric_lerp(&sa, &sb, 0.2).expect("metric");
+        vm.newton(&NewtonOptions::default().with_reuse_factor(false))
+            .expect("solves");
+        vm.factorize().expect("definite");
+        vm.set_metric_lerp(&sa, &sb, 0.7).expect("metric");
+        vm.reset_u();
+        vm.evaluate();
+        let used = vm.pcg_step(1e-13, 200);
+        assert!(used > 1 && used < 200, "{used} iterations");
+        let h = vm.program().hessian().clone();
+        let mut hs = vec![0.0; n];
+        symmetric_product(
+            &h.col_ptr,
+            &h.row_idx,
+            vm.hessian_values(),
+            &vm.step,
+            &mut hs,
+        );
+        let g_norm = dot(vm.gradient(), vm.gradient()).sqrt();
+        assert!(g_norm > 1e-4, "{g_norm}");
+        for (k, (hs, g)) in hs.iter().zip(vm.gradient()).enumerate() {
+            assert!((hs + g).abs() < 1e-11 * g_norm, "row {k}");
+        }
+        // A truncated solve is still a descent direction.
+        vm.pcg_step(1e-13, 1);
+        assert!(dot(vm.gradient(), &vm.step) < 0.0);
+    }
+
+    #[test]
+    fn symmetric_product_uses_both_triangles() {
+        // [[4, 1, 0], [1, 3, 2], [0, 2, 5]] stored as its lower triangle.
+        let col_ptr = [0, 2, 4, 5];
+        let row_idx = [0, 1, 1, 2, 2];
+        let values = [4.0, 1.0, 3.0, 2.0, 5.0];
+        let mut y = [0.0; 3];
+        symmetric_product(&col_ptr, &row_idx, &values, &[1.0, 2.0, 3.0], &mut y);
+        assert_eq!(y, [6.0, 13.0, 19.0]);
+    }
+}

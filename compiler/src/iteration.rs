@@ -2,13 +2,13 @@
 //!
 //! Interior vertices are numbered (as unknowns) in breadth-first order from the anchor. For
 //! each one, in that order, the emitter first makes sure every triangle of its fan has been
-//! computed (the missing edge lengths, then the triangle's three half-angle tangents), then
+//! computed (the missing edge lengths, then the triangle's corners), then
 //! emits its `VERTEX_INFO`. Each command thus consumes results written shortly before it, and
 //! gradient entries and Hessian columns are written in increasing order.
 
 use bdmorph_isa::{operand, HessianPattern, Op};
 
-use crate::topology::{next, prev, Topology, NONE};
+use crate::topology::{prev, Topology, NONE};
 
 /// The iteration stream with the numbering it relies on.
 pub(crate) struct Emitted {
@@ -114,20 +114,12 @@ pub(crate) fn emit(topo: &Topology, order: &[u32]) -> Emitted {
             }
             let n_slots = edges.len() as u32;
             let back = |he: u32| n_slots - slot_of_edge[topo.edge_of[he as usize] as usize];
+            // Corner c lies between half-edges 3f+c (leaving it) and prev (entering it),
+            // opposite next(3f+c): TRIANGLE's corner c.
+            code.push(Op::Triangle as u16);
             for c in 0..3 {
-                // Corner c lies between half-edges 3f+c (leaving it) and prev (entering it),
-                // opposite next(3f+c).
                 let he = f * 3 + c;
-                let corner_vertex = topo.from(he);
-                let op = if topo.boundary[corner_vertex as usize] {
-                    Op::HalfTanCot
-                } else {
-                    Op::HalfTan
-                };
-                code.push(op as u16);
                 operand::push(&mut code, back(he));
-                operand::push(&mut code, back(prev(he)));
-                operand::push(&mut code, back(next(he)));
                 temp_of_corner[he as usize] = n_temps;
                 n_temps += 1;
             }

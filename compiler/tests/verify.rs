@@ -89,9 +89,9 @@ fn corrupted_streams_are_rejected() {
     p.iteration.pop();
     assert!(matches!(rejected(p), VerifyError::Decode { .. }));
 
-    // A half-angle tangent reading an edge slot not yet written.
+    // A triangle reading an edge slot not yet written.
     let mut p = parts();
-    let pc = first(&p, Op::HalfTan);
+    let pc = first(&p, Op::Triangle);
     p.iteration[pc + 1] = 1000;
     assert_eq!(rejected(p), VerifyError::Operand { pc });
 

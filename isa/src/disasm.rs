@@ -61,15 +61,20 @@ pub fn disassemble(p: &Program) -> String {
                 let _ = writeln!(out, "  {at:04}  {:<12} {args:<24} -> L{li}", op.mnemonic());
                 li += 1;
             }
-            Instr::HalfTan { op, back } => {
+            Instr::Triangle { back } => {
                 let args = format!(
-                    "L{} L{} opp L{}",
+                    "L{} L{} L{}",
                     li - i64::from(back[0]),
                     li - i64::from(back[1]),
                     li - i64::from(back[2])
                 );
-                let _ = writeln!(out, "  {at:04}  {:<12} {args:<24} -> T{ti}", op.mnemonic());
-                ti += 1;
+                let _ = writeln!(
+                    out,
+                    "  {at:04}  {:<12} {args:<24} -> T{ti}..T{}",
+                    Op::Triangle.mnemonic(),
+                    ti + 2
+                );
+                ti += 3;
             }
             Instr::VertexInfo {
                 lower,

@@ -48,8 +48,9 @@ pub use verify::{instructions, VerifyError};
 /// operands, each encoded with [`operand::push`]. Names say the operand kinds:
 /// `I` = an interior vertex (it has an unknown `u`), `B` = a boundary vertex (`u = 0`).
 ///
-/// Implicit destinations: the n-th `EdgeLen*` writes edge slot n, the n-th `HalfTan*` writes
-/// temporary n, and the k-th `VertexInfo` writes gradient entry k and column k of the Hessian.
+/// Implicit destinations: the n-th `EdgeLen*` writes edge slot n, the n-th `Triangle` writes
+/// temporaries 3n, 3n + 1 and 3n + 2, and the k-th `VertexInfo` writes gradient entry k and
+/// column k of the Hessian.
 #[repr(u16)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Op {
@@ -61,13 +62,13 @@ pub enum Op {
     EdgeLenIb = 2,
     /// `EDGE_LEN.BB`: edge between two boundary vertices: `L[n] = l0[n]`.
     EdgeLenBb = 3,
-    /// `HALF_TAN a b c`: the corner between sides `L[a]` and `L[b]`, opposite `L[c]`; each
-    /// operand is a back-offset `n_edges_so_far - slot` (>= 1). Writes temporary `T[n]` =
-    /// (half angle, cotangent of the angle).
-    HalfTan = 4,
-    /// `HALF_TAN.COT a b c`: as [`Op::HalfTan`] for a corner at a boundary vertex, whose angle
-    /// enters the energy and the Hessian weights but no gradient entry.
-    HalfTanCot = 5,
+    /// `TRIANGLE e0 e1 e2`: a triangle with sides `L[e0]`, `L[e1]`, `L[e2]` in
+    /// counter-clockwise order; each operand is a back-offset `n_edges_so_far - slot` (>= 1).
+    /// Writes one temporary per corner, corner `c` being the one opposite side `e(c+1 mod 3)`
+    /// (between sides `e(c)` and `e(c+2 mod 3)`): the direction `(cos, sin)` of its half
+    /// angle, scaled by a positive factor of at most 1, and the cotangent of its angle. All
+    /// three from one square root (the inradius), with no trigonometric call.
+    Triangle = 4,
     /// `VERTEX_INFO n m  i_1..i_n  (a_1 b_1)..(a_n b_n)`: interior vertex `k` of valence `n`.
     /// `i_*` are the temporaries of its `n` corners (back-offsets into `T`), giving
     /// `g[k] = pi - sum(half angles)`; each pair `(a_j, b_j)` are the two corners opposite edge
@@ -84,8 +85,7 @@ impl Op {
             1 => Op::EdgeLenIi,
             2 => Op::EdgeLenIb,
             3 => Op::EdgeLenBb,
-            4 => Op::HalfTan,
-            5 => Op::HalfTanCot,
+            4 => Op::Triangle,
             6 => Op::VertexInfo,
             _ => return None,
         })
@@ -97,8 +97,7 @@ impl Op {
             Op::EdgeLenIi => "edge_len.ii",
             Op::EdgeLenIb => "edge_len.ib",
             Op::EdgeLenBb => "edge_len.bb",
-            Op::HalfTan => "half_tan",
-            Op::HalfTanCot => "half_tan.cot",
+            Op::Triangle => "triangle",
             Op::VertexInfo => "vertex_info",
         }
     }
@@ -114,13 +113,13 @@ mod tests {
             Op::EdgeLenIi,
             Op::EdgeLenIb,
             Op::EdgeLenBb,
-            Op::HalfTan,
-            Op::HalfTanCot,
+            Op::Triangle,
             Op::VertexInfo,
         ] {
             assert_eq!(Op::from_word(op as u16), Some(op));
         }
         assert_eq!(Op::from_word(0), None);
+        assert_eq!(Op::from_word(5), None, "retired: HALF_TAN.COT");
         assert_eq!(Op::from_word(7), None);
     }
 

@@ -81,8 +81,7 @@ pub(crate) enum Instr {
         op: Op,
         offsets: [i64; 2],
     },
-    HalfTan {
-        op: Op,
+    Triangle {
         back: [u32; 3],
     },
     VertexInfo {
@@ -114,8 +113,7 @@ pub(crate) fn decode(code: &[u16], pc: &mut usize) -> Option<Instr> {
             op,
             offsets: [0, 0],
         },
-        Op::HalfTan | Op::HalfTanCot => Instr::HalfTan {
-            op,
+        Op::Triangle => Instr::Triangle {
             back: [next()?, next()?, next()?],
         },
         Op::VertexInfo => {
@@ -298,13 +296,16 @@ pub(crate) fn verify(p: &Program) -> Result<(), VerifyError> {
                 }
                 li += 1;
             }
-            Instr::HalfTan { back, .. } => {
-                check(ti < p.n_temps as usize, VerifyError::Operand { pc: at })?;
+            Instr::Triangle { back } => {
+                check(
+                    ti + 3 <= p.n_temps as usize,
+                    VerifyError::Operand { pc: at },
+                )?;
                 check(
                     back.iter().all(|&b| b >= 1 && (b as usize) <= li),
                     VerifyError::Operand { pc: at },
                 )?;
-                ti += 1;
+                ti += 3;
             }
             Instr::VertexInfo {
                 lower,

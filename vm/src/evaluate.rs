@@ -4,14 +4,13 @@
 
 use bdmorph_isa::{operand, Op, Program};
 
-use crate::kernel::half_angle_and_cot;
+use crate::kernel::{half_angle_sum, triangle_corners, Corner};
 use crate::lobachevsky::lobachevsky;
 
 const EDGE_LEN_II: u16 = Op::EdgeLenIi as u16;
 const EDGE_LEN_IB: u16 = Op::EdgeLenIb as u16;
 const EDGE_LEN_BB: u16 = Op::EdgeLenBb as u16;
-const HALF_TAN: u16 = Op::HalfTan as u16;
-const HALF_TAN_COT: u16 = Op::HalfTanCot as u16;
+const TRIANGLE: u16 = Op::Triangle as u16;
 const VERTEX_INFO: u16 = Op::VertexInfo as u16;
 
 /// Buffers the iteration stream writes; all sized once from the program.
@@ -22,7 +21,7 @@ pub(crate) struct Registers<'a> {
     pub scale: &'a [f64],
     pub len: &'a mut [f64],
     pub log_len: &'a mut [f64],
-    pub temps: &'a mut [[f64; 2]],
+    pub temps: &'a mut [Corner],
     pub grad: &'a mut [f64],
     pub hvals: &'a mut [f64],
 }
@@ -94,37 +93,39 @@ pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> En
                 }
                 li += 1;
             }
-            HALF_TAN | HALF_TAN_COT => {
-                let a = len[li - operand::read(code, &mut pc) as usize];
-                let b = len[li - operand::read(code, &mut pc) as usize];
-                let opposite = li - operand::read(code, &mut pc) as usize;
-                let c = len[opposite];
-                // Every corner's angle enters the energy; only interior corners' the gradient
-                // (HALF_TAN.COT marks the others, for readers of the stream).
-                let t = half_angle_and_cot(a, b, c, ENERGY || op == HALF_TAN);
+            TRIANGLE => {
+                let e = [
+                    li - operand::read(code, &mut pc) as usize,
+                    li - operand::read(code, &mut pc) as usize,
+                    li - operand::read(code, &mut pc) as usize,
+                ];
+                let corners = triangle_corners([len[e[0]], len[e[1]], len[e[2]]]);
                 if ENERGY {
-                    let linear = (t[0] - std::f64::consts::FRAC_PI_4) * 2.0 * log_len[opposite];
-                    let lob = lobachevsky(2.0 * t[0]);
-                    energy.value += linear + lob;
-                    energy.magnitude += linear.abs() + lob.abs();
+                    for (c, corner) in corners.iter().enumerate() {
+                        let half = corner[1].atan2(corner[0]);
+                        let opposite = e[(c + 1) % 3];
+                        let linear = (half - std::f64::consts::FRAC_PI_4) * 2.0 * log_len[opposite];
+                        let lob = lobachevsky(2.0 * half);
+                        energy.value += linear + lob;
+                        energy.magnitude += linear.abs() + lob.abs();
+                    }
                 }
-                debug_assert!(t[0].is_finite() && t[1].is_finite(), "T{ti} = {t:?}");
-                temps[ti] = t;
-                ti += 1;
+                temps[ti..ti + 3].copy_from_slice(&corners);
+                ti += 3;
             }
             VERTEX_INFO => {
                 let n = operand::read(code, &mut pc) as usize;
                 let m = operand::read(code, &mut pc) as usize;
-                let mut angle = 0.0;
-                for _ in 0..n {
-                    angle += temps[ti - operand::read(code, &mut pc) as usize][0];
-                }
+                let angle = half_angle_sum((0..n).map(|_| {
+                    let c = temps[ti - operand::read(code, &mut pc) as usize];
+                    [c[0], c[1]]
+                }));
                 grad[k] = std::f64::consts::PI - angle;
                 let col = col_ptr[k] as usize;
                 let mut diag = 0.0;
                 for j in 0..n {
-                    let a = temps[ti - operand::read(code, &mut pc) as usize][1];
-                    let b = temps[ti - operand::read(code, &mut pc) as usize][1];
+                    let a = temps[ti - operand::read(code, &mut pc) as usize][2];
+                    let b = temps[ti - operand::read(code, &mut pc) as usize][2];
                     let w = 0.25 * (a + b);
                     diag += w;
                     if j < m {

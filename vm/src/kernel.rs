@@ -37,6 +37,93 @@ pub fn half_angle_and_cot(a: f64, b: f64, c: f64, with_angle: bool) -> [f64; 2] 
     [half, cot]
 }
 
+/// One corner of a triangle as the iteration stream stores it: the direction of its half angle
+/// `(cos h, sin h)` scaled by a factor in (0, 1], and the cotangent of the full angle.
+pub type Corner = [f64; 3];
+
+/// The three corners of a triangle with sides `l[0]`, `l[1]`, `l[2]`, corner `c` opposite
+/// side `l[(c + 1) % 3]` (the `TRIANGLE` instruction's convention).
+///
+/// With `s` the half perimeter, `s_x = s - l_x` and `r = sqrt(s_0 s_1 s_2 / s)` the inradius,
+/// the corner opposite `l_x` has half-angle tangent `r / s_x`, so direction `(s_x, r) / s`, and
+/// cotangent `(l_y^2 + l_z^2 - l_x^2) / (4 r s)` (the area is `r s`): one square root and two
+/// divisions for the whole triangle. Degenerate lengths and lengths whose products leave the
+/// normal range take a cold path through [`half_angle_and_cot`], with the same limits (angles
+/// 0 and pi, cotangents 0).
+#[inline(always)]
+pub fn triangle_corners(l: [f64; 3]) -> [Corner; 3] {
+    let s = 0.5 * (l[0] + l[1] + l[2]);
+    let sx = [s - l[0], s - l[1], s - l[2]];
+    let p = sx[0] * sx[1] * sx[2];
+    if !(sx[0] > 0.0 && sx[1] > 0.0 && sx[2] > 0.0 && p.is_normal() && s.is_finite()) {
+        return triangle_corners_cold(l);
+    }
+    let inv_s = 1.0 / s;
+    let r = (p * inv_s).sqrt();
+    let inv_4area = 0.25 / (r * s);
+    let sq = [l[0] * l[0], l[1] * l[1], l[2] * l[2]];
+    let corner = |x: usize, y: usize, z: usize| {
+        [
+            sx[x] * inv_s,
+            r * inv_s,
+            (sq[y] + sq[z] - sq[x]) * inv_4area,
+        ]
+    };
+    // Corner c is opposite side (c + 1) % 3.
+    let out = [corner(1, 2, 0), corner(2, 0, 1), corner(0, 1, 2)];
+    if out.iter().all(|c| c[1] > 0.0 && c[2].is_finite()) {
+        out
+    } else {
+        triangle_corners_cold(l)
+    }
+}
+
+/// [`triangle_corners`] for lengths the fast path cannot take, corner by corner.
+#[cold]
+#[inline(never)]
+fn triangle_corners_cold(l: [f64; 3]) -> [Corner; 3] {
+    let corner = |a: f64, b: f64, opposite: f64| {
+        let [half, cot] = half_angle_and_cot(a, b, opposite, true);
+        let (sin, cos) = half.sin_cos();
+        [cos, sin, cot]
+    };
+    [
+        corner(l[0], l[2], l[1]),
+        corner(l[1], l[0], l[2]),
+        corner(l[2], l[1], l[0]),
+    ]
+}
+
+/// Sum of the half angles whose scaled directions are `corners` (each half angle in
+/// [0, pi/2]): the argument of their complex product, unwrapped by counting full turns, so one
+/// `atan2` serves a whole vertex.
+#[inline(always)]
+pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
+    let (mut re, mut im) = (1.0f64, 0.0f64);
+    let mut turns = 0u32;
+    for [c, s] in corners {
+        let next_re = re * c - im * s;
+        let next_im = re * s + im * c;
+        // A turn of at most pi/2 counter-clockwise brings the product from the lower half
+        // plane to the upper one only across the positive real axis: a full turn.
+        if im < 0.0 && next_im >= 0.0 {
+            turns += 1;
+        }
+        re = next_re;
+        im = next_im;
+        if re.abs() + im.abs() < 1e-100 {
+            // Each factor has magnitude at most 1: keep the product away from underflow.
+            re *= 1e100;
+            im *= 1e100;
+        }
+    }
+    let mut angle = im.atan2(re);
+    if angle < 0.0 {
+        angle += std::f64::consts::TAU;
+    }
+    angle + std::f64::consts::TAU * f64::from(turns)
+}
+
 /// Cosine and sine of the angle between sides `a` and `b` opposite side `c` (rational in the
 /// half-angle tangent, so no trigonometric call): `((den - num), 2 sqrt(num den)) / (den + num)`.
 /// Degenerate lengths give angle 0 or pi.
@@ -97,6 +184,62 @@ mod tests {
                 cs.abs() < 1e-15 && (sn - 1.0).abs() < 1e-15,
                 "{scale}: {cs} {sn}"
             );
+        }
+    }
+
+    #[test]
+    fn triangle_corners_match_the_corner_by_corner_formulas() {
+        let cases = [
+            [3.0, 4.0, 5.0],
+            [1.0, 1.0, 1.0],
+            [2.0, 3.0, 4.5],
+            [1.0, 1.0, 1.9],
+            [1e-120, 1.3e-120, 0.9e-120],
+            [1e120, 1.3e120, 0.9e120],
+            [1.0, 1.0, 2.5],
+            [1.0, 3.0, 1.0],
+            [1.0, 1.0, 2.0],
+        ];
+        for l in cases {
+            let corners = triangle_corners(l);
+            let reference = triangle_corners_cold(l);
+            for (c, (x, y)) in corners.iter().zip(&reference).enumerate() {
+                let (hx, hy) = (x[1].atan2(x[0]), y[1].atan2(y[0]));
+                assert!((hx - hy).abs() < 1e-14, "{l:?} corner {c}: {hx} vs {hy}");
+                assert!(
+                    (x[2] - y[2]).abs() < 1e-12 * (1.0 + y[2].abs()),
+                    "{l:?} corner {c}: cot {} vs {}",
+                    x[2],
+                    y[2]
+                );
+                assert!(x[0].hypot(x[1]) <= 1.0 + 1e-15 && x[0].hypot(x[1]) > 0.0);
+            }
+            // Corner c is opposite side (c + 1) % 3: the largest side faces the largest angle.
+            if l == [3.0, 4.0, 5.0] {
+                let right = corners[1];
+                assert!(right[2].abs() < 1e-15, "the right angle is opposite side 2");
+            }
+        }
+    }
+
+    #[test]
+    fn half_angle_sums_unwrap_full_turns() {
+        for n in [1usize, 3, 4, 7, 12, 40, 2000] {
+            for base in [0.0, 0.3, std::f64::consts::FRAC_PI_2] {
+                let halves: Vec<f64> = (0..n)
+                    .map(|i| (base + 0.37 * i as f64).rem_euclid(std::f64::consts::FRAC_PI_2))
+                    .collect();
+                let expected: f64 = halves.iter().sum();
+                // Scaled directions, magnitude in (0, 1].
+                let got = half_angle_sum(halves.iter().enumerate().map(|(i, h)| {
+                    let m = 0.2 + 0.8 * ((i * 7 % 5) as f64 / 5.0);
+                    [m * h.cos(), m * h.sin()]
+                }));
+                assert!(
+                    (got - expected).abs() < 1e-12 * (1.0 + expected),
+                    "n {n} base {base}: {got} vs {expected}"
+                );
+            }
         }
     }
 

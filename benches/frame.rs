@@ -2,17 +2,27 @@
 //! and 100K vertices (source `disk(rings_for(n), 0.25)`, target `twist(bend(source, 0.6),
 //! 1.2)`).
 //!
-//! Groups (the parameter is the nominal vertex count):
+//! Groups (the parameter is the nominal vertex count), by phase:
 //!
 //! - `compile`: [`bdmorph::compile`] alone;
+//! - `symbolic`: [`Vm::new`] on a compiled program (buffers and the symbolic Cholesky
+//!   factorisation; the program's clone is included);
 //! - `setup`: [`Morph::new`] (checks, compile, symbolic Cholesky, keyframe lengths);
-//! - `iteration_stream`: one pass of the iteration stream (`vm`, [`Vm::evaluate`]) against the
-//!   direct uncompiled implementation (`direct`, [`reference::gradient_and_hessian`]) on the
-//!   same state: `t = 0.5` and the `u` that flattens it;
-//! - `factorization`: the numeric Cholesky factorisation and solve of one Newton step
-//!   ([`Vm::factor_and_solve`]) on that state;
-//! - `warm_frame`: one frame, alternating `t = 0.4` and `t = 0.5`, each warm-started from the
-//!   other ([`Morph::frame_into`]).
+//! - `iteration_stream`: one pass of the iteration stream as Newton runs it (`vm`,
+//!   [`Vm::evaluate_gradient`]), the pass with the energy the line search sometimes needs
+//!   (`vm_energy`, [`Vm::evaluate`]), and the direct uncompiled implementation of the same
+//!   gradient and Hessian walking an adjacency structure (`direct`,
+//!   [`reference::gradient_and_hessian`]), all on the same state: `t = 0.5` and the `u` that
+//!   flattens it;
+//! - `factorization`: the numeric Cholesky factorisation ([`Vm::factorize`]) on that state;
+//! - `solve`: one solve with that factor ([`Vm::solve`]), the unit of work of a conjugate-
+//!   gradient iteration;
+//! - `embed`: the layout ([`Vm::embed`]);
+//! - `warm_frame`: one frame of a sweep `t = 0, 0.1, ..., 1, 0.9, ..., 0` repeated, each frame
+//!   warm-started from the previous ones ([`Morph::frame_into`], default options: extrapolated
+//!   starts, reused factors); `warm_frame_plain` the same with both levers off (a factorisation
+//!   per Newton step, start = previous solution), the ratio being what they buy;
+//! - `cold_frame`: the frame `t = 0.5` from `u = 0` with a factorisation per step.
 //!
 //! Every case is built on first use, so a filter (`cargo bench --bench frame -- warm_frame`)
 //! only pays for what it runs. Program sizes and the Newton iterations of a warm frame are
@@ -191,8 +201,16 @@ fn bench_iteration_stream(c: &mut Criterion, cases: &mut [Case]) {
         group.bench_function(id, |b| {
             let e = case.evaluated();
             b.iter(|| {
-                e.vm.evaluate();
+                e.vm.evaluate_gradient();
                 black_box(e.vm.hessian_values());
+            });
+        });
+        let id = BenchmarkId::new("vm_energy", case.n);
+        group.bench_function(id, |b| {
+            let e = case.evaluated();
+            b.iter(|| {
+                e.vm.evaluate();
+                black_box(e.vm.energy());
             });
         });
         let id = BenchmarkId::new("direct", case.n);
@@ -218,61 +236,128 @@ fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
         configure(&mut group, case.n);
         group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
             let e = case.evaluated();
+            b.iter(|| e.vm.factorize().expect("positive definite"));
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("solve");
+    for case in cases.iter_mut() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let e = case.evaluated();
+            e.vm.factorize().expect("positive definite");
             b.iter(|| {
-                black_box(e.vm.factor_and_solve().expect("positive definite"));
+                black_box(e.vm.solve().expect("factored"));
+            });
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("embed");
+    for case in cases.iter_mut() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let e = case.evaluated();
+            let mut out = vec![[0.0; 2]; e.vm.program().n_vertices()];
+            b.iter(|| {
+                e.vm.embed([0.1, 0.2], [1.0, 0.5], &mut out).expect("fits");
+                black_box(&out);
             });
         });
     }
     group.finish();
 }
 
+/// Times along the sweep 0, 0.1, ..., 1, 0.9, ..., 0.1 (then again from 0).
+fn sweep() -> Vec<f64> {
+    (0..=10)
+        .chain((1..10).rev())
+        .map(|i| f64::from(i) / 10.0)
+        .collect()
+}
+
 fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
-    let mut group = c.benchmark_group("warm_frame");
+    let configs = [
+        ("warm_frame", MorphOptions::default()),
+        (
+            "warm_frame_plain",
+            MorphOptions::default()
+                .with_extrapolate(false)
+                .with_reuse_factor(false),
+        ),
+    ];
+    let ts = sweep();
+    for (name, options) in configs {
+        let mut group = c.benchmark_group(name);
+        for case in cases.iter() {
+            configure(&mut group, case.n);
+            // The morph, its output buffer, the position in the sweep, and (frames, Newton
+            // iterations, factorisations, CG iterations) counted over every call.
+            let mut state: Option<(Morph, Vec<[f64; 2]>, usize)> = None;
+            let mut counts = [0u64; 4];
+            group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+                let (morph, out, at) = state.get_or_insert_with(|| {
+                    let m = case.meshes();
+                    let mut morph = Morph::new(&m.source, &m.target, options).expect("morph");
+                    let mut out = vec![[0.0; 2]; m.source.positions.len()];
+                    morph.frame_into(0.0, &mut out).expect("frame");
+                    (morph, out, 1)
+                });
+                b.iter(|| {
+                    let stats = morph.frame_into(ts[*at], out).expect("frame");
+                    *at = (*at + 1) % ts.len();
+                    counts[0] += 1;
+                    counts[1] += u64::from(stats.newton_iterations);
+                    counts[2] += u64::from(stats.factorizations);
+                    counts[3] += u64::from(stats.cg_iterations);
+                    stats
+                });
+            });
+            if counts[0] > 0 {
+                let per = |x: u64| x as f64 / counts[0] as f64;
+                eprintln!(
+                    "[bdmorph n={}] {name}: {} frames, per frame {:.2} Newton iterations, {:.2} \
+                     factorisations, {:.2} CG iterations",
+                    case.n,
+                    counts[0],
+                    per(counts[1]),
+                    per(counts[2]),
+                    per(counts[3]),
+                );
+            }
+        }
+        group.finish();
+    }
+
+    let mut group = c.benchmark_group("cold_frame");
     for case in cases.iter() {
         configure(&mut group, case.n);
-        // The morph, its output buffer, the last t, and (frames, Newton iterations) counted
-        // over every call the benchmark made.
-        let mut state: Option<(Morph, Vec<[f64; 2]>, f64)> = None;
-        let (mut frames, mut iterations) = (0u64, 0u64);
+        let mut state: Option<(Morph, Vec<[f64; 2]>)> = None;
         group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
-            let (morph, out, t) = state.get_or_insert_with(|| {
+            let (morph, out) = state.get_or_insert_with(|| {
                 let m = case.meshes();
-                let mut morph =
-                    Morph::new(&m.source, &m.target, MorphOptions::default()).expect("morph");
-                let mut out = vec![[0.0; 2]; m.source.positions.len()];
-                let cold = morph.frame_into(0.5, &mut out).expect("frame");
-                let down = morph.frame_into(0.4, &mut out).expect("frame");
-                let up = morph.frame_into(0.5, &mut out).expect("frame");
-                eprintln!(
-                    "[bdmorph n={}] cold frame t=0.5: {} Newton iterations; warm 0.5->0.4: {} \
-                     (|g| {:.1e}, {} flipped); warm 0.4->0.5: {} (|g| {:.1e}, {} flipped)",
-                    case.n,
-                    cold.newton_iterations,
-                    down.newton_iterations,
-                    down.gradient_norm,
-                    down.flipped_triangles,
-                    up.newton_iterations,
-                    up.gradient_norm,
-                    up.flipped_triangles,
-                );
-                (morph, out, 0.5)
+                let options = MorphOptions::default()
+                    .with_warm_start(false)
+                    .with_reuse_factor(false);
+                let morph = Morph::new(&m.source, &m.target, options).expect("morph");
+                (morph, vec![[0.0; 2]; m.source.positions.len()])
             });
-            b.iter(|| {
-                *t = if *t == 0.5 { 0.4 } else { 0.5 };
-                let stats = morph.frame_into(*t, out).expect("frame");
-                frames += 1;
-                iterations += u64::from(stats.newton_iterations);
-                stats
-            });
+            b.iter(|| morph.frame_into(0.5, out).expect("frame"));
         });
-        if frames > 0 {
-            eprintln!(
-                "[bdmorph n={}] warm frames run by the benchmark: {frames}, mean Newton \
-                 iterations per frame {:.2}",
-                case.n,
-                iterations as f64 / frames as f64
-            );
-        }
+    }
+    group.finish();
+}
+
+fn bench_symbolic(c: &mut Criterion, cases: &mut [Case]) {
+    let mut group = c.benchmark_group("symbolic");
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let m = case.meshes();
+            let program = bdmorph::compile(&m.source.positions, &m.source.faces).expect("ok");
+            b.iter(|| Vm::new(program.clone()).expect("vm"));
+        });
     }
     group.finish();
 }
@@ -287,6 +372,7 @@ fn benches(c: &mut Criterion) {
         })
         .collect();
     bench_compile(c, &mut cases);
+    bench_symbolic(c, &mut cases);
     bench_iteration_stream(c, &mut cases);
     bench_factorization(c, &mut cases);
     bench_warm_frame(c, &mut cases);

@@ -74,6 +74,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
         };
+        if std::env::var_os("PASS_ONLY").is_some() {
+            // For a profiler: nothing but passes of the iteration stream.
+            for _ in 0..2000 {
+                vm.evaluate_gradient();
+            }
+            return Ok(());
+        }
         let full = median(&mut || vm.evaluate());
         let grad = median(&mut || vm.evaluate_gradient());
         let fact = median(&mut || vm.factorize().expect("definite"));

@@ -101,6 +101,7 @@ pub struct Vm {
     dirs: Vec<[f64; 2]>,
     metric_set: bool,
     factor_ready: bool,
+    refactor_after_cg: u32,
     failure: Vec<TriangleReport>,
 }
 
@@ -129,6 +130,7 @@ impl Vm {
         );
         let (symbolic, workspace) = newton::analyse(&pattern)?;
         let factor = vec![0.0; symbolic.len_val()];
+        let refactor_after_cg = newton::refactor_after_cg(&symbolic);
         Ok(Vm {
             pattern,
             symbolic,
@@ -151,6 +153,7 @@ impl Vm {
             dirs: vec![[0.0; 2]; program.n_edges()],
             metric_set: false,
             factor_ready: false,
+            refactor_after_cg,
             failure: Vec::new(),
             program,
         })

@@ -5,7 +5,7 @@ use faer::linalg::cholesky::llt::factor::LltError;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymmetricOrdering,
+    SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
@@ -82,11 +82,56 @@ pub struct NewtonReport {
 /// A step is accepted on the gradient alone when it brings `||g||` below this fraction of the
 /// smallest norm seen so far in the solve.
 const ACCEPT_RATIO: f64 = 0.5;
-/// A step whose conjugate gradients needed more iterations than this marks the factor stale:
-/// the next step refactors.
-const REFACTOR_AFTER_CG: u32 = 10;
 /// Conjugate-gradient iterations allowed per step (any iterate is a descent direction).
 const MAX_CG: u32 = 25;
+
+/// How many conjugate-gradient iterations a step may take before the factor is judged stale
+/// (the next step refactors): half the cost of a factorisation counted in solves, so that the
+/// iterations a stale factor costs never exceed what refactoring would, within a factor of 2.
+///
+/// The costs are estimated from the factor's structure, not timed, so that a frame's work (and
+/// its result, to the last bit) does not depend on the machine's load. Multiply-adds are
+/// weighted by what they cost on measurement (BENCHMARKS.md): a supernodal factorisation runs
+/// dense kernels, about 5 times faster per multiply-add than the memory-bound solves; a
+/// simplicial one about as fast as they are.
+pub(crate) fn refactor_after_cg(symbolic: &SymbolicCholesky<u32>) -> u32 {
+    let (factor, solve, supernodal) = factor_and_solve_cost(symbolic);
+    let speed = if supernodal { 0.2 } else { 1.2 };
+    let ratio = speed * factor / solve.max(1.0);
+    (0.5 * ratio).round().clamp(2.0, 20.0) as u32
+}
+
+/// Estimated multiply-adds of one numeric factorisation and of one solve with it, from the
+/// factor's structure, and whether it is supernodal.
+pub(crate) fn factor_and_solve_cost(symbolic: &SymbolicCholesky<u32>) -> (f64, f64, bool) {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let (mut factor, mut solve) = (0.0, 0.0);
+            for w in s.col_ptr().windows(2) {
+                let c = f64::from(w[1] - w[0]);
+                factor += 0.5 * c * (c + 1.0);
+                solve += 2.0 * c;
+            }
+            (factor, solve, false)
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (mut factor, mut solve) = (0.0, 0.0);
+            let rows = s.col_ptr_for_row_idx();
+            for (k, (&b, &e)) in s
+                .supernode_begin()
+                .iter()
+                .zip(s.supernode_end())
+                .enumerate()
+            {
+                let w = f64::from(e - b);
+                let h = f64::from(rows[k + 1] - rows[k]);
+                factor += w * w * w / 6.0 + 0.5 * h * w * w + 0.5 * h * h * w;
+                solve += w * w + 2.0 * h * w;
+            }
+            (factor, solve, true)
+        }
+    }
+}
 
 /// Symbolic factorisation and a workspace large enough for every numeric factorisation and
 /// solve that follows.
@@ -196,7 +241,7 @@ impl Vm {
                     .min(0.5);
                 let used = self.pcg_step(forcing, MAX_CG);
                 report.cg_iterations += used;
-                if used > REFACTOR_AFTER_CG {
+                if used > self.refactor_after_cg {
                     self.factor_ready = false;
                 }
             }
@@ -364,6 +409,9 @@ mod tests {
         let mut vm = Vm::new(program).expect("vm");
         let n = vm.program().n_unknowns();
         assert_eq!(n, 7);
+        assert!((2..=20).contains(&vm.refactor_after_cg));
+        let (factor, solve, _) = factor_and_solve_cost(&vm.symbolic);
+        assert!(factor > 0.0 && solve > 0.0);
 
         // Before any evaluation the Hessian is zero: no factorisation.
         let sq = vm.squared_lengths(&positions).expect("lengths");

@@ -117,11 +117,25 @@ pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
             im *= 1e100;
         }
     }
+    let full_turns = std::f64::consts::TAU * f64::from(turns);
+    // Near a flat vertex the sum is close to pi: the product points along the negative real
+    // axis, and its argument is pi - atan(x) with x = im / -re small, where a short odd series
+    // is exact to double precision (|x| < 1/32: the first omitted term is below 1e-22 x).
+    if re < 0.0 && im.abs() < (-re) * (1.0 / 32.0) {
+        let x = im / -re;
+        let y = x * x;
+        let atan = x
+            * (1.0
+                - y * (1.0 / 3.0
+                    - y * (1.0 / 5.0
+                        - y * (1.0 / 7.0 - y * (1.0 / 9.0 - y * (1.0 / 11.0 - y / 13.0))))));
+        return std::f64::consts::PI - atan + full_turns;
+    }
     let mut angle = im.atan2(re);
     if angle < 0.0 {
         angle += std::f64::consts::TAU;
     }
-    angle + std::f64::consts::TAU * f64::from(turns)
+    angle + full_turns
 }
 
 /// Cosine and sine of the angle between sides `a` and `b` opposite side `c` (rational in the
@@ -219,6 +233,23 @@ mod tests {
                 let right = corners[1];
                 assert!(right[2].abs() < 1e-15, "the right angle is opposite side 2");
             }
+        }
+    }
+
+    #[test]
+    fn half_angle_sums_near_pi_take_the_series() {
+        // Sums just around pi (a nearly flat vertex), either side of the series' range.
+        for defect in [
+            0.0, 1e-12, -1e-12, 1e-6, -3e-4, 0.01, -0.02, 0.0312, -0.0313, 0.05,
+        ] {
+            let halves = [0.9, 0.8, 0.7, std::f64::consts::PI - 2.4 + defect];
+            let expected: f64 = halves.iter().sum();
+            let got = half_angle_sum(halves.iter().map(|h| [0.7 * h.cos(), 0.7 * h.sin()]));
+            assert!(
+                (got - expected).abs() < 4e-16 * expected,
+                "defect {defect}: {got} vs {expected}, {:e}",
+                got - expected
+            );
         }
     }
 

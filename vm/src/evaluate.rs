@@ -4,7 +4,7 @@
 
 use bdmorph_isa::{operand, Op, Program};
 
-use crate::kernel::{half_angle_sum, triangle_corners, Corner};
+use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners, Corner};
 use crate::lobachevsky::lobachevsky;
 
 const EDGE_LEN_II: u16 = Op::EdgeLenIi as u16;
@@ -32,6 +32,22 @@ pub(crate) struct Registers<'a> {
 pub(crate) struct Energy {
     pub value: f64,
     pub magnitude: f64,
+}
+
+/// The half-angle directions of `n` corners whose temporaries `code` names from `*pc` on
+/// (back-offsets from `ti`), advancing `*pc`.
+#[inline(always)]
+fn corner_directions<'a>(
+    code: &'a [u16],
+    pc: &'a mut usize,
+    temps: &'a [Corner],
+    ti: usize,
+    n: usize,
+) -> impl Iterator<Item = [f64; 2]> + 'a {
+    (0..n).map(move |_| {
+        let c = temps[ti - operand::read(code, pc) as usize];
+        [c[0], c[1]]
+    })
 }
 
 /// Runs the iteration stream of a verified program.
@@ -116,10 +132,15 @@ pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> En
             VERTEX_INFO => {
                 let n = operand::read(code, &mut pc) as usize;
                 let m = operand::read(code, &mut pc) as usize;
-                let angle = half_angle_sum((0..n).map(|_| {
-                    let c = temps[ti - operand::read(code, &mut pc) as usize];
-                    [c[0], c[1]]
-                }));
+                let first_corner = pc;
+                let angle =
+                    match half_angle_sum_fast(corner_directions(code, &mut pc, temps, ti, n)) {
+                        Some(angle) => angle,
+                        None => {
+                            let mut again = first_corner;
+                            half_angle_sum(corner_directions(code, &mut again, temps, ti, n))
+                        }
+                    };
                 grad[k] = std::f64::consts::PI - angle;
                 let col = col_ptr[k] as usize;
                 let mut diag = 0.0;

@@ -95,10 +95,15 @@ fn triangle_corners_cold(l: [f64; 3]) -> [Corner; 3] {
 }
 
 /// Sum of the half angles whose scaled directions are `corners` (each half angle in
-/// [0, pi/2]): the argument of their complex product, unwrapped by counting full turns, so one
-/// `atan2` serves a whole vertex.
+/// [0, pi/2], each direction of magnitude at most 1): the argument of their complex product,
+/// unwrapped by counting full turns, so one `atan2` (or, near pi, a short series) serves a
+/// whole vertex.
+///
+/// `None` when the product's magnitude fell below 1e-290, where its last bits may have been
+/// lost to underflow (it never grows, so checking at the end covers every step): then
+/// [`half_angle_sum`] takes the same corners.
 #[inline(always)]
-pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
+pub fn half_angle_sum_fast(corners: impl Iterator<Item = [f64; 2]>) -> Option<f64> {
     let (mut re, mut im) = (1.0f64, 0.0f64);
     let mut turns = 0u32;
     for [c, s] in corners {
@@ -106,17 +111,37 @@ pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
         let next_im = re * s + im * c;
         // A turn of at most pi/2 counter-clockwise brings the product from the lower half
         // plane to the upper one only across the positive real axis: a full turn.
-        if im < 0.0 && next_im >= 0.0 {
-            turns += 1;
-        }
+        turns += u32::from(im < 0.0 && next_im >= 0.0);
         re = next_re;
         im = next_im;
-        if re.abs() + im.abs() < 1e-100 {
-            // Each factor has magnitude at most 1: keep the product away from underflow.
-            re *= 1e100;
-            im *= 1e100;
+    }
+    (re.abs() + im.abs() >= 1e-290).then(|| argument(re, im, turns))
+}
+
+/// [`half_angle_sum_fast`] for any magnitudes: rescales the product away from underflow.
+#[cold]
+#[inline(never)]
+pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
+    let (mut re, mut im) = (1.0f64, 0.0f64);
+    let mut turns = 0u32;
+    for [c, s] in corners {
+        let next_re = re * c - im * s;
+        let next_im = re * s + im * c;
+        turns += u32::from(im < 0.0 && next_im >= 0.0);
+        re = next_re;
+        im = next_im;
+        let m = re.abs().max(im.abs());
+        if m < 1e-100 && m > 0.0 {
+            re /= m;
+            im /= m;
         }
     }
+    argument(re, im, turns)
+}
+
+/// The argument of `re + i im` in [0, 2 pi), plus `turns` full turns.
+#[inline(always)]
+fn argument(re: f64, im: f64, turns: u32) -> f64 {
     let full_turns = std::f64::consts::TAU * f64::from(turns);
     // Near a flat vertex the sum is close to pi: the product points along the negative real
     // axis, and its argument is pi - atan(x) with x = im / -re small, where a short odd series
@@ -244,7 +269,8 @@ mod tests {
         ] {
             let halves = [0.9, 0.8, 0.7, std::f64::consts::PI - 2.4 + defect];
             let expected: f64 = halves.iter().sum();
-            let got = half_angle_sum(halves.iter().map(|h| [0.7 * h.cos(), 0.7 * h.sin()]));
+            let got = half_angle_sum_fast(halves.iter().map(|h| [0.7 * h.cos(), 0.7 * h.sin()]))
+                .expect("no underflow");
             assert!(
                 (got - expected).abs() < 4e-16 * expected,
                 "defect {defect}: {got} vs {expected}, {:e}",
@@ -262,14 +288,20 @@ mod tests {
                     .collect();
                 let expected: f64 = halves.iter().sum();
                 // Scaled directions, magnitude in (0, 1].
-                let got = half_angle_sum(halves.iter().enumerate().map(|(i, h)| {
+                let corners = halves.iter().enumerate().map(|(i, h)| {
                     let m = 0.2 + 0.8 * ((i * 7 % 5) as f64 / 5.0);
                     [m * h.cos(), m * h.sin()]
-                }));
+                });
+                let got = half_angle_sum(corners.clone());
                 assert!(
                     (got - expected).abs() < 1e-12 * (1.0 + expected),
                     "n {n} base {base}: {got} vs {expected}"
                 );
+                // The fast variant gives up exactly when the product gets that small.
+                match half_angle_sum_fast(corners) {
+                    Some(fast) => assert_eq!(fast, got, "n {n}"),
+                    None => assert!(n >= 40, "n {n}: the product of {n} factors is not tiny"),
+                }
             }
         }
     }

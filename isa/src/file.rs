@@ -415,6 +415,7 @@ impl Program {
         sizes.iteration = section(&mut out, &mut payload, tag::ITERATION, |p| {
             put(p, u64::from(self.n_temps));
             put(p, self.iteration.len() as u64);
+            p.reserve(self.iteration.len());
             for &word in &self.iteration {
                 put(p, u64::from(word));
             }
@@ -523,6 +524,7 @@ fn section(
 }
 
 /// Appends `x` as a varint.
+#[inline]
 fn put(out: &mut Vec<u8>, mut x: u64) {
     while x >= 0x80 {
         out.push(x as u8 | 0x80);
@@ -678,10 +680,7 @@ fn decode_layout(r: &mut Reader) -> Result<Layout, LoadError> {
             .and_then(|c| c.checked_add(unzigzag(head >> 4)))
             .and_then(|i| usize::try_from(i).ok())
             .filter(|&i| i < known.len())
-            .ok_or(malformed(
-                at,
-                "a step enters through an edge that is not known yet",
-            ))?;
+            .ok_or_else(|| malformed(at, "a step enters through an edge that is not known yet"))?;
         cursor = index + 1;
         let e_ab = known[index];
         let [x, y] = edges[e_ab];
@@ -803,7 +802,7 @@ fn decode_hessian(r: &mut Reader) -> Result<HessianPattern, LoadError> {
             };
             prev = row
                 .and_then(|row| u32::try_from(row).ok())
-                .ok_or(malformed(at, TOO_LARGE))?;
+                .ok_or_else(|| malformed(at, TOO_LARGE))?;
             row_idx.push(prev);
         }
         last = prev;
@@ -825,15 +824,26 @@ impl Reader<'_> {
         let b = *self
             .bytes
             .get(self.pos)
-            .ok_or(malformed(self.pos, ENDS_INSIDE))?;
+            .ok_or_else(|| malformed(self.pos, ENDS_INSIDE))?;
         self.pos += 1;
         Ok(b)
     }
 
     /// A canonical LEB128 varint of at most 64 bits.
+    #[inline]
     fn varint(&mut self) -> Result<u64, LoadError> {
+        // Most values take one byte.
+        match self.bytes.get(self.pos) {
+            Some(&b) if b < 0x80 => {
+                self.pos += 1;
+                Ok(u64::from(b))
+            }
+            _ => self.long_varint(),
+        }
+    }
+
+    fn long_varint(&mut self) -> Result<u64, LoadError> {
         let at = self.pos;
-        let bad = LoadError::BadVarint { offset: at as u64 };
         let mut x = 0u64;
         for i in 0..10 {
             let b = self.byte()?;
@@ -841,12 +851,12 @@ impl Reader<'_> {
             if b & 0x80 == 0 {
                 // Overlong (a final zero group), or bits above the 64th.
                 if (b == 0 && i > 0) || (i == 9 && b > 1) {
-                    return Err(bad);
+                    break;
                 }
                 return Ok(x);
             }
         }
-        Err(bad)
+        Err(LoadError::BadVarint { offset: at as u64 })
     }
 
     fn u32(&mut self) -> Result<u32, LoadError> {
@@ -873,7 +883,7 @@ impl Reader<'_> {
         i64::from(prev)
             .checked_add(d)
             .and_then(|x| u32::try_from(x).ok())
-            .ok_or(malformed(at, TOO_LARGE))
+            .ok_or_else(|| malformed(at, TOO_LARGE))
     }
 
     /// An edge slot below `n_edges`, stored as a zigzag difference from `prev`.

@@ -26,14 +26,8 @@ pub fn disassemble(p: &Program) -> String {
     );
     let _ = writeln!(
         out,
-        "; iteration stream {} bytes ({:.1} per face); file {} bytes ({:.1} per face); Hessian {}x{} lower, {} values",
-        st.iteration_bytes,
-        st.iteration_bytes_per_face,
-        st.file_bytes,
-        st.file_bytes as f64 / st.faces.max(1) as f64,
-        st.unknowns,
-        st.unknowns,
-        st.hessian_nnz
+        "; iteration stream {} bytes ({:.1} per face); Hessian {}x{} lower, {} values",
+        st.iteration_bytes, st.iteration_bytes_per_face, st.unknowns, st.unknowns, st.hessian_nnz
     );
     let _ = writeln!(out, "init:");
     for (slot, [a, b]) in p.edges().iter().enumerate() {

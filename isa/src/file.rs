@@ -73,12 +73,14 @@
 //! **Section 4, Hessian**: the number of columns, then for each column `k` the number `m` of
 //! rows below the diagonal, then those rows `r`, each stored as `2 (r - p - 1)` where `p` is
 //! the column's previous row (`k` for the first), or as `2 zigzag(r - q) + 1` where `q` is the
-//! last row of the previous column (0 for column 0), whichever is shorter. The diagonal row
-//! `k` is not stored; the column pointers follow from the lengths.
+//! last row of the previous column (0 for column 0): the writer takes the shorter (the first
+//! on a tie), the reader accepts either. The diagonal row `k` is not stored; the column
+//! pointers follow from the lengths.
 //!
-//! The encodings rely on what the verifier guarantees of every program (known entry edges,
-//! edges joining their steps' vertices, diagonal-first increasing rows) only for their size:
-//! any bytes decode to some parts or to an error, and the verifier decides.
+//! The writer relies on what the verifier guarantees of every [`Program`] (each entry edge is
+//! known, each step's edges join its vertices, each column starts with its diagonal and
+//! increases): that makes the round trip exact. The reader relies on nothing: any bytes
+//! decode to some parts or to an error, and the verifier decides about the parts.
 //!
 //! The checksum is CRC-32C (Castagnoli: reflected polynomial `0x82F63B78`, initial value and
 //! final XOR `0xFFFFFFFF`; the check value of `b"123456789"` is `0xE3069283`). It detects

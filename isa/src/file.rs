@@ -433,8 +433,8 @@ impl Program {
         (out, sizes)
     }
 
-    /// Section 1. Mirrors [`decode_layout`]; relies on the program being verified only for
-    /// the sizes it reaches (every entry edge is known, so it has an index in `known`).
+    /// Section 1. Mirrors [`decode_layout`]. Relies on the program being verified: every
+    /// slot is in range, and every entry edge is known (so it has an index in `known_at`).
     fn encode_layout(&self, p: &mut Vec<u8>) {
         let n_edges = self.edges.len();
         put(p, n_edges as u64);
@@ -449,13 +449,13 @@ impl Program {
         let mut defined = vec![false; n_edges];
         defined[root_edge] = true;
         // The latest index of each slot in the list of known slots (root, then each step's
-        // `e_bc` and `e_ca`).
-        let mut known_at = vec![u32::MAX; n_edges];
-        known_at[root_edge] = 0;
-        let mut n_known = 1u32;
+        // `e_bc` and `e_ca`); the root's, 0, starts every slot, and only the root's is read
+        // before another is written.
+        let mut known_at = vec![0u64; n_edges];
+        let mut n_known = 1;
         let (mut cursor, mut prev_bc, mut prev_ca, mut prev_c) = (0i64, 0, 0, 0);
         for s in &self.embed {
-            let at = i64::from(known_at[s.e_ab as usize]);
+            let at = known_at[s.e_ab as usize] as i64;
             put(p, (zigzag(at - cursor) << 4) | u64::from(s.flags & 0xF));
             cursor = at + 1;
             put_delta(p, prev_bc, s.e_bc);

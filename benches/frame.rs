@@ -123,7 +123,8 @@ impl Case {
                 .stats();
             eprintln!(
                 "[bdmorph n={}] {} vertices, {} faces, {} unknowns, {} edges; iteration stream \
-                 {} bytes ({:.1} bytes/face), whole program {} bytes ({:.1} bytes/face)",
+                 {} bytes ({:.1} bytes/face), whole program {} bytes in memory ({:.1} bytes/face), \
+                 {} bytes as a file ({:.1} bytes/face)",
                 self.n,
                 stats.vertices,
                 stats.faces,
@@ -133,6 +134,8 @@ impl Case {
                 stats.iteration_bytes_per_face,
                 stats.total_bytes,
                 stats.total_bytes as f64 / stats.faces as f64,
+                stats.file_bytes,
+                stats.file_bytes as f64 / stats.faces as f64,
             );
             m
         })

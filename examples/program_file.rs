@@ -43,22 +43,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         assert_eq!(loaded.0, program);
         let (hash, _) = best(5, || MeshKey::of(mesh.positions.len(), &mesh.faces));
         let st = program.stats();
+        let file = program.file_sizes();
+        assert_eq!(file.total(), bytes.len());
         let per = |b: usize| b as f64 / st.faces as f64;
         println!(
-            "{} vertices, {} triangles, {} unknowns: file {} bytes = {:.1} bytes per triangle",
+            "{} vertices, {} triangles, {} unknowns: file {} bytes = {:.1} bytes per triangle \
+             (in memory {:.1})",
             st.vertices,
             st.faces,
             st.unknowns,
             bytes.len(),
-            per(bytes.len())
+            per(bytes.len()),
+            per(st.total_bytes)
         );
         println!(
-            "  per triangle: iteration {:.1}, edges {:.1}, embed {:.1}, Hessian {:.1}, unknowns {:.1}",
-            per(st.iteration_bytes),
+            "  file, per triangle: layout (edges and embed) {:.2}, unknowns {:.2}, iteration {:.2}, \
+             Hessian {:.2}, header and checksum {:.4}",
+            per(file.layout),
+            per(file.unknowns),
+            per(file.iteration),
+            per(file.hessian),
+            per(file.header + file.checksum)
+        );
+        println!(
+            "  in memory, per triangle: edges {:.1}, embed {:.1}, unknowns {:.1}, iteration {:.1}, \
+             Hessian {:.1}",
             per(st.edges * 8),
             per(program.embed().len() * 28),
-            per((program.hessian().col_ptr.len() + program.hessian().nnz()) * 4),
-            per(st.unknowns * 4)
+            per(st.unknowns * 4),
+            per(st.iteration_bytes),
+            per((program.hessian().col_ptr.len() + program.hessian().nnz()) * 4)
         );
         println!(
             "  compile {:.2} ms, to_bytes {:.2} ms, from_bytes (CRC + parse + verify) {:.2} ms, mesh key {:.2} ms; load / compile = {:.2}",

@@ -658,33 +658,16 @@ fn fuzz_obj_reader_regression_texture_index_called_vertex() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Program files: `Program::from_bytes` on arbitrary bytes, and on damaged valid files whose
-// checksum was recomputed (so the damage reaches the parser and the verifier).
-
-fn program_file(bytes: &[u8]) {
-    match bdmorph::Program::from_bytes(bytes) {
-        Ok((program, _key)) => check::run(program, None),
-        Err(e) => check::one_line(&e.to_string()),
-    }
-}
-
-fn base_file(which: usize) -> Vec<u8> {
-    let bases = check::base_programs();
-    let program = bdmorph::Program::from_parts(bases[which % bases.len()].clone()).expect("valid");
-    let key = bdmorph::MeshKey {
-        n_vertices: program.n_vertices() as u32,
-        n_faces: program.n_faces() as u32,
-        faces_hash: 0x1234_5678_9abc_def0,
-    };
-    program.to_bytes(&key)
-}
+// Program files: `Program::from_bytes` on arbitrary bytes, and on damaged valid files and
+// arbitrary sections whose length and checksum were made valid (so the damage reaches the
+// section parser and the verifier).
 
 proptest! {
     #![proptest_config(config(256))]
 
     #[test]
     fn fuzz_program_file_arbitrary_bytes(bytes in vec(any::<u8>(), 0..400)) {
-        bounded_allocation(bytes.len(), || program_file(&bytes));
+        bounded_allocation(bytes.len(), || check::program_file(&bytes));
     }
 
     #[test]
@@ -693,19 +676,37 @@ proptest! {
         edits in vec((any::<usize>(), any::<u8>()), 1..6),
         cut in any::<Option<usize>>(),
     ) {
-        let mut bytes = base_file(which);
+        let mut bytes = check::base_file(which);
         let body = bytes.len() - 4;
         for (at, xor) in edits {
             bytes[at % body] ^= xor.max(1);
         }
         if let Some(cut) = cut {
-            bytes.truncate(4.max(cut % body));
+            bytes.truncate(20.max(cut % body));
             bytes.extend_from_slice(&[0; 4]);
         }
-        let body = bytes.len() - 4;
-        let crc = bdmorph_isa::file::crc32c(&bytes[..body]);
-        bytes[body..].copy_from_slice(&crc.to_le_bytes());
-        bounded_allocation(bytes.len(), || program_file(&bytes));
+        check::reseal(&mut bytes);
+        bounded_allocation(bytes.len(), || check::program_file(&bytes));
+    }
+
+    #[test]
+    fn fuzz_program_file_from_bytes(bytes in vec(any::<u8>(), 0..400)) {
+        let file = check::file_from_bytes(&bytes);
+        bounded_allocation(file.len(), || check::program_file(&file));
+    }
+}
+
+#[test]
+fn base_files_pass_the_checks() {
+    for which in 0..check::base_programs().len() {
+        let file = check::base_file(which);
+        assert!(bdmorph::Program::from_bytes(&file).is_ok());
+        check::program_file(&file);
+        // Resealing an intact file changes nothing; a mode byte alone gives a base file.
+        let mut resealed = file.clone();
+        check::reseal(&mut resealed);
+        assert_eq!(resealed, file);
+        assert_eq!(check::file_from_bytes(&[2 * which as u8]), file);
     }
 }
 

@@ -40,7 +40,7 @@ mod program;
 mod verify;
 
 pub use disasm::disassemble;
-pub use file::{LoadError, MeshKey};
+pub use file::{FileSizes, LoadError, MeshKey};
 pub use program::{EmbedRoot, EmbedStep, HessianPattern, Program, ProgramParts, ProgramStats};
 pub use verify::{instructions, VerifyError};
 

@@ -130,8 +130,11 @@ pub struct ProgramStats {
     pub iteration_bytes: usize,
     /// Bytes of the iteration stream per triangle.
     pub iteration_bytes_per_face: f64,
-    /// Bytes of all streams: init, iteration, embed and Hessian pattern.
+    /// Bytes of all streams in memory: init, iteration, embed, Hessian pattern and the
+    /// unknowns' vertices.
     pub total_bytes: usize,
+    /// Bytes of the program's file ([`Program::to_bytes`]), header and checksum included.
+    pub file_bytes: usize,
     /// Stored values of the Hessian's lower triangle.
     pub hessian_nnz: usize,
 }
@@ -232,7 +235,7 @@ impl Program {
         &self.embed
     }
 
-    /// Sizes of the program.
+    /// Sizes of the program. This encodes the program to measure its file.
     pub fn stats(&self) -> ProgramStats {
         let iteration_bytes = self.iteration.len() * 2;
         let total_bytes = iteration_bytes
@@ -248,6 +251,7 @@ impl Program {
             iteration_bytes,
             iteration_bytes_per_face: iteration_bytes as f64 / self.n_faces.max(1) as f64,
             total_bytes,
+            file_bytes: self.file_sizes().total(),
             hessian_nnz: self.hessian.nnz(),
         }
     }

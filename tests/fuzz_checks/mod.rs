@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 
 use bdmorph::info::MeshInfo;
 use bdmorph::io::{self, SurfaceMesh};
-use bdmorph::{generate, CompileError, NewtonOptions, PlanarMesh, Program, Vm};
+use bdmorph::{generate, CompileError, MeshKey, NewtonOptions, PlanarMesh, Program, Vm};
 use bdmorph_isa::ProgramParts;
 
 /// An error message: non-empty, one line, short enough for a terminal.
@@ -232,8 +232,9 @@ fn error_holds(e: &CompileError, positions: &[[f64; 2]], faces: &[[u32; 3]]) {
 }
 
 /// Runs a verified program on the VM: the metric from `positions` (or a made-up one), a few
-/// Newton iterations, the layout.
+/// Newton iterations, the layout. First writes it to a file and loads it back.
 pub fn run(program: Program, positions: Option<&[[f64; 2]]>) {
+    file_round_trip(&program);
     if program.iteration().len() < 10_000 {
         let _ = bdmorph::disassemble(&program);
     }
@@ -285,6 +286,86 @@ pub fn verifier(parts: ProgramParts) {
         }
         Err(e) => one_line(&e.to_string()),
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Program files.
+
+/// Every verified program, written to bytes, loads back as itself with its key.
+pub fn file_round_trip(program: &Program) {
+    let key = MeshKey {
+        n_vertices: program.n_vertices() as u32,
+        n_faces: program.n_faces() as u32,
+        faces_hash: 0x1234_5678_9abc_def0,
+    };
+    let bytes = program.to_bytes(&key);
+    assert_eq!(program.file_sizes().total(), bytes.len());
+    match Program::from_bytes(&bytes) {
+        Ok(loaded) => assert!(loaded == (program.clone(), key), "loaded another program"),
+        Err(e) => panic!("a written program does not load: {e}"),
+    }
+}
+
+/// `Program::from_bytes`: a program (which [`run`] checks) or a one-line error.
+pub fn program_file(bytes: &[u8]) {
+    match Program::from_bytes(bytes) {
+        Ok((program, _key)) => run(program, None),
+        Err(e) => one_line(&e.to_string()),
+    }
+}
+
+/// The file of base program `which` (see [`base_programs`]).
+pub fn base_file(which: usize) -> Vec<u8> {
+    let bases = base_programs();
+    let program = Program::from_parts(bases[which % bases.len()].clone()).expect("valid");
+    let key = MeshKey {
+        n_vertices: program.n_vertices() as u32,
+        n_faces: program.n_faces() as u32,
+        faces_hash: 0x1234_5678_9abc_def0,
+    };
+    program.to_bytes(&key)
+}
+
+/// Makes `file` (at least 20 bytes, checksum included) consistent again after damage: the
+/// length in its header (bytes 12..20) and its checksum (the last four bytes) are rewritten,
+/// so that the damage reaches the section parser and the verifier.
+pub fn reseal(file: &mut [u8]) {
+    let len = file.len();
+    file[12..20].copy_from_slice(&(len as u64).to_le_bytes());
+    let crc = bdmorph_isa::file::crc32c(&file[..len - 4]);
+    file[len - 4..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// A program file with a valid header and checksum: either a base file with up to 8 damaged
+/// bytes, or a header followed by sections made of arbitrary bytes.
+pub fn file_from_bytes(bytes: &[u8]) -> Vec<u8> {
+    let mut b = Bytes(bytes);
+    let mode = b.u8();
+    let mut file = if mode % 2 == 0 {
+        let mut file = base_file(usize::from(mode / 2));
+        for _ in 0..8 {
+            if b.is_empty() {
+                break;
+            }
+            let at = usize::from(b.u8()) | usize::from(b.u8()) << 8;
+            let len = file.len();
+            file[at % len] ^= b.u8().max(1);
+        }
+        file
+    } else {
+        let mut file = b"BDMORPH\0".to_vec();
+        file.extend_from_slice(&2u32.to_le_bytes());
+        file.extend_from_slice(&[0; 8]);
+        // The mesh key: a small vertex and face count (sometimes anything), any hash.
+        file.extend_from_slice(&b.value().to_le_bytes());
+        file.extend_from_slice(&b.value().to_le_bytes());
+        file.extend_from_slice(&[0; 8]);
+        file.extend_from_slice(b.0);
+        file.extend_from_slice(&[0; 4]);
+        file
+    };
+    reseal(&mut file);
+    file
 }
 
 /// Parts of compiled programs for small meshes, the starting points of mutations.

@@ -79,6 +79,7 @@ fn compile_topology(topo: &Topology, anchor: u32) -> Result<Program, CompileErro
         hessian: it.hessian,
         embed_root: root,
         embed: steps,
+        ordering: None,
     })?)
 }
 

@@ -13,7 +13,8 @@
 //! # Layout (format version 1)
 //!
 //! Every integer is little-endian; there is no padding. `E`, `U`, `W`, `Z` and `S` are the
-//! counts stored in the header.
+//! counts stored in the header; `O`, stored before the last section, is 0 or (for a valid
+//! program) `U`.
 //!
 //! | offset         | size        | content                                                   |
 //! |----------------|-------------|-----------------------------------------------------------|
@@ -36,6 +37,8 @@
 //! | ...            | `4 Z`       | Hessian row indices (`u32`)                               |
 //! | ...            | 12          | embed root: `p0`, `p1`, edge slot (`u32` each)            |
 //! | ...            | `28 S`      | embed steps: `a b c e_ab e_bc e_ca flags` (`u32` each)    |
+//! | ...            | 4           | `O`: fill-reducing ordering's length, `u32` (0: none)     |
+//! | ...            | `4 O`       | the ordering: `ordering[new] = old` (`u32`)               |
 //! | end - 4        | 4           | CRC-32C of every byte before it, `u32`                    |
 //!
 //! The checksum is CRC-32C (Castagnoli: reflected polynomial `0x82F63B78`, initial value and
@@ -56,6 +59,7 @@
 //! #     hessian: HessianPattern { col_ptr: vec![0], row_idx: vec![] },
 //! #     embed_root: EmbedRoot { p0: 0, p1: 1, edge: 0 },
 //! #     embed: vec![EmbedStep { a: 0, b: 1, c: 2, e_ab: 0, e_bc: 1, e_ca: 2, flags: EmbedStep::PLACE }],
+//! #     ordering: None,
 //! # })?;
 //! // `program` was compiled from a mesh with 3 vertices and these faces.
 //! let key = MeshKey::of(3, &faces);
@@ -93,8 +97,9 @@ const CHECKSUM_LEN: usize = 4;
 /// Identifies the mesh a program was compiled for: its vertex and face counts and a hash of
 /// its faces. A program may only run on a mesh with an equal key.
 ///
-/// Positions are not part of the key: they only chose the layout's anchor vertex when the
-/// program was compiled, and any positions with these faces can be morphed by it.
+/// Positions are not part of the key: they only chose the layout's anchor vertex (and the
+/// fill-reducing ordering) when the program was compiled, and any positions with these faces
+/// can be morphed by it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct MeshKey {
     /// Number of vertices.
@@ -236,6 +241,9 @@ impl Program {
                 .iter()
                 .map(|s| [s.a, s.b, s.c, s.e_ab, s.e_bc, s.e_ca, s.flags]),
         );
+        let ordering = self.ordering.as_deref().unwrap_or_default();
+        w.records(std::iter::once([counts.ordering]));
+        w.records(ordering.iter().map(one));
         debug_assert_eq!(w.rest.len(), CHECKSUM_LEN);
         let (content, checksum) = out.split_at_mut(len - CHECKSUM_LEN);
         checksum.copy_from_slice(&crc32c(content).to_le_bytes());
@@ -290,15 +298,21 @@ impl Program {
         let unknowns = header.u32();
         let n_iter_edges = header.u32();
         let n_temps = header.u32();
-        let counts = Counts {
+        let mut counts = Counts {
             edges,
             unknowns,
             words: header.u32(),
             nnz: header.u32(),
             steps: header.u32(),
+            ordering: 0,
         };
 
-        // Lengths before anything is allocated: every section must lie in the file.
+        // Lengths before anything is allocated: every section must lie in the file. The
+        // ordering's length is the last word before the ordering itself.
+        let at = usize::try_from(counts.file_len()).unwrap_or(usize::MAX) - CHECKSUM_LEN - 4;
+        if let Some(o) = bytes.get(at..at + 4) {
+            counts.ordering = u32::from_le_bytes([o[0], o[1], o[2], o[3]]);
+        }
         let len = counts.file_len();
         if available < len {
             return Err(LoadError::Truncated {
@@ -341,6 +355,8 @@ impl Program {
                 flags,
             }
         });
+        let [o] = r.records(1, |c: [u32; 1]| c)[0];
+        let ordering = (o > 0).then(|| r.records(n(o), |[x]: [u32; 1]| x));
         debug_assert!(r.bytes.is_empty());
         let program = Program::from_parts(ProgramParts {
             n_vertices,
@@ -353,6 +369,7 @@ impl Program {
             hessian: HessianPattern { col_ptr, row_idx },
             embed_root,
             embed,
+            ordering,
         })?;
         Ok((program, key))
     }
@@ -366,6 +383,7 @@ impl Program {
             words: n(self.iteration.len()),
             nnz: n(self.hessian.row_idx.len()),
             steps: n(self.embed.len()),
+            ordering: n(self.ordering.as_ref().map_or(0, Vec::len)),
         }
     }
 }
@@ -402,12 +420,13 @@ struct Counts {
     words: u32,
     nnz: u32,
     steps: u32,
+    ordering: u32,
 }
 
 impl Counts {
-    /// Sections whose size does not depend on the counts: the first column pointer and the
-    /// embed root.
-    const FIXED_SECTIONS: usize = 4 + 12;
+    /// Sections whose size does not depend on the counts: the first column pointer, the
+    /// embed root and the ordering's length.
+    const FIXED_SECTIONS: usize = 4 + 12 + 4;
 
     /// The file length these counts make (cannot overflow: each count is below 2^32).
     fn file_len(self) -> u64 {
@@ -419,6 +438,7 @@ impl Counts {
             + 4 * c(self.unknowns)
             + 4 * c(self.nnz)
             + 28 * c(self.steps)
+            + 4 * c(self.ordering)
     }
 }
 
@@ -594,8 +614,12 @@ mod tests {
         let (program, key) = hexagon();
         let bytes = program.to_bytes(&key);
         let st = program.stats();
-        // Header, sections (the stats count every section but the root), checksum.
-        assert_eq!(bytes.len(), HEADER_LEN + st.total_bytes + 12 + CHECKSUM_LEN);
+        // Header, sections (the stats count every section but the root and the ordering's
+        // length), checksum.
+        assert_eq!(
+            bytes.len(),
+            HEADER_LEN + st.total_bytes + 12 + 4 + CHECKSUM_LEN
+        );
         assert_eq!(&bytes[..8], b"BDMORPH\0");
         let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4"));
         assert_eq!(
@@ -619,6 +643,42 @@ mod tests {
     }
 
     #[test]
+    fn the_ordering_round_trips_and_is_verified() {
+        let (program, key) = hexagon();
+        let mut parts = program.to_parts();
+        parts.ordering = Some(vec![0]);
+        let ordered = Program::from_parts(parts).expect("valid");
+        let bytes = ordered.to_bytes(&key);
+        assert_eq!(bytes.len(), program.to_bytes(&key).len() + 4);
+        let n = bytes.len() - CHECKSUM_LEN;
+        assert_eq!(&bytes[n - 8..n], &[1, 0, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(Program::from_bytes(&bytes), Ok((ordered, key)));
+        // An ordering that names no unknown, with a valid checksum.
+        let mut b = bytes.clone();
+        set_u32(&mut b, n - 4, 1);
+        reseal(&mut b);
+        assert_eq!(
+            Program::from_bytes(&b),
+            Err(LoadError::Verify(VerifyError::BadOrdering { entry: 0 }))
+        );
+        // An ordering length that disagrees with the file's.
+        let mut b = bytes.clone();
+        set_u32(&mut b, n - 8, 2);
+        reseal(&mut b);
+        assert!(matches!(
+            Program::from_bytes(&b),
+            Err(LoadError::Truncated { .. })
+        ));
+        let mut b = bytes;
+        set_u32(&mut b, n - 8, 0);
+        reseal(&mut b);
+        assert!(matches!(
+            Program::from_bytes(&b),
+            Err(LoadError::TrailingBytes { .. })
+        ));
+    }
+
+    #[test]
     fn every_flipped_bit_and_byte_is_refused() {
         let (program, key) = hexagon();
         let bytes = program.to_bytes(&key);
@@ -628,8 +688,10 @@ mod tests {
                 damaged[at] ^= mask;
                 let err = Program::from_bytes(&damaged).expect_err("damaged bytes must be refused");
                 damaged[at] ^= mask;
-                // Damage past the header can only be caught by the checksum.
-                if at >= HEADER_LEN {
+                // Damage past the header can only be caught by the checksum, except in the
+                // ordering's length, which must match the file's length.
+                let ordering_length = bytes.len() - CHECKSUM_LEN - 4..bytes.len() - CHECKSUM_LEN;
+                if at >= HEADER_LEN && !ordering_length.contains(&at) {
                     assert!(
                         matches!(err, LoadError::ChecksumMismatch { .. }),
                         "byte {at} ^ {mask:#x}: {err}"

@@ -3,13 +3,15 @@
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltError;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::linalg::matmul::matmul;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
 use crate::{Vm, VmError};
 
@@ -106,7 +108,23 @@ pub(crate) fn analyse(
         symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
     ]);
     let workspace = MemBuffer::try_new(req).map_err(|e| VmError::Symbolic(format!("{e:?}")))?;
+    if matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+        warm_up_dense_kernels();
+    }
     Ok((symbolic, workspace))
+}
+
+/// faer's dense matrix products, which the supernodal factorisation uses, allocate a
+/// workspace per thread on first use (twice the L3 cache's size; its packing differs for
+/// products of at most 48 rows and of more). Two small products here make that allocation
+/// on the thread that builds the VM rather than in its first Newton iteration.
+fn warm_up_dense_kernels() {
+    let b = Mat::<f64>::zeros(64, 64);
+    for rows in [32, 64] {
+        let a = Mat::<f64>::zeros(rows, 64);
+        let mut c = Mat::<f64>::zeros(rows, 64);
+        matmul(&mut c, Accum::Replace, &a, &b, 1.0, Par::Seq);
+    }
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -122,7 +140,7 @@ impl Vm {
     /// The energy is convex and bounded below on a valid metric, so this converges from any
     /// start. On error `u` is restored
     /// to its value at the call, so a failed frame does not spoil the next warm start.
-    /// Allocates nothing.
+    /// Allocates nothing (but see [`Vm::factor_and_solve`] about other threads).
     pub fn newton(&mut self, options: &NewtonOptions) -> Result<NewtonReport, VmError> {
         if !self.metric_set {
             return Err(VmError::MetricNotSet);
@@ -210,7 +228,9 @@ impl Vm {
     /// factorisation computed in [`Vm::new`]) and solves `H step = -g`, returning the Newton
     /// step, one value per unknown. This is the linear-algebra half of one Newton iteration,
     /// exposed so that it can be measured and checked on its own; `u`, the gradient and the
-    /// Hessian values are left unchanged. Allocates nothing.
+    /// Hessian values are left unchanged. Allocates nothing, except on a thread other than the
+    /// one that built the VM: there faer's dense kernels allocate their per-thread workspace
+    /// in the first supernodal factorisation.
     ///
     /// Fails with [`VmError::NotPositiveDefinite`] when the Hessian is not numerically
     /// positive definite (for instance before any evaluation, when its values are all zero).

@@ -39,7 +39,8 @@ use topology::Topology;
 /// Programs with at least this many unknowns carry a [`nested_dissection`] ordering for the
 /// Hessian's Cholesky factorisation when compiled with positions ([`compile`]); smaller ones
 /// leave the choice to the VM (AMD). The VM factors an ordered program supernodally; on the
-/// benchmark disks that is 8% faster than AMD at 919 unknowns and 7% slower at 547.
+/// benchmark disks that is 7% slower than AMD at 547 unknowns, as fast within the noise
+/// (+-10%) at 919, and 28% faster at 2.8K.
 pub const ORDERING_MIN_UNKNOWNS: usize = 800;
 
 /// Compiles a planar triangle mesh. `positions` (one per vertex) choose the anchor of the

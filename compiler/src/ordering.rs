@@ -16,10 +16,12 @@
 //! its parts plus the matching on the cut edges, O(c^1.5) for c cut edges: O(n log n) in all
 //! on meshes, whose cuts have O(sqrt n) edges (a 1M-unknown disk takes 0.4 s).
 //!
-//! On the benchmark disks it fills about as much as AMD (nnz(L) +1 to +5%), but its dense
-//! separator blocks suit faer's supernodal factorisation, which the VM uses with it: one
-//! factorisation and solve takes 10-25% less time than with AMD from about 1K unknowns, and
-//! 45% less at 10K, where faer would factor an AMD ordering column by column. See
+//! On the benchmark disks it fills a little more than AMD (nnz(L) +3 to +21% with the default
+//! leaf size, about the same multiply-adds), but its dense separator blocks suit faer's
+//! supernodal factorisation, which the VM uses with it: one numeric factorisation and solve
+//! takes about the same time as with AMD at 1K unknowns, 28% less at 3K, 20% less at 10K
+//! (45% less than faer's default column-by-column factorisation of AMD there), 15% less at
+//! 30K and 7-10% less at 100K; the VM's symbolic analysis skips AMD. See
 //! `examples/ordering.rs`.
 
 use bdmorph_isa::{HessianPattern, Program};

@@ -34,8 +34,9 @@
 //! | 36      | ...  | sections, each: tag (one byte), payload length (varint), payload    |
 //! | end - 4 | 4    | CRC-32C of every byte before it, `u32`                              |
 //!
-//! Sections 1 to 4 are required, in this order. A later version may add optional sections
-//! after them with higher tags, in increasing order; this one refuses any other tag. Each
+//! Sections 1 to 4 are required, in this order; section 5 is optional and comes last. A later
+//! version may add optional sections after them with higher tags, in increasing order; this
+//! one refuses any other tag. Each
 //! payload must be read exactly to its end.
 //!
 //! **Section 1, layout**: the edge slots (the init stream) and the embed stream.
@@ -77,6 +78,10 @@
 //! on a tie), the reader accepts either. The diagonal row `k` is not stored; the column
 //! pointers follow from the lengths.
 //!
+//! **Section 5, ordering** (optional, present when the program carries a fill-reducing
+//! ordering of the unknowns): `U`, then `ordering[new] = old` for each `new`, each a Δ from
+//! the previous one (0 before the first).
+//!
 //! The writer relies on what the verifier guarantees of every [`Program`] (each entry edge is
 //! known, each step's edges join its vertices, each column starts with its diagonal and
 //! increases): that makes the round trip exact. The reader relies on nothing: any bytes
@@ -99,7 +104,7 @@
 //! #     n_iter_edges: 0, n_temps: 0, iteration: vec![],
 //! #     hessian: HessianPattern { col_ptr: vec![0], row_idx: vec![] },
 //! #     embed_root: EmbedRoot { p0: 0, p1: 1, edge: 0 },
-//! #     embed: vec![EmbedStep { a: 0, b: 1, c: 2, e_ab: 0, e_bc: 1, e_ca: 2, flags: EmbedStep::PLACE }],
+//! #     embed: vec![EmbedStep { a: 0, b: 1, c: 2, e_ab: 0, e_bc: 1, e_ca: 2, flags: EmbedStep::PLACE }], ordering: None,
 //! # })?;
 //! // `program` was compiled from a mesh with 3 vertices and these faces.
 //! let key = MeshKey::of(3, &faces);
@@ -145,6 +150,7 @@ mod tag {
     pub const UNKNOWNS: u8 = 2;
     pub const ITERATION: u8 = 3;
     pub const HESSIAN: u8 = 4;
+    pub const ORDERING: u8 = 5;
 }
 
 /// Identifies the mesh a program was compiled for: its vertex and face counts and a hash of
@@ -271,6 +277,8 @@ pub struct FileSizes {
     pub iteration: usize,
     /// Section 4: the Hessian pattern.
     pub hessian: usize,
+    /// Section 5 (optional, 0 when absent): the fill-reducing ordering of the unknowns.
+    pub ordering: usize,
     /// The checksum.
     pub checksum: usize,
 }
@@ -278,7 +286,13 @@ pub struct FileSizes {
 impl FileSizes {
     /// The file's length.
     pub fn total(&self) -> usize {
-        self.header + self.layout + self.unknowns + self.iteration + self.hessian + self.checksum
+        self.header
+            + self.layout
+            + self.unknowns
+            + self.iteration
+            + self.hessian
+            + self.ordering
+            + self.checksum
     }
 }
 
@@ -425,6 +439,16 @@ impl Program {
         sizes.hessian = section(&mut out, &mut payload, tag::HESSIAN, |p| {
             self.encode_hessian(p)
         });
+        if let Some(ordering) = &self.ordering {
+            sizes.ordering = section(&mut out, &mut payload, tag::ORDERING, |p| {
+                put(p, ordering.len() as u64);
+                let mut prev = 0;
+                for &k in ordering {
+                    put_delta(p, prev, k);
+                    prev = k;
+                }
+            });
+        }
         let len = (out.len() + CHECKSUM_LEN) as u64;
         out[LENGTH_AT..LENGTH_AT + 8].copy_from_slice(&len.to_le_bytes());
         let crc = crc32c(&out);
@@ -575,6 +599,7 @@ fn decode(content: &[u8], n_vertices: u32, n_faces: u32) -> Result<ProgramParts,
     let mut unknown_vertex = None;
     let mut iteration = None;
     let mut hessian = None;
+    let mut ordering = None;
     let mut last_tag = 0;
     while r.pos < content.len() {
         let at = r.pos;
@@ -599,6 +624,7 @@ fn decode(content: &[u8], n_vertices: u32, n_faces: u32) -> Result<ProgramParts,
             tag::UNKNOWNS => unknown_vertex = Some(decode_unknowns(&mut s)?),
             tag::ITERATION => iteration = Some(decode_iteration(&mut s)?),
             tag::HESSIAN => hessian = Some(decode_hessian(&mut s)?),
+            tag::ORDERING => ordering = Some(decode_unknowns(&mut s)?),
             _ => return Err(malformed(at, "a section this version does not know")),
         }
         if s.pos != end {
@@ -629,6 +655,7 @@ fn decode(content: &[u8], n_vertices: u32, n_faces: u32) -> Result<ProgramParts,
         hessian,
         embed_root,
         embed,
+        ordering,
     })
 }
 
@@ -755,7 +782,8 @@ fn decode_layout(r: &mut Reader) -> Result<Layout, LoadError> {
     })
 }
 
-/// Section 2.
+/// Section 2 (and section 5, the same encoding): a count, then each value as a Δ from the
+/// previous one.
 fn decode_unknowns(r: &mut Reader) -> Result<Vec<u32>, LoadError> {
     let n = r.count(1)?;
     let mut out = Vec::with_capacity(n);
@@ -1067,6 +1095,20 @@ mod tests {
     }
 
     #[test]
+    fn an_ordering_travels_in_section_5() {
+        let (program, key) = hexagon();
+        let mut parts = program.to_parts();
+        assert_eq!(parts.ordering, None);
+        parts.ordering = Some(vec![0]);
+        let ordered = Program::from_parts(parts).expect("valid");
+        let bytes = ordered.to_bytes(&key);
+        let sizes = ordered.file_sizes();
+        assert!(sizes.ordering > 0 && sizes.total() == bytes.len());
+        assert_eq!(Program::from_bytes(&bytes), Ok((ordered, key)));
+        assert_eq!(program.file_sizes().ordering, 0);
+    }
+
+    #[test]
     fn round_trip_and_layout() {
         let (program, key) = hexagon();
         let bytes = program.to_bytes(&key);
@@ -1274,7 +1316,7 @@ mod tests {
         let mut twice = s.clone();
         twice.insert(2, s[1].clone());
         assert_eq!(what(&twice), "a section is repeated or out of order");
-        for tag in [0, 5, 255] {
+        for tag in [0, 6, 255] {
             let mut extra = s.clone();
             extra.push((tag, vec![]));
             let expected = if tag == 0 {

@@ -57,5 +57,6 @@ pub(crate) fn hexagon_parts() -> ProgramParts {
             step(6, 0, 5, 10, 8, 9, 9),
             step(0, 4, 5, 6, 7, 8, 4),
         ],
+        ordering: None,
     }
 }

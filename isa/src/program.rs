@@ -98,6 +98,11 @@ pub struct ProgramParts {
     pub embed_root: EmbedRoot,
     /// The embed stream.
     pub embed: Vec<EmbedStep>,
+    /// A fill-reducing ordering of the unknowns for the Cholesky factorisation of the Hessian,
+    /// or `None` to let the VM choose one (AMD). `ordering[new] = old`: the unknown that
+    /// comes `new`-th in elimination order (faer's forward permutation). Must be a
+    /// permutation of `0..n_unknowns`; with no unknowns, `Some(vec![])` becomes `None`.
+    pub ordering: Option<Vec<u32>>,
 }
 
 /// A compiled, verified BDMORPH program. See the crate documentation for its parts.
@@ -113,6 +118,7 @@ pub struct Program {
     pub(crate) hessian: HessianPattern,
     pub(crate) embed_root: EmbedRoot,
     pub(crate) embed: Vec<EmbedStep>,
+    pub(crate) ordering: Option<Vec<u32>>,
 }
 
 /// Sizes of a program, for reports and benchmarks.
@@ -130,8 +136,8 @@ pub struct ProgramStats {
     pub iteration_bytes: usize,
     /// Bytes of the iteration stream per triangle.
     pub iteration_bytes_per_face: f64,
-    /// Bytes of all streams in memory: init, iteration, embed, Hessian pattern and the
-    /// unknowns' vertices.
+    /// Bytes of all streams in memory: init, iteration, embed, Hessian pattern, the unknowns'
+    /// vertices and the ordering.
     pub total_bytes: usize,
     /// Bytes of the program's file ([`Program::to_bytes`]), header and checksum included.
     pub file_bytes: usize,
@@ -153,7 +159,10 @@ impl Program {
             hessian,
             embed_root,
             embed,
+            ordering,
         } = parts;
+        // Without unknowns, an empty ordering is the same as none (and stored as none).
+        let ordering = ordering.filter(|o| !(o.is_empty() && unknown_vertex.is_empty()));
         let program = Program {
             n_vertices,
             n_faces,
@@ -165,6 +174,7 @@ impl Program {
             hessian,
             embed_root,
             embed,
+            ordering,
         };
         verify(&program)?;
         Ok(program)
@@ -183,6 +193,7 @@ impl Program {
             hessian: self.hessian.clone(),
             embed_root: self.embed_root,
             embed: self.embed.clone(),
+            ordering: self.ordering.clone(),
         }
     }
 
@@ -234,6 +245,11 @@ impl Program {
     pub fn embed(&self) -> &[EmbedStep] {
         &self.embed
     }
+    /// The fill-reducing ordering of the unknowns, if the program carries one:
+    /// `ordering[new] = old`, a permutation of `0..n_unknowns` (see [`ProgramParts::ordering`]).
+    pub fn ordering(&self) -> Option<&[u32]> {
+        self.ordering.as_deref()
+    }
 
     /// Sizes of the program. This encodes the program to measure its file.
     pub fn stats(&self) -> ProgramStats {
@@ -242,7 +258,8 @@ impl Program {
             + self.edges.len() * 8
             + self.embed.len() * std::mem::size_of::<EmbedStep>()
             + (self.hessian.col_ptr.len() + self.hessian.row_idx.len()) * 4
-            + self.unknown_vertex.len() * 4;
+            + self.unknown_vertex.len() * 4
+            + self.ordering.as_ref().map_or(0, |o| o.len() * 4);
         ProgramStats {
             vertices: self.n_vertices(),
             faces: self.n_faces(),

@@ -71,6 +71,13 @@ pub enum VerifyError {
         /// The step (`usize::MAX` for the root, the stream length for a missing vertex).
         step: usize,
     },
+    /// The fill-reducing ordering is not a permutation of the unknowns.
+    #[error("the fill-reducing ordering is not a permutation of the unknowns (entry {entry})")]
+    BadOrdering {
+        /// The first entry out of range or repeated; the ordering's length when that is not
+        /// the number of unknowns.
+        entry: usize,
+    },
 }
 
 /// One decoded instruction of the iteration stream (used by the verifier and the disassembler;
@@ -336,7 +343,31 @@ pub(crate) fn verify(p: &Program) -> Result<(), VerifyError> {
         },
     )?;
 
+    verify_ordering(p)?;
     verify_embed(p)
+}
+
+/// The ordering, when present, names every unknown exactly once.
+fn verify_ordering(p: &Program) -> Result<(), VerifyError> {
+    let Some(ordering) = &p.ordering else {
+        return Ok(());
+    };
+    let nu = p.unknown_vertex.len();
+    check(
+        ordering.len() == nu,
+        VerifyError::BadOrdering {
+            entry: ordering.len(),
+        },
+    )?;
+    let mut seen = vec![false; nu];
+    for (entry, &old) in ordering.iter().enumerate() {
+        let slot = seen
+            .get_mut(old as usize)
+            .ok_or(VerifyError::BadOrdering { entry })?;
+        check(!*slot, VerifyError::BadOrdering { entry })?;
+        *slot = true;
+    }
+    Ok(())
 }
 
 fn verify_embed(p: &Program) -> Result<(), VerifyError> {
@@ -418,6 +449,24 @@ mod tests {
         let parts = hexagon_parts();
         let program = Program::from_parts(parts.clone()).expect("valid");
         assert_eq!(program.to_parts(), parts);
+    }
+
+    #[test]
+    fn the_ordering_must_be_a_permutation_of_the_unknowns() {
+        let with = |ordering: Option<Vec<u32>>| {
+            let mut parts = hexagon_parts();
+            parts.ordering = ordering;
+            Program::from_parts(parts)
+        };
+        let program = with(Some(vec![0])).expect("the identity on one unknown");
+        assert_eq!(program.ordering(), Some(&[0][..]));
+        assert_eq!(with(None).expect("no ordering").ordering(), None);
+        for (ordering, entry) in [(vec![], 0), (vec![0, 0], 2), (vec![1], 0)] {
+            assert_eq!(
+                with(Some(ordering)),
+                Err(VerifyError::BadOrdering { entry })
+            );
+        }
     }
 
     #[test]

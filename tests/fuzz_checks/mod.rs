@@ -645,6 +645,8 @@ pub fn parts_from_bytes(bytes: &[u8]) -> ProgramParts {
             flags: c[6] % 16,
         })
         .collect();
+    // Read last, so that shorter inputs (and the regression inputs) carry no ordering.
+    let ordering = list(&mut b, 8);
     ProgramParts {
         n_vertices,
         n_faces,
@@ -660,6 +662,7 @@ pub fn parts_from_bytes(bytes: &[u8]) -> ProgramParts {
             edge: root[2],
         },
         embed,
+        ordering: (!ordering.is_empty()).then_some(ordering),
     }
 }
 

@@ -74,7 +74,7 @@ impl std::fmt::Display for TriangleReport {
 }
 
 use faer::dyn_stack::MemBuffer;
-use faer::sparse::linalg::cholesky::SymbolicCholesky;
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::SymbolicSparseColMat;
 
 /// Executes one compiled program; owns every buffer it needs (see the crate documentation).
@@ -117,7 +117,8 @@ impl std::fmt::Debug for Vm {
 
 impl Vm {
     /// Prepares a VM for `program`: allocates every buffer and computes the symbolic Cholesky
-    /// factorisation of the Hessian pattern (AMD ordering) once.
+    /// factorisation of the Hessian pattern once, with the program's fill-reducing ordering
+    /// ([`Program::ordering`]) or, when it has none, AMD.
     pub fn new(program: Program) -> Result<Vm, VmError> {
         let n = program.n_unknowns();
         let h = program.hessian();
@@ -128,7 +129,7 @@ impl Vm {
             None,
             h.row_idx.clone(),
         );
-        let (symbolic, workspace) = newton::analyse(&pattern)?;
+        let (symbolic, workspace) = newton::analyse(&pattern, program.ordering())?;
         let factor = vec![0.0; symbolic.len_val()];
         let refactor_after_cg = newton::refactor_after_cg(&symbolic);
         Ok(Vm {
@@ -297,6 +298,12 @@ impl Vm {
     /// Number of stored values of the Cholesky factor.
     pub fn factor_nnz(&self) -> usize {
         self.factor.len()
+    }
+
+    /// Whether faer chose its supernodal (blocked) Cholesky factorisation for this program's
+    /// Hessian, rather than the simplicial (column by column) one.
+    pub fn factor_is_supernodal(&self) -> bool {
+        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
     }
 
     /// Lays the current metric out in the plane: the anchor vertex at `anchor`, the anchor

@@ -93,14 +93,21 @@ const MAX_CG: u32 = 25;
 /// iterations a stale factor costs never exceed what refactoring would, within a factor of 2.
 ///
 /// The costs are estimated from the factor's structure, not timed, so that a frame's work (and
-/// its result, to the last bit) does not depend on the machine's load. Multiply-adds are
-/// weighted by what they cost on measurement (BENCHMARKS.md): a supernodal factorisation runs
-/// dense kernels, about 5 times faster per multiply-add than the memory-bound solves; a
-/// simplicial one about as fast as they are.
+/// its result, to the last bit) does not depend on the machine's load. A simplicial
+/// factorisation and the solves are both memory-bound: their multiply-add counts compare
+/// directly (measured factor/solve time 14 and 19 at 1K and 10K unknowns, model 7 and 17). A
+/// supernodal one runs dense kernels whose speed grows with the supernodes: fitted on the
+/// benchmark disks with a nested-dissection ordering (measured factor/solve time 5.4, 10, 6.7,
+/// 7.7 and 6.8 at 1K, 3K, 10K, 30K and 100K unknowns, model ratio r = 8, 10, 15, 22, 36) as
+/// `1.8 sqrt(r)`.
 pub(crate) fn refactor_after_cg(symbolic: &SymbolicCholesky<u32>) -> u32 {
     let (factor, solve, supernodal) = factor_and_solve_cost(symbolic);
-    let speed = if supernodal { 0.2 } else { 1.2 };
-    let ratio = speed * factor / solve.max(1.0);
+    let model = factor / solve.max(1.0);
+    let ratio = if supernodal {
+        1.8 * model.sqrt()
+    } else {
+        1.2 * model
+    };
     (0.5 * ratio).round().clamp(2.0, 20.0) as u32
 }
 

@@ -96,17 +96,16 @@ const MAX_CG: u32 = 25;
 /// its result, to the last bit) does not depend on the machine's load. A simplicial
 /// factorisation and the solves are both memory-bound: their multiply-add counts compare
 /// directly (measured factor/solve time 14 and 19 at 1K and 10K unknowns, model 7 and 17). A
-/// supernodal one runs dense kernels whose speed grows with the supernodes: fitted on the
-/// benchmark disks with a nested-dissection ordering (measured factor/solve time 5.4, 10, 6.7,
-/// 7.7 and 6.8 at 1K, 3K, 10K, 30K and 100K unknowns, model ratio r = 8, 10, 15, 22, 36) as
-/// `1.8 sqrt(r)`.
+/// supernodal one runs dense kernels whose speed grows with the supernodes as fast as the
+/// multiply-adds do: on the benchmark disks with a nested-dissection ordering the measured
+/// factor/solve time is 4.3, 5.3 and 4.5 at 1K, 10K and 100K unknowns (criterion medians,
+/// BENCHMARKS.md) while the multiply-add ratio grows from 8 to 36, so it is taken as 4.7.
 pub(crate) fn refactor_after_cg(symbolic: &SymbolicCholesky<u32>) -> u32 {
     let (factor, solve, supernodal) = factor_and_solve_cost(symbolic);
-    let model = factor / solve.max(1.0);
     let ratio = if supernodal {
-        1.8 * model.sqrt()
+        4.7
     } else {
-        1.2 * model
+        1.2 * factor / solve.max(1.0)
     };
     (0.5 * ratio).round().clamp(2.0, 20.0) as u32
 }

@@ -16,7 +16,6 @@ const VERTEX_INFO: u16 = Op::VertexInfo as u16;
 /// Buffers the iteration stream writes; all sized once from the program.
 pub(crate) struct Registers<'a> {
     pub l0: &'a [f64],
-    pub log_l0: &'a [f64],
     pub u: &'a [f64],
     pub scale: &'a [f64],
     pub len: &'a mut [f64],
@@ -69,7 +68,6 @@ pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> En
     let col_ptr = &program.hessian().col_ptr;
     let Registers {
         l0,
-        log_l0,
         u,
         scale,
         len,
@@ -90,7 +88,7 @@ pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> En
                 let b = unknown(k, operand::read(code, &mut pc));
                 len[li] = l0[li] * scale[a] * scale[b];
                 if ENERGY {
-                    log_len[li] = log_l0[li] + 0.5 * (u[a] + u[b]);
+                    log_len[li] = len[li].ln();
                 }
                 li += 1;
             }
@@ -98,14 +96,14 @@ pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> En
                 let a = unknown(k, operand::read(code, &mut pc));
                 len[li] = l0[li] * scale[a];
                 if ENERGY {
-                    log_len[li] = log_l0[li] + 0.5 * u[a];
+                    log_len[li] = len[li].ln();
                 }
                 li += 1;
             }
             EDGE_LEN_BB => {
                 len[li] = l0[li];
                 if ENERGY {
-                    log_len[li] = log_l0[li];
+                    log_len[li] = len[li].ln();
                 }
                 li += 1;
             }

@@ -85,7 +85,6 @@ pub struct Vm {
     factor: Vec<f64>,
     workspace: MemBuffer,
     l0: Vec<f64>,
-    log_l0: Vec<f64>,
     len: Vec<f64>,
     log_len: Vec<f64>,
     energy: evaluate::Energy,
@@ -138,7 +137,6 @@ impl Vm {
             factor,
             workspace,
             l0: vec![0.0; program.n_edges()],
-            log_l0: vec![0.0; program.n_edges()],
             len: vec![0.0; program.n_edges()],
             log_len: vec![0.0; program.n_edges()],
             energy: evaluate::Energy::default(),
@@ -208,7 +206,6 @@ impl Vm {
                 });
             }
             self.l0[slot] = v.sqrt();
-            self.log_l0[slot] = 0.5 * v.ln();
         }
         // Slots outside the iteration stream join boundary vertices: their length is l0.
         let n_it = self.program.n_iter_edges();
@@ -241,7 +238,6 @@ impl Vm {
             &self.program,
             evaluate::Registers {
                 l0: &self.l0,
-                log_l0: &self.log_l0,
                 u: &self.u,
                 scale: &self.scale,
                 len: &mut self.len,

@@ -115,11 +115,21 @@ fn stats_without_output_prints_json_and_writes_nothing() {
         assert!(line.starts_with(&format!("{{\"t\":{t},")), "{line}");
         for key in [
             "\"newton_iterations\":",
+            "\"factorizations\":",
+            "\"cg_iterations\":",
             "\"gradient_norm\":",
             "\"flipped_triangles\":0",
+            "\"seconds\":",
         ] {
             assert!(line.contains(key), "{line} lacks {key}");
         }
+        // The frame's time is a positive number of seconds.
+        let seconds: f64 = line
+            .split("\"seconds\":")
+            .nth(1)
+            .and_then(|rest| rest.trim_end_matches('}').parse().ok())
+            .expect("a number");
+        assert!(seconds > 0.0 && seconds < 60.0, "{line}");
     }
     let after: Vec<_> = std::fs::read_dir(&dir).expect("dir").collect();
     assert_eq!(before.len(), after.len());

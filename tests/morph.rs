@@ -131,6 +131,28 @@ fn frame_levers_change_the_work_not_the_frames() {
 }
 
 #[test]
+fn any_order_of_times_gives_the_frames_of_cold_starts() {
+    // Repeats, jumps, reversals and tiny steps: the extrapolation must never change a frame.
+    let (_, a, b) = pairs().remove(3);
+    let mut warm = Morph::new(&a, &b, MorphOptions::default()).expect("warm");
+    let cold_options = MorphOptions::default()
+        .with_warm_start(false)
+        .with_reuse_factor(false);
+    let mut cold = Morph::new(&a, &b, cold_options).expect("cold");
+    let ts = [
+        0.5, 0.5, 0.51, 0.52, 0.52, 0.9, 0.1, 1.0, 0.0, 0.3, 0.31, 0.3, 0.29, 0.7, 0.700001, 0.2,
+    ];
+    for t in ts {
+        let w = warm.frame(t).expect("warm frame");
+        assert_eq!(w.stats.flipped_triangles, 0, "t = {t}");
+        let w = w.positions.to_vec();
+        let c = cold.frame(t).expect("cold frame");
+        let d = max_distance(&w, c.positions);
+        assert!(d < 1e-9 * a.diameter(), "t = {t}: {d:e}");
+    }
+}
+
+#[test]
 fn cold_and_warm_starts_agree() {
     let (_, a, b) = pairs().remove(0);
     let mut warm = Morph::new(&a, &b, MorphOptions::default()).expect("warm");

@@ -57,8 +57,9 @@ fn corner_directions<'a>(
 /// `dE/du_k = pi - (1/2) sum alpha` is the gradient. Degenerate triangles take angles 0 and pi,
 /// which is the convex, C^1 extension of the CETM paper.
 ///
-/// With `ENERGY = false` the energy (and the log lengths only it needs) is left out: the pass
-/// a Newton iteration runs when its line search can decide on the gradient alone.
+/// With `ENERGY = false` the energy (and the log lengths only it needs) is left out. The VM
+/// runs that pass from the decoded plan instead ([`crate::plan`]), which computes the same
+/// bits; this interpreter runs the pass with the energy, and is the plan's reference in tests.
 ///
 /// Operand indices are bounds-checked by ordinary slice indexing: a verified program never
 /// fails them. A variant with unchecked indexing was measured (10K-vertex disk, 57-62 ns per

@@ -1,0 +1,149 @@
+//! The iteration stream decoded once into flat arrays (structure of arrays), for the gradient
+//! pass that every Newton iteration runs.
+//!
+//! The stream interleaves its instructions so that each consumes results written shortly
+//! before; decoding it costs a dispatch per instruction and an escape test per operand, about
+//! a third of the interpreter's instructions. [`Plan::new`] resolves every operand of a
+//! verified program to an absolute index once (at [`crate::Vm::new`]); [`Plan::run`] then
+//! makes three branch-light sweeps: every edge length, every triangle's corners, every
+//! vertex's gradient entry and Hessian column. It computes exactly what the interpreter
+//! computes, in the same order of floating-point operations (tested bit for bit); the
+//! interpreter still runs the pass that needs the energy.
+
+use bdmorph_isa::{operand, Op, Program};
+
+use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners, Corner};
+
+/// A verified program's iteration stream with every operand resolved.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Plan {
+    /// Per edge slot of the stream: the indices of its two ends' scale factors, the number of
+    /// unknowns standing for a boundary vertex (whose scale is 1).
+    edge_scales: Vec<[u32; 2]>,
+    /// Per triangle: its three edge slots; triangle `t` writes temporaries `3t..3t + 3`.
+    triangles: Vec<[u32; 3]>,
+    /// Per unknown `k`: its corners and pairs are `vertex_start[k]..vertex_start[k + 1]`.
+    vertex_start: Vec<u32>,
+    /// Per unknown: how many of its pairs are below the diagonal.
+    lower: Vec<u32>,
+    /// The temporaries of each vertex's corners.
+    corners: Vec<u32>,
+    /// The two temporaries opposite each edge at each vertex.
+    pairs: Vec<[u32; 2]>,
+}
+
+impl Plan {
+    /// Resolves the operands of `program`'s iteration stream. The program is verified, so
+    /// every resolved index is in range (the verifier checked each operand).
+    pub fn new(program: &Program) -> Plan {
+        let code = program.iteration();
+        let boundary = program.n_unknowns() as u32;
+        let mut plan = Plan {
+            vertex_start: vec![0],
+            ..Plan::default()
+        };
+        let (mut pc, mut li, mut ti, mut k) = (0usize, 0usize, 0usize, 0usize);
+        let unknown = |k: usize, zz: u32| (k as i64 + operand::unzigzag(zz)) as u32;
+        while pc < code.len() {
+            let op = Op::from_word(code[pc]).expect("a verified program has valid opcodes");
+            pc += 1;
+            match op {
+                Op::EdgeLenIi => {
+                    let a = unknown(k, operand::read(code, &mut pc));
+                    let b = unknown(k, operand::read(code, &mut pc));
+                    plan.edge_scales.push([a, b]);
+                    li += 1;
+                }
+                Op::EdgeLenIb => {
+                    let a = unknown(k, operand::read(code, &mut pc));
+                    plan.edge_scales.push([a, boundary]);
+                    li += 1;
+                }
+                Op::EdgeLenBb => {
+                    plan.edge_scales.push([boundary, boundary]);
+                    li += 1;
+                }
+                Op::Triangle => {
+                    let mut e = [0u32; 3];
+                    for slot in &mut e {
+                        *slot = (li - operand::read(code, &mut pc) as usize) as u32;
+                    }
+                    plan.triangles.push(e);
+                    ti += 3;
+                }
+                Op::VertexInfo => {
+                    let n = operand::read(code, &mut pc) as usize;
+                    let m = operand::read(code, &mut pc);
+                    for _ in 0..n {
+                        plan.corners
+                            .push((ti - operand::read(code, &mut pc) as usize) as u32);
+                    }
+                    for _ in 0..n {
+                        let a = (ti - operand::read(code, &mut pc) as usize) as u32;
+                        let b = (ti - operand::read(code, &mut pc) as usize) as u32;
+                        plan.pairs.push([a, b]);
+                    }
+                    plan.lower.push(m);
+                    plan.vertex_start.push(plan.corners.len() as u32);
+                    k += 1;
+                }
+            }
+        }
+        plan
+    }
+
+    /// Bytes the plan holds.
+    pub fn bytes(&self) -> usize {
+        self.edge_scales.len() * 8
+            + self.triangles.len() * 12
+            + (self.vertex_start.len() + self.lower.len() + self.corners.len()) * 4
+            + self.pairs.len() * 8
+    }
+
+    /// The gradient pass: lengths, corners, gradient and Hessian values, exactly as the
+    /// interpreter's pass without the energy. `scale` has one entry per unknown and a last
+    /// entry 1 (for boundary vertices).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        col_ptr: &[u32],
+        l0: &[f64],
+        scale: &[f64],
+        len: &mut [f64],
+        temps: &mut [Corner],
+        grad: &mut [f64],
+        hvals: &mut [f64],
+    ) {
+        for ((len, &l0), &[a, b]) in len.iter_mut().zip(l0).zip(&self.edge_scales) {
+            *len = l0 * scale[a as usize] * scale[b as usize];
+        }
+        for (out, &[e0, e1, e2]) in temps.chunks_exact_mut(3).zip(&self.triangles) {
+            let corners = triangle_corners([len[e0 as usize], len[e1 as usize], len[e2 as usize]]);
+            out.copy_from_slice(&corners);
+        }
+        let temps = &*temps;
+        for (k, (w, &m)) in self.vertex_start.windows(2).zip(&self.lower).enumerate() {
+            let range = w[0] as usize..w[1] as usize;
+            let corners = &self.corners[range.clone()];
+            let directions = || {
+                corners.iter().map(|&c| {
+                    let c = temps[c as usize];
+                    [c[0], c[1]]
+                })
+            };
+            let angle =
+                half_angle_sum_fast(directions()).unwrap_or_else(|| half_angle_sum(directions()));
+            grad[k] = std::f64::consts::PI - angle;
+            let col = col_ptr[k] as usize;
+            let mut diag = 0.0;
+            for (j, &[a, b]) in self.pairs[range].iter().enumerate() {
+                let w = 0.25 * (temps[a as usize][2] + temps[b as usize][2]);
+                diag += w;
+                if j < m as usize {
+                    hvals[col + 1 + j] = -w;
+                }
+            }
+            hvals[col] = diag;
+        }
+    }
+}

@@ -104,6 +104,22 @@ fn triangle_corners_cold(l: [f64; 3]) -> [Corner; 3] {
 /// [`half_angle_sum`] takes the same corners.
 #[inline(always)]
 pub fn half_angle_sum_fast(corners: impl Iterator<Item = [f64; 2]>) -> Option<f64> {
+    let (re, im, turns) = product::<false>(corners);
+    (re.abs() + im.abs() >= 1e-290).then(|| argument(re, im, turns))
+}
+
+/// [`half_angle_sum_fast`] for any magnitudes: rescales the product away from underflow.
+#[cold]
+#[inline(never)]
+pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
+    let (re, im, turns) = product::<true>(corners);
+    argument(re, im, turns)
+}
+
+/// The complex product of `corners` and the full turns it made; with `RESCALE` the product is
+/// renormalised whenever its magnitude drops below 1e-100.
+#[inline(always)]
+fn product<const RESCALE: bool>(corners: impl Iterator<Item = [f64; 2]>) -> (f64, f64, u32) {
     let (mut re, mut im) = (1.0f64, 0.0f64);
     let mut turns = 0u32;
     for [c, s] in corners {
@@ -114,29 +130,15 @@ pub fn half_angle_sum_fast(corners: impl Iterator<Item = [f64; 2]>) -> Option<f6
         turns += u32::from(im < 0.0 && next_im >= 0.0);
         re = next_re;
         im = next_im;
-    }
-    (re.abs() + im.abs() >= 1e-290).then(|| argument(re, im, turns))
-}
-
-/// [`half_angle_sum_fast`] for any magnitudes: rescales the product away from underflow.
-#[cold]
-#[inline(never)]
-pub fn half_angle_sum(corners: impl Iterator<Item = [f64; 2]>) -> f64 {
-    let (mut re, mut im) = (1.0f64, 0.0f64);
-    let mut turns = 0u32;
-    for [c, s] in corners {
-        let next_re = re * c - im * s;
-        let next_im = re * s + im * c;
-        turns += u32::from(im < 0.0 && next_im >= 0.0);
-        re = next_re;
-        im = next_im;
-        let m = re.abs().max(im.abs());
-        if m < 1e-100 && m > 0.0 {
-            re /= m;
-            im /= m;
+        if RESCALE {
+            let m = re.abs().max(im.abs());
+            if m < 1e-100 && m > 0.0 {
+                re /= m;
+                im /= m;
+            }
         }
     }
-    argument(re, im, turns)
+    (re, im, turns)
 }
 
 /// The argument of `re + i im` in [0, 2 pi), plus `turns` full turns.

@@ -228,9 +228,7 @@ impl Vm {
     /// run, from the stream decoded once into flat arrays at [`Vm::new`] (same results, bit for
     /// bit). Allocates nothing.
     pub fn evaluate_gradient(&mut self) {
-        for (s, &u) in self.scale.iter_mut().zip(&self.u) {
-            *s = (0.5 * u).exp();
-        }
+        self.update_scale();
         let n_it = self.program.n_iter_edges();
         self.plan.run(
             &self.program.hessian().col_ptr,
@@ -247,10 +245,15 @@ impl Vm {
         };
     }
 
-    fn evaluate_with<const ENERGY: bool>(&mut self) {
+    /// `scale = exp(u / 2)` per unknown (its last entry, for boundary vertices, stays 1).
+    fn update_scale(&mut self) {
         for (s, &u) in self.scale.iter_mut().zip(&self.u) {
             *s = (0.5 * u).exp();
         }
+    }
+
+    fn evaluate_with<const ENERGY: bool>(&mut self) {
+        self.update_scale();
         self.energy = evaluate::run::<ENERGY>(
             &self.program,
             evaluate::Registers {

@@ -32,19 +32,25 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod blend;
+pub mod distortion;
 pub mod generate;
 pub mod info;
 pub mod io;
+mod keyframes;
 pub mod mesh;
 pub mod morph;
+pub mod path;
 pub mod reference;
 pub mod render;
 
 pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
 pub use bdmorph_isa::{disassemble, LoadError, MeshKey, Program};
 pub use bdmorph_vm::{NewtonOptions, TriangleReport, Vm, VmError};
+pub use blend::Blend;
 pub use mesh::{MeshError, PlanarMesh};
-pub use morph::{Frame, FrameStats, Morph, MorphError, MorphOptions};
+pub use morph::{Frame, FrameAt, FrameStats, Morph, MorphError, MorphOptions};
+pub use path::{Easing, Path, PathOptions};
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -1,6 +1,8 @@
 //! The morph object: compile once, then frames for any `t`.
 
-use bdmorph_vm::{NewtonOptions, Program, TriangleReport, Vm, VmError};
+use bdmorph_vm::{NewtonOptions, Program, TriangleReport, VmError};
+
+use crate::keyframes::{Engine, Unwrap};
 
 use crate::mesh::{MeshError, PlanarMesh};
 
@@ -60,7 +62,7 @@ impl MorphOptions {
 /// Statistics of one frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameStats {
-    /// The frame's time.
+    /// The frame's time (a morph's or path's `t`); NaN for a free blend.
     pub t: f64,
     /// Newton iterations (linear solves) the frame took.
     pub newton_iterations: u32,
@@ -72,65 +74,82 @@ pub struct FrameStats {
     pub gradient_norm: f64,
     /// Triangles with non-positive signed area in the result.
     pub flipped_triangles: usize,
+    /// The largest conformal distortion (largest over smallest singular value of the affine
+    /// map) of any triangle from the first keyframe (the source) to this frame; infinite when
+    /// a triangle is flipped. See [`crate::distortion`].
+    pub max_conformal_distortion: f64,
     /// Wall-clock time of the frame (metric, Newton, layout, flip count), in seconds.
     pub seconds: f64,
 }
 
 impl FrameStats {
-    /// The statistics as one line of JSON.
+    /// The statistics as one line of JSON. Non-finite numbers (a blend's `t`, the
+    /// distortion of a frame with a flipped triangle) are written as `null`.
     pub fn to_json(&self) -> String {
         format!(
-            "{{\"t\":{},\"newton_iterations\":{},\"factorizations\":{},\"cg_iterations\":{},\"gradient_norm\":{:e},\"flipped_triangles\":{},\"seconds\":{:e}}}",
-            self.t,
+            "{{\"t\":{},\"newton_iterations\":{},\"factorizations\":{},\"cg_iterations\":{},\"gradient_norm\":{},\"flipped_triangles\":{},\"max_conformal_distortion\":{},\"seconds\":{}}}",
+            Json(self.t, false),
             self.newton_iterations,
             self.factorizations,
             self.cg_iterations,
-            self.gradient_norm,
+            Json(self.gradient_norm, true),
             self.flipped_triangles,
-            self.seconds
+            Json(self.max_conformal_distortion, false),
+            Json(self.seconds, true)
         )
     }
 }
 
-/// Solved frames kept for extrapolating the next start.
-const HISTORY: usize = 3;
+/// A JSON number: `null` when not finite, in exponent form when asked.
+struct Json(f64, bool);
 
-/// Weights of the Lagrange polynomial through the nodes' times evaluated at `t`, and their
-/// count; `None` when two nodes share a time or the weights would amplify the nodes' values
-/// (sum of magnitudes above 8: one step of uniform quadratic extrapolation gives 7).
-fn lagrange_weights(t: f64, nodes: &[Solved]) -> Option<([f64; HISTORY], usize)> {
-    let mut w = [0.0; HISTORY];
-    for (i, a) in nodes.iter().enumerate() {
-        let mut wi = 1.0;
-        for (j, b) in nodes.iter().enumerate() {
-            if i != j {
-                let d = a.t - b.t;
-                if d == 0.0 {
-                    return None;
-                }
-                wi *= (t - b.t) / d;
-            }
+impl std::fmt::Display for Json {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.0.is_finite(), self.1) {
+            (false, _) => write!(f, "null"),
+            (true, true) => write!(f, "{:e}", self.0),
+            (true, false) => write!(f, "{}", self.0),
         }
-        w[i] = wi;
     }
-    let size: f64 = w.iter().map(|x| x.abs()).sum();
-    (size.is_finite() && size <= 8.0).then_some((w, nodes.len()))
 }
 
-/// A solved frame kept for extrapolating the next start.
-#[derive(Clone, Debug)]
-struct Solved {
-    t: f64,
-    u: Vec<f64>,
-}
-
-/// A computed frame: positions (one per vertex, in the source's order) and statistics.
+/// A computed frame: positions (one per vertex, in the source's order), the conformal
+/// distortion of every triangle from the first keyframe, and statistics.
 #[derive(Clone, Copy, Debug)]
 pub struct Frame<'a> {
     /// Vertex positions.
     pub positions: &'a [[f64; 2]],
+    /// Conformal distortion of each triangle (in the faces' order) from the first keyframe:
+    /// 1 where the triangle kept its shape up to a similarity, infinite where it is flipped.
+    pub distortion: &'a [f64],
     /// Statistics.
     pub stats: FrameStats,
+}
+
+/// Which frame an error is about.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FrameAt {
+    /// A morph's or path's time.
+    Time(f64),
+    /// A blend's weights, one per keyframe.
+    Weights(Vec<f64>),
+}
+
+impl std::fmt::Display for FrameAt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrameAt::Time(t) => write!(f, "t = {t}"),
+            FrameAt::Weights(w) => {
+                write!(f, "weights (")?;
+                for (i, x) in w.iter().enumerate() {
+                    let sep = if i == 0 { "" } else { ", " };
+                    // Short enough to read, precise enough to reproduce the limit.
+                    write!(f, "{sep}{}", (x * 1e9).round() / 1e9)?;
+                }
+                write!(f, ")")
+            }
+        }
+    }
 }
 
 /// Why a morph could not be set up or a frame computed.
@@ -140,17 +159,93 @@ pub enum MorphError {
     /// The input meshes are not valid.
     #[error(transparent)]
     Mesh(#[from] MeshError),
-    /// `t` is not a finite number in [0, 1].
-    #[error("t = {t} is outside [0, 1]")]
+    /// `t` is not a finite number.
+    #[error("t = {t} is not a finite number")]
+    TimeNotFinite {
+        /// The time asked for.
+        t: f64,
+    },
+    /// `t` is outside a path's [0, 1].
+    #[error("t = {t} is outside the path's [0, 1]")]
     TimeOutOfRange {
         /// The time asked for.
         t: f64,
     },
+    /// Weights given for a different number of keyframes.
+    #[error("{got} weights given for {expected} keyframes")]
+    WeightCount {
+        /// Keyframes.
+        expected: usize,
+        /// Weights given.
+        got: usize,
+    },
+    /// Weights that are not finite or do not sum to 1.
+    #[error("{}: weights must be finite and sum to 1 (they sum to {sum})", FrameAt::Weights(weights.clone()))]
+    WeightSum {
+        /// The weights.
+        weights: Vec<f64>,
+        /// Their sum.
+        sum: f64,
+    },
+    /// Extrapolated too far: the blended squared edge lengths of a triangle are no longer
+    /// those of a Euclidean triangle.
+    #[error("{at}: the extrapolated edge lengths of triangle {face} (vertices {} {} {}) break the triangle inequality from {limit} on", vertices[0], vertices[1], vertices[2])]
+    MetricBreaks {
+        /// The frame asked for.
+        at: FrameAt,
+        /// The first triangle to break (index into the faces).
+        face: usize,
+        /// Its vertices.
+        vertices: [u32; 3],
+        /// Where it breaks on the straight way from the nearest valid weights (for a morph,
+        /// the nearest of 0 and 1) to the frame asked for: frames are possible up to there.
+        limit: FrameAt,
+    },
+    /// A program that does not hold one of the mesh's triangles.
+    #[error("the program was not compiled for these triangles: its edges do not contain triangle {} {} {}", face[0], face[1], face[2])]
+    ProgramMismatch {
+        /// The triangle.
+        face: [u32; 3],
+    },
+    /// A keyframe after the first is not valid, or has other triangles than the first.
+    #[error("keyframe {index}: {source}")]
+    Keyframe {
+        /// The keyframe's index.
+        index: usize,
+        /// Why.
+        source: MeshError,
+    },
+    /// Fewer keyframes than the operation needs.
+    #[error("{got} keyframes given; at least {needed} are needed")]
+    TooFewKeyframes {
+        /// Needed.
+        needed: usize,
+        /// Given.
+        got: usize,
+    },
+    /// Path options with the wrong number of per-segment values.
+    #[error("{got} {what} given for {expected} segments")]
+    SegmentCount {
+        /// `durations` or `easings`.
+        what: &'static str,
+        /// Segments (keyframes minus one).
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A segment duration that is not a positive number.
+    #[error("segment {segment}: duration {duration} is not a positive number")]
+    BadDuration {
+        /// The segment.
+        segment: usize,
+        /// Its duration.
+        duration: f64,
+    },
     /// Newton's method did not reach the tolerance.
-    #[error("frame t = {t}: Newton did not converge (gradient norm {gradient_norm:e} after {iterations} iterations){}", Worst(worst))]
+    #[error("frame {at}: Newton did not converge (gradient norm {gradient_norm:e} after {iterations} iterations){}", Worst(worst))]
     NotConverged {
         /// The frame.
-        t: f64,
+        at: FrameAt,
         /// Iterations performed.
         iterations: u32,
         /// Gradient norm reached.
@@ -160,10 +255,10 @@ pub enum MorphError {
         worst: Vec<TriangleReport>,
     },
     /// The solver failed otherwise (non-finite values, a Hessian that is not positive definite).
-    #[error("frame t = {t}: {source}{}", Worst(worst))]
+    #[error("frame {at}: {source}{}", Worst(worst))]
     Solver {
         /// The frame.
-        t: f64,
+        at: FrameAt,
         /// The VM's error.
         source: VmError,
         /// The triangles closest to breaking the triangle inequality where the solver failed.
@@ -214,30 +309,14 @@ impl std::fmt::Display for Worst<'_> {
 /// # Ok::<(), bdmorph::MorphError>(())
 /// ```
 pub struct Morph {
-    vm: Vm,
-    faces: Vec<[u32; 3]>,
-    sq_source: Vec<f64>,
-    sq_target: Vec<f64>,
-    anchor_source: [f64; 2],
-    anchor_target: [f64; 2],
-    angle_source: f64,
-    angle_turn: f64,
-    options: MorphOptions,
-    positions: Vec<[f64; 2]>,
-    /// The last solved frames, newest last; the last `solved` of them are valid.
-    history: [Solved; HISTORY],
-    solved: usize,
-    /// The start `u` of the frame being solved.
-    start: Vec<f64>,
+    engine: Engine,
 }
 
 impl std::fmt::Debug for Morph {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Morph")
-            .field("vertices", &self.positions.len())
-            .field("faces", &self.faces.len())
-            .field("vm", &self.vm)
-            .finish_non_exhaustive()
+            .field("engine", &self.engine)
+            .finish()
     }
 }
 
@@ -262,202 +341,74 @@ impl Morph {
         options: MorphOptions,
     ) -> Result<Morph, MorphError> {
         source.validate_pair(target)?;
-        let solver = |source| MorphError::Solver {
-            t: 0.0,
-            source,
-            worst: Vec::new(),
-        };
-        let vm = Vm::new(program).map_err(solver)?;
-        let sq_source = vm.squared_lengths(&source.positions).map_err(solver)?;
-        let sq_target = vm.squared_lengths(&target.positions).map_err(solver)?;
-        let root = vm.program().embed_root();
-        let (p0, p1) = (root.p0 as usize, root.p1 as usize);
-        let angle = |m: &PlanarMesh| {
-            let (a, b) = (m.positions[p0], m.positions[p1]);
-            (b[1] - a[1]).atan2(b[0] - a[0])
-        };
-        let angle_source = angle(source);
-        // The shorter turn from the source's direction to the target's, in (-pi, pi].
-        let mut angle_turn = angle(target) - angle_source;
-        while angle_turn > std::f64::consts::PI {
-            angle_turn -= std::f64::consts::TAU;
-        }
-        while angle_turn <= -std::f64::consts::PI {
-            angle_turn += std::f64::consts::TAU;
-        }
-        // A half turn is ambiguous: round-off in atan2 must not pick the direction, so within
-        // 1e-9 of pi the turn is counter-clockwise.
-        if (angle_turn.abs() - std::f64::consts::PI).abs() < 1e-9 {
-            angle_turn = std::f64::consts::PI;
-        }
-        Ok(Morph {
-            faces: source.faces.clone(),
-            sq_source,
-            sq_target,
-            anchor_source: source.positions[p0],
-            anchor_target: target.positions[p0],
-            angle_source,
-            angle_turn,
-            options,
-            positions: vec![[0.0; 2]; source.positions.len()],
-            history: [(); HISTORY].map(|_| Solved {
-                t: 0.0,
-                u: vec![0.0; vm.u().len()],
-            }),
-            solved: 0,
-            start: vec![0.0; vm.u().len()],
-            vm,
-        })
+        let keyframes = [source.clone(), target.clone()];
+        let engine = Engine::new(program, &keyframes, Unwrap::FromFirst, options)?;
+        Ok(Morph { engine })
     }
 
     /// The compiled program.
     pub fn program(&self) -> &Program {
-        self.vm.program()
+        self.engine.program()
     }
 
     /// The triangles (the source's).
     pub fn faces(&self) -> &[[u32; 3]] {
-        &self.faces
+        self.engine.faces()
     }
 
     /// The log scale factors of the last frame, one per interior vertex.
     pub fn scale_factors(&self) -> &[f64] {
-        self.vm.u()
+        self.engine.scale_factors()
     }
 
-    /// Computes the frame at `t` in [0, 1]: `t = 0` gives the source, `t = 1` the target.
-    /// The positions borrow an internal buffer reused by the next call.
+    /// The conformal distortion of each triangle in the last frame, from the source.
+    pub fn distortion(&self) -> &[f64] {
+        self.engine.distortion()
+    }
+
+    /// Computes the frame at `t`: `t = 0` gives the source, `t = 1` the target. The metric
+    /// is `(1 - t)` times the source's squared edge lengths plus `t` times the target's.
+    /// Outside [0, 1] the morph extrapolates while that metric stays Euclidean, and
+    /// otherwise fails with [`MorphError::MetricBreaks`] naming the first triangle to break
+    /// and the `t` where it does. The positions borrow an internal buffer reused by the next
+    /// call.
     pub fn frame(&mut self, t: f64) -> Result<Frame<'_>, MorphError> {
-        let mut out = std::mem::take(&mut self.positions);
-        let result = self.frame_into(t, &mut out);
-        self.positions = out;
+        let stats = self
+            .engine
+            .frame(&[1.0 - t, t], Some(t))
+            .map_err(|e| in_time(e, t))?;
         Ok(Frame {
-            stats: result?,
-            positions: &self.positions,
+            positions: self.engine.positions(),
+            distortion: self.engine.distortion(),
+            stats,
         })
     }
 
     /// Computes the frame at `t` into `out` (one position per vertex). Allocates nothing; on
     /// error `out` is left untouched.
     pub fn frame_into(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<FrameStats, MorphError> {
-        let started = std::time::Instant::now();
-        if !(0.0..=1.0).contains(&t) {
-            return Err(MorphError::TimeOutOfRange { t });
-        }
-        if out.len() != self.vm.program().n_vertices() {
-            return Err(MorphError::OutputLength {
-                expected: self.vm.program().n_vertices(),
-                got: out.len(),
-            });
-        }
-        let solver = |source| MorphError::Solver {
-            t,
-            source,
-            worst: Vec::new(),
-        };
-        self.vm
-            .set_metric_lerp(&self.sq_source, &self.sq_target, t)
-            .map_err(solver)?;
-        let extrapolated = self.choose_start(t);
-        let mut result = self.vm.newton(&self.options.newton);
-        if result.is_err() && extrapolated {
-            // An extrapolated start is a guess: fall back to the last solution before failing.
-            self.vm
-                .set_u(&self.history[HISTORY - 1].u)
-                .expect("history has one value per unknown");
-            result = self.vm.newton(&self.options.newton);
-        }
-        let report = result.map_err(|e| {
-            let worst = self.vm.failure_triangles().to_vec();
-            match e {
-                VmError::NotConverged {
-                    iterations,
-                    gradient_norm,
-                } => MorphError::NotConverged {
-                    t,
-                    iterations,
-                    gradient_norm,
-                    worst,
-                },
-                other => MorphError::Solver {
-                    t,
-                    source: other,
-                    worst,
-                },
-            }
-        })?;
-        let anchor = [
-            (1.0 - t) * self.anchor_source[0] + t * self.anchor_target[0],
-            (1.0 - t) * self.anchor_source[1] + t * self.anchor_target[1],
-        ];
-        let (s, c) = (self.angle_source + t * self.angle_turn).sin_cos();
-        self.vm.embed(anchor, [c, s], out).map_err(solver)?;
-        self.remember(t);
-        Ok(FrameStats {
-            t,
-            newton_iterations: report.iterations,
-            factorizations: report.factorizations,
-            cg_iterations: report.cg_iterations,
-            gradient_norm: report.gradient_norm,
-            flipped_triangles: self.vm.count_flipped(out),
-            seconds: started.elapsed().as_secs_f64(),
-        })
+        self.engine
+            .frame_into(&[1.0 - t, t], Some(t), out)
+            .map_err(|e| in_time(e, t))
     }
+}
 
-    /// Sets the VM's start `u` for a frame at `t`; true when it was extrapolated.
-    fn choose_start(&mut self, t: f64) -> bool {
-        if !self.options.warm_start {
-            self.vm.reset_u();
-            return false;
-        }
-        if self.solved == 0 {
-            return false;
-        }
-        let last = &self.history[HISTORY - 1];
-        let weights = if self.options.extrapolate && self.solved >= 2 {
-            let prev = &self.history[HISTORY - 2];
-            let near = (t - last.t).abs() <= 2.0 * (last.t - prev.t).abs();
-            let nodes = &self.history[HISTORY - self.solved..];
-            let cubic = lagrange_weights(t, nodes);
-            let linear = lagrange_weights(t, &nodes[nodes.len() - 2..]);
-            match (near, cubic, linear) {
-                (false, ..) => None,
-                (true, Some(w), _) => Some(w),
-                (true, None, Some(w)) => Some(w),
-                (true, None, None) => None,
-            }
-        } else {
-            None
-        };
-        let Some((weights, count)) = weights else {
-            self.vm
-                .set_u(&last.u)
-                .expect("history has one value per unknown");
-            return false;
-        };
-        let nodes = &self.history[HISTORY - count..];
-        self.start.fill(0.0);
-        for (node, w) in nodes.iter().zip(&weights[..count]) {
-            for (s, u) in self.start.iter_mut().zip(&node.u) {
-                *s += w * u;
-            }
-        }
-        self.vm
-            .set_u(&self.start)
-            .expect("start has one value per unknown");
-        true
-    }
-
-    /// Records the VM's solution for `t` as the newest solved frame. Allocates nothing.
-    fn remember(&mut self, t: f64) {
-        if self.solved > 0 && self.history[HISTORY - 1].t == t {
-            // The same frame again: do not let a repeat collapse the spacing.
-            self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
-            return;
-        }
-        self.history.rotate_left(1);
-        self.history[HISTORY - 1].t = t;
-        self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
-        self.solved = (self.solved + 1).min(HISTORY);
+/// A morph's errors name times, not weights: the limit of an extrapolation is the target's
+/// weight there, and non-finite times are reported as such.
+fn in_time(e: MorphError, t: f64) -> MorphError {
+    match e {
+        MorphError::MetricBreaks {
+            at,
+            face,
+            vertices,
+            limit: FrameAt::Weights(w),
+        } if w.len() == 2 => MorphError::MetricBreaks {
+            at,
+            face,
+            vertices,
+            limit: FrameAt::Time(w[1]),
+        },
+        MorphError::WeightSum { .. } => MorphError::TimeNotFinite { t },
+        other => other,
     }
 }

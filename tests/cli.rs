@@ -119,6 +119,7 @@ fn stats_without_output_prints_json_and_writes_nothing() {
             "\"cg_iterations\":",
             "\"gradient_norm\":",
             "\"flipped_triangles\":0",
+            "\"max_conformal_distortion\":",
             "\"seconds\":",
         ] {
             assert!(line.contains(key), "{line} lacks {key}");
@@ -178,15 +179,19 @@ fn errors_are_one_line_name_the_file_and_write_nothing() {
         .expect("runs");
     let err = String::from_utf8(r.stderr).expect("utf8");
     assert!(!r.status.success() && err.contains("bad.obj:3"), "{err}");
-    // t out of range, and no action.
+    // t not a number, and no action.
     let r = morph()
         .arg(&pa)
         .arg(&pa)
-        .args(["--t", "2", "-o"])
+        .args(["--t", "inf", "-o"])
         .arg(&out)
         .output()
         .expect("runs");
-    assert!(!r.status.success());
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(
+        !r.status.success() && err.contains("not a finite number"),
+        "{err}"
+    );
     let r = morph()
         .arg(&pa)
         .arg(&pa)
@@ -502,4 +507,187 @@ fn frames_that_fail_are_reported_and_not_written() {
             .any(|l| l.starts_with("{\"t\":0.5,\"error\":\"")),
         "{stdout}"
     );
+}
+
+/// Three poses of one disk, written as a.obj, b.obj, c.obj.
+fn poses(dir: &Path) -> (Vec<PlanarMesh>, Vec<PathBuf>) {
+    let a = generate::disk(6, 0.2);
+    let keys = vec![
+        a.clone(),
+        generate::bend(&a, 0.6),
+        generate::twist(&generate::stretch(&a, 1.4), 0.7),
+    ];
+    let paths = ["a.obj", "b.obj", "c.obj"]
+        .iter()
+        .zip(&keys)
+        .map(|(name, m)| write(dir, name, m))
+        .collect();
+    (keys, paths)
+}
+
+fn off_by(path: &Path, want: &PlanarMesh) -> f64 {
+    let got = PlanarMesh::read(path).expect("readable");
+    assert_eq!(got.faces, want.faces);
+    got.positions
+        .iter()
+        .zip(&want.positions)
+        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+        .fold(0.0, f64::max)
+        / want.diameter()
+}
+
+#[test]
+fn blend_writes_one_frame_with_its_weights_in_the_stats() {
+    let dir = scratch("blend");
+    let (keys, paths) = poses(&dir);
+    let out = dir.join("mix.obj");
+    let r = run_ok(
+        bin()
+            .arg("blend")
+            .args(&paths)
+            .args(["--weights", "0,1,0", "--stats", "-o"])
+            .arg(&out),
+    );
+    assert!(off_by(&out, &keys[1]) < 1e-9);
+    let stdout = String::from_utf8(r.stdout).expect("utf8");
+    assert!(stdout.starts_with("{\"weights\":[0,1,0],"), "{stdout}");
+    assert!(stdout.contains("\"max_conformal_distortion\":"), "{stdout}");
+    // Weights slightly outside the simplex extrapolate; far outside, the triangle is named.
+    run_ok(
+        bin()
+            .arg("blend")
+            .args(&paths)
+            .args(["--weights", "-0.05,0.5,0.55", "--stats"]),
+    );
+    let r = bin()
+        .arg("blend")
+        .args(&paths)
+        .args(["--weights", "-4,0.5,4.5", "-o"])
+        .arg(dir.join("far.obj"))
+        .output()
+        .expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("triangle") && err.contains("break the triangle inequality"),
+        "{err}"
+    );
+    assert!(!dir.join("far.obj").exists());
+    // Weights that do not fit are refused before anything is read.
+    for (weights, says) in [("0.5,0.5", "3 meshes"), ("0.5,0.5,0.5", "sum to 1")] {
+        let r = bin()
+            .arg("blend")
+            .args(&paths)
+            .args(["--weights", weights, "--stats"])
+            .output()
+            .expect("runs");
+        let err = String::from_utf8(r.stderr).expect("utf8");
+        assert!(
+            !r.status.success() && err.contains(says),
+            "{weights}: {err}"
+        );
+    }
+}
+
+#[test]
+fn morph_through_several_meshes_passes_through_each() {
+    let dir = scratch("path");
+    let (keys, paths) = poses(&dir);
+    let out = dir.join("frames");
+    run_ok(morph().args(&paths).args(["--frames", "5", "-o"]).arg(&out));
+    for (frame, key) in [(0, 0), (2, 1), (4, 2)] {
+        let err = off_by(&out.join(format!("frame_{frame:04}.obj")), &keys[key]);
+        assert!(err < 1e-9, "frame {frame}: off by {err}");
+    }
+    // Durations 1, 3: keyframe 1 is reached at t = 0.25, frame 1 of 5; eased segments too.
+    let out = dir.join("timed");
+    run_ok(
+        morph()
+            .args(&paths)
+            .args([
+                "--frames",
+                "5",
+                "--durations",
+                "1,3",
+                "--easing",
+                "ease-in-out",
+            ])
+            .args(["--easing", "cubic-bezier(0.2,0,0.4,1)", "-o"])
+            .arg(&out),
+    );
+    assert!(off_by(&out.join("frame_0001.obj"), &keys[1]) < 1e-9);
+    assert!(off_by(&out.join("frame_0004.obj"), &keys[2]) < 1e-9);
+    // Per-segment values must match the segments.
+    for args in [
+        &["--durations", "1,2,3"][..],
+        &[
+            "--easing", "linear", "--easing", "linear", "--easing", "linear",
+        ][..],
+        &["--easing", "wobbly"][..],
+    ] {
+        let r = morph()
+            .args(&paths)
+            .args(["--frames", "3", "--stats"])
+            .args(args)
+            .output()
+            .expect("runs");
+        assert!(!r.status.success(), "{args:?}");
+    }
+}
+
+#[test]
+fn morph_t_outside_zero_one_extrapolates_until_a_triangle_breaks() {
+    let dir = scratch("extrapolate");
+    let (_, pa, _, pb) = pair(&dir);
+    let out = dir.join("beyond.obj");
+    run_ok(
+        morph()
+            .arg(&pa)
+            .arg(&pb)
+            .args(["--t", "1.05", "-o"])
+            .arg(&out),
+    );
+    assert!(out.is_file());
+    run_ok(morph().arg(&pa).arg(&pb).args(["--t", "-0.05", "--stats"]));
+    let r = morph()
+        .arg(&pa)
+        .arg(&pb)
+        .args(["--t", "40", "--stats"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(!r.status.success());
+    assert!(
+        err.contains("t = 40: the extrapolated edge lengths of triangle")
+            && err.contains("from t = "),
+        "{err}"
+    );
+}
+
+#[test]
+fn pictures_can_be_coloured_by_distortion() {
+    let dir = scratch("colour");
+    let (_, paths) = poses(&dir);
+    let picture = |name: &str, colour: bool| {
+        let out = dir.join(name);
+        let mut cmd = bin();
+        cmd.arg("blend")
+            .args(&paths)
+            .args(["--weights", "0.2,0.3,0.5", "--size", "200x200", "-o"])
+            .arg(&out);
+        if colour {
+            cmd.args(["--color-by", "distortion"]);
+        }
+        run_ok(&mut cmd);
+        std::fs::read(&out).expect("written")
+    };
+    assert_ne!(picture("plain.png", false), picture("coloured.png", true));
+    let svg = String::from_utf8(picture("coloured.svg", true)).expect("utf8");
+    // Several fill groups of the colour ramp instead of one flat fill.
+    assert!(svg.matches("<g fill=").count() > 3, "{svg}");
+    assert!(!svg.contains("fill=\"#cfe0f5\""));
+    let html = String::from_utf8(picture("coloured.html", true)).expect("utf8");
+    assert!(html.contains("id=\"legend\"") && html.contains("conformal distortion"));
+    let plain = String::from_utf8(picture("plain.html", false)).expect("utf8");
+    assert!(!plain.contains("id=\"legend\"") && plain.contains("shades: null"));
 }

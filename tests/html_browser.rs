@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use bdmorph::render::{html::html, Viewport};
+use bdmorph::render::html::{html, html_shaded, Shading};
+use bdmorph::render::{colour, Viewport};
 use bdmorph::{generate, Morph, MorphOptions, PlanarMesh};
 
 fn find_chromium() -> Option<PathBuf> {
@@ -362,6 +363,38 @@ fn chromium_shows_frames_textures_and_flips() {
         "the texture's top (blue, mean row {row_blue:.1}) must be drawn above its bottom \
          (green, mean row {row_green:.1})"
     );
+
+    // Shaded by distortion: t = 0 is undistorted (all the darkest shade), t = 1 shows the
+    // ramp's brighter shades, and the legend names what the colours mean.
+    let mut morph = Morph::new(&source, &target, MorphOptions::default()).expect("morph");
+    let shades: Vec<Vec<u8>> = [0.0, 1.0]
+        .iter()
+        .map(|&t| morph.frame(t).expect("frame").distortion.to_vec())
+        .collect::<Vec<_>>()
+        .iter()
+        .map(|d| colour::distortion_shades(d, 3.0))
+        .collect();
+    let ends = [frames[0], frames[10]];
+    let shading = Shading {
+        shades: &shades,
+        label: "conformal distortion",
+        max: 3.0,
+    };
+    let shaded = dir.join("shaded.html");
+    let text = html_shaded("", &ends, faces, None, None, Some(&shading), &view);
+    std::fs::write(&shaded, text).expect("page");
+    let dark = colour::shade_colour(0);
+    let bright = |p: [u8; 3]| p[1] > 110 && p[1] > p[2] && i32::from(p[1]) - i32::from(p[0]) > 20;
+    let first = browser.screenshot(&shaded, "frame=0");
+    let last = browser.screenshot(&shaded, "frame=1");
+    let (dark0, _) = first.count(|p| near(p, dark));
+    let (bright0, _) = first.count(bright);
+    let (bright1, _) = last.count(bright);
+    assert!(dark0 > total / 10, "t = 0: only {dark0} dark pixels");
+    assert!(bright0 < total / 500, "t = 0: {bright0} bright pixels");
+    assert!(bright1 > total / 50, "t = 1: only {bright1} bright pixels");
+    let (_, legend) = browser.state(&shaded, "frame=1", 0);
+    assert!(legend.contains("2/2"), "{legend}");
 
     // A frame with flipped triangles: the centre of a small disk dragged outside its ring.
     let mut bad: PlanarMesh = generate::disk(3, 0.0);

@@ -76,7 +76,12 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
         let f = morph.frame(t).map_err(|e| e.to_string())?;
         iterations += f.stats.newton_iterations;
         flips += f.stats.flipped_triangles;
-        frames.push((index, t, f.positions.to_vec()));
+        frames.push(output::Frame {
+            index,
+            t,
+            positions: f.positions.to_vec(),
+            distortion: None,
+        });
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -98,13 +103,14 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     }
     // A strip of five pictures, t = 0, 0.25, ..., 1.
     let picks: Vec<&[[f64; 2]]> = (0..5)
-        .map(|k| frames[k * (frames.len() - 1) / 4].2.as_slice())
+        .map(|k| frames[k * (frames.len() - 1) / 4].positions.as_slice())
         .collect();
-    let view = bdmorph::render::Viewport::fit(frames.iter().map(|(_, _, p)| p.as_slice()));
+    let view = bdmorph::render::Viewport::fit(frames.iter().map(|f| f.positions.as_slice()));
     let drawing = bdmorph::render::Drawing {
         faces: morph.faces(),
         corner_uv: Some(&corner_uv),
         texture: Some(&texture),
+        face_colours: None,
     };
     let images: Vec<Image> = picks
         .iter()

@@ -1,5 +1,6 @@
 //! Command-line parsing and the subcommands.
 
+mod blend;
 mod compile;
 mod demo;
 mod info;
@@ -9,6 +10,7 @@ mod output;
 use std::path::PathBuf;
 
 use bdmorph::render::ImageSize;
+use bdmorph::Easing;
 use clap::{Args, Parser, Subcommand};
 
 pub use output::Format;
@@ -34,11 +36,15 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Morph between two planar meshes with the same triangles.
+    /// Morph between two planar meshes with the same triangles, or along a path of several.
     ///
     /// Inputs: OBJ or OFF files with z = 0 (or two coordinates per `v` line). Faces must be
     /// triangles (quads and polygons are refused, not triangulated), counter-clockwise,
-    /// forming one disk; SOURCE and TARGET must list the same triangles.
+    /// forming one disk; every mesh must list the first one's triangles.
+    ///
+    /// With more than two meshes (or with --easing or --durations) the frames walk a path
+    /// through them in order, keyframe k reached at t = k / n (or after the first k
+    /// durations), each segment eased as asked, passing exactly through every keyframe.
     ///
     /// The output format follows the extension of -o (or --format): .obj, .svg or .png for
     /// one frame (--t) or for a directory of frame_NNNN files (--frames, -o DIR; .obj by
@@ -55,8 +61,27 @@ enum Command {
     ///   bdmorph morph man.obj man2.obj --frames 60 --texture skin.png -o viewer.html
     ///   bdmorph morph man.obj man2.obj --frames 11 --stats
     ///   bdmorph morph man.obj man2.obj --program man.bdm --t 0.5 -o half.obj
+    ///   bdmorph morph man.obj man2.obj --t 1.1 -o beyond.obj
+    ///   bdmorph morph man.obj man2.obj man3.obj man.obj --frames 90 --easing ease-in-out -o loop.gif
+    ///   bdmorph morph a.obj b.obj c.obj --frames 40 --durations 1,3 -o frames/
+    ///   bdmorph morph man.obj man2.obj --frames 30 --color-by distortion -o viewer.html
     #[command(verbatim_doc_comment)]
     Morph(MorphArgs),
+    /// Blend any number of keyframes with weights: one frame.
+    ///
+    /// The frame's squared edge lengths are the weighted sums of the keyframes' (convex
+    /// weights keep every triangle Euclidean), flattened with no flipped triangle; the anchor
+    /// vertex and edge angle are blended likewise (angles unwrapped from the first
+    /// keyframe's). Weights must sum to 1; slightly negative ones extrapolate while every
+    /// triangle stays Euclidean, and otherwise the first triangle to break is named.
+    /// Output formats as for `morph` with one frame (.obj, .svg, .png, .html).
+    ///
+    /// Examples:
+    ///   bdmorph blend man.obj man2.obj man3.obj --weights 0.2,0.3,0.5 -o mix.obj
+    ///   bdmorph blend man.obj man2.obj man3.obj --weights 0.5,0,0.5 --color-by distortion -o mix.png
+    ///   bdmorph blend man.obj man2.obj man3.obj --weights 0.1,0.4,0.5 --stats
+    #[command(verbatim_doc_comment)]
+    Blend(BlendArgs),
     /// Compile a mesh's triangles once into a program file, for `morph --program`.
     ///
     /// SOURCE is read and checked as `morph` does, and its connectivity is compiled into the
@@ -89,16 +114,59 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct MorphArgs {
-    /// The source mesh (t = 0).
-    source: PathBuf,
-    /// The target mesh (t = 1), with the source's triangles.
-    target: PathBuf,
-    /// One frame at this time in [0, 1].
-    #[arg(long = "t", value_name = "T", conflicts_with = "frames")]
+    /// The keyframes: SOURCE (t = 0) and TARGET (t = 1), or K0 K1 ... Kn for a path through
+    /// them (keyframe k at t = k / n), all with the first one's triangles.
+    #[arg(value_name = "MESH", num_args = 2.., required = true)]
+    meshes: Vec<PathBuf>,
+    /// One frame at this time: in [0, 1] for a path; for two meshes slightly outside works
+    /// too (extrapolation) while the extrapolated edge lengths stay Euclidean.
+    #[arg(
+        long = "t",
+        value_name = "T",
+        conflicts_with = "frames",
+        allow_negative_numbers = true
+    )]
     t: Option<f64>,
     /// N frames at t = i / (N - 1).
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
+    /// Relative durations of the path's segments, one per pair of consecutive meshes
+    /// (default: all equal).
+    #[arg(long, value_name = "D1,D2,...", value_delimiter = ',')]
+    durations: Vec<f64>,
+    /// Easing of the path's segments: linear, ease-in-out or cubic-bezier(x1,y1,x2,y2).
+    /// Once for every segment, or once per segment in order.
+    #[arg(long, value_name = "EASING", value_parser = parse_easing)]
+    easing: Vec<Easing>,
+    #[command(flatten)]
+    out: OutputArgs,
+    #[command(flatten)]
+    solver: SolverArgs,
+}
+
+#[derive(Args, Debug)]
+struct BlendArgs {
+    /// The keyframes K0 K1 ..., all with K0's triangles.
+    #[arg(value_name = "MESH", num_args = 2.., required = true)]
+    meshes: Vec<PathBuf>,
+    /// One weight per keyframe, summing to 1 (slightly negative ones extrapolate).
+    #[arg(
+        long,
+        value_name = "W0,W1,...",
+        value_delimiter = ',',
+        required = true,
+        allow_hyphen_values = true
+    )]
+    weights: Vec<f64>,
+    #[command(flatten)]
+    out: OutputArgs,
+    #[command(flatten)]
+    solver: SolverArgs,
+}
+
+/// Where and how frames are written, shared by `morph` and `blend`.
+#[derive(Args, Debug)]
+struct OutputArgs {
     /// Output file, or directory for per-frame files. Optional with --stats.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
@@ -111,13 +179,38 @@ struct MorphArgs {
     /// An image (PNG or JPEG) to map onto the triangles in PNG, GIF and HTML output.
     #[arg(long, value_name = "IMAGE")]
     texture: Option<PathBuf>,
+    /// Colour the triangles of PNG, GIF, SVG and HTML output by their conformal distortion
+    /// from the first mesh (viridis, log scale from 1 to the largest over all frames).
+    #[arg(
+        long = "color-by",
+        alias = "colour-by",
+        value_enum,
+        value_name = "WHAT"
+    )]
+    color_by: Option<ColorBy>,
     /// Frames per second of GIF and HTML playback.
     #[arg(long, value_name = "FPS", default_value_t = 25)]
     fps: u32,
     /// Print one JSON object of statistics per frame on stdout.
     #[arg(long)]
     stats: bool,
-    /// A program compiled for SOURCE by `bdmorph compile`, used instead of compiling again.
+    /// Print nothing but errors (and --stats).
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// What to colour triangles by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ColorBy {
+    /// The conformal distortion from the first mesh.
+    Distortion,
+}
+
+/// The solver's settings, shared by `morph` and `blend`.
+#[derive(Args, Debug)]
+struct SolverArgs {
+    /// A program compiled for the first mesh by `bdmorph compile`, used instead of compiling
+    /// again.
     #[arg(long, value_name = "PROGRAM")]
     program: Option<PathBuf>,
     /// Newton's tolerance on the gradient norm.
@@ -126,9 +219,11 @@ struct MorphArgs {
     /// Newton's iteration limit per frame.
     #[arg(long, value_name = "N", default_value_t = 50)]
     max_iterations: u32,
-    /// Print nothing but errors (and --stats).
-    #[arg(short, long)]
-    quiet: bool,
+}
+
+fn parse_easing(text: &str) -> Result<Easing, String> {
+    text.parse()
+        .map_err(|e: bdmorph::path::EasingError| e.to_string())
 }
 
 #[derive(Args, Debug)]
@@ -174,17 +269,19 @@ struct DemoArgs {
 pub fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Morph(args) => morph::run(args),
+        Command::Blend(args) => blend::run(args),
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),
     }
 }
 
-/// The frame times: one `t`, or `n` evenly spaced over [0, 1].
+/// The frame times: one `t` (any finite number: the solver checks how far it may go), or `n`
+/// evenly spaced over [0, 1].
 fn times(t: Option<f64>, frames: Option<usize>) -> Result<Vec<f64>, String> {
     match (t, frames) {
-        (Some(t), None) if (0.0..=1.0).contains(&t) => Ok(vec![t]),
-        (Some(t), None) => Err(format!("--t {t} is outside [0, 1]")),
+        (Some(t), None) if t.is_finite() => Ok(vec![t]),
+        (Some(t), None) => Err(format!("--t {t} is not a finite number")),
         (None, Some(n)) if n >= 2 => Ok((0..n).map(|i| i as f64 / (n - 1) as f64).collect()),
         (None, Some(n)) => Err(format!("--frames {n}: at least 2 frames are needed")),
         _ => Err("give either --t T or --frames N".into()),

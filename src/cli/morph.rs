@@ -1,16 +1,19 @@
 //! `bdmorph morph SOURCE TARGET ...`.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::PathBuf;
 
-use bdmorph::render::raster;
-use bdmorph::{Morph, MorphOptions, PlanarMesh};
+use bdmorph::io::TexCoords;
+use bdmorph::render::{raster, Image};
+use bdmorph::{Morph, MorphError, MorphOptions, Path, PathOptions, PlanarMesh};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::output::{self, Look, Plan};
-use super::{times, MorphArgs};
+use super::{times, MorphArgs, OutputArgs, SolverArgs};
 
-pub(super) fn read(path: &Path) -> Result<(PlanarMesh, Option<bdmorph::io::TexCoords>), String> {
+pub(super) fn read(
+    path: &std::path::Path,
+) -> Result<(PlanarMesh, Option<bdmorph::io::TexCoords>), String> {
     let (mesh, tex) = PlanarMesh::read_textured(path).map_err(|e| e.to_string())?;
     mesh.validate()
         .map_err(|e| format!("{}: {e}", path.display()))?;
@@ -32,62 +35,172 @@ pub(super) fn progress_bar(len: usize, quiet: bool, what: &str) -> ProgressBar {
     bar
 }
 
+/// Checks the output and solver options that can be checked before reading anything.
+pub(super) fn check_options(out: &OutputArgs, solver: &SolverArgs) -> Result<(), String> {
+    if out.output.is_none() && !out.stats {
+        return Err("nothing to do: give -o OUT, --stats, or both".into());
+    }
+    if solver.tolerance.is_nan() || solver.tolerance <= 0.0 {
+        return Err(format!("--tolerance {} must be positive", solver.tolerance));
+    }
+    if out.fps == 0 {
+        return Err("--fps must be at least 1".into());
+    }
+    Ok(())
+}
+
+/// Reads every mesh (and the first one's texture coordinates) and the texture, warning about
+/// options the output does not use.
+pub(super) fn read_inputs(
+    meshes: &[PathBuf],
+    out: &OutputArgs,
+    plan: Option<&Plan>,
+) -> Result<Inputs, String> {
+    let mut keyframes = Vec::with_capacity(meshes.len());
+    let mut texcoords = None;
+    for (i, path) in meshes.iter().enumerate() {
+        let (mesh, tex) = read(path)?;
+        if i == 0 {
+            texcoords = tex;
+        }
+        keyframes.push(mesh);
+    }
+    let texture = match &out.texture {
+        Some(path) => Some(raster::read_image(path).map_err(|e| e.to_string())?),
+        None => None,
+    };
+    let draws = plan.is_some_and(Plan::draws);
+    if texture.is_some() && !draws && !out.quiet {
+        eprintln!("bdmorph: warning: --texture only affects PNG, GIF and HTML output");
+    }
+    if out.color_by.is_some() && !draws && !out.quiet {
+        eprintln!("bdmorph: warning: --color-by only affects PNG, GIF, SVG and HTML output");
+    }
+    Ok(Inputs {
+        keyframes,
+        texcoords,
+        texture,
+    })
+}
+
+/// The meshes and pictures a command works on.
+pub(super) struct Inputs {
+    /// The keyframes, in order.
+    pub keyframes: Vec<PlanarMesh>,
+    /// The first keyframe's texture coordinates.
+    pub texcoords: Option<TexCoords>,
+    /// The texture image.
+    pub texture: Option<Image>,
+}
+
+/// The solver's options from the command line.
+pub(super) fn morph_options(solver: &SolverArgs) -> MorphOptions {
+    MorphOptions::default()
+        .with_tolerance(solver.tolerance)
+        .with_max_iterations(solver.max_iterations)
+}
+
+/// A set-up error, naming the file of a keyframe that is at fault.
+pub(super) fn setup_error(e: MorphError, meshes: &[PathBuf]) -> String {
+    let names: Vec<String> = meshes.iter().map(|p| p.display().to_string()).collect();
+    match e {
+        MorphError::Keyframe { index, source } => format!(
+            "{}: {source} (compared with {})",
+            names.get(index).map_or("?", String::as_str),
+            names[0]
+        ),
+        other => format!("{}: {other}", names.join(" -> ")),
+    }
+}
+
+/// A morph between two meshes, or a path through several.
+enum Animation {
+    Morph(Morph),
+    Path(Path),
+}
+
+impl Animation {
+    fn frame(&mut self, t: f64) -> Result<bdmorph::Frame<'_>, MorphError> {
+        match self {
+            Animation::Morph(m) => m.frame(t),
+            Animation::Path(p) => p.frame(t),
+        }
+    }
+
+    fn faces(&self) -> &[[u32; 3]] {
+        match self {
+            Animation::Morph(m) => m.faces(),
+            Animation::Path(p) => p.faces(),
+        }
+    }
+}
+
 pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     // Everything that can be checked before computing is checked first: bad input writes
     // nothing.
     let times = times(args.t, args.frames)?;
-    if args.output.is_none() && !args.stats {
-        return Err("nothing to do: give -o OUT, --stats, or both".into());
+    check_options(&args.out, &args.solver)?;
+    let segments = args.meshes.len() - 1;
+    if !args.durations.is_empty() && args.durations.len() != segments {
+        return Err(format!(
+            "--durations: {} values given for {segments} segments (one per pair of consecutive meshes)",
+            args.durations.len()
+        ));
     }
-    if args.tolerance.is_nan() || args.tolerance <= 0.0 {
-        return Err(format!("--tolerance {} must be positive", args.tolerance));
+    if args.easing.len() > 1 && args.easing.len() != segments {
+        return Err(format!(
+            "--easing: given {} times for {segments} segments (give it once, or once per segment)",
+            args.easing.len()
+        ));
     }
-    if args.fps == 0 {
-        return Err("--fps must be at least 1".into());
-    }
-    let plan = match &args.output {
-        Some(path) => Some(Plan::new(path, args.format, times.len())?),
+    let plan = match &args.out.output {
+        Some(path) => Some(Plan::new(path, args.out.format, times.len())?),
         None => None,
     };
-    let (source, texcoords) = read(&args.source)?;
-    let (target, _) = read(&args.target)?;
-    let texture = match &args.texture {
-        Some(path) => Some(raster::read_image(path).map_err(|e| e.to_string())?),
+    let inputs = read_inputs(&args.meshes, &args.out, plan.as_ref())?;
+    let options = morph_options(&args.solver);
+    let program = match &args.solver.program {
+        Some(path) => Some(super::compile::load(
+            path,
+            &args.meshes[0],
+            &inputs.keyframes[0],
+        )?),
         None => None,
     };
-    if texture.is_some() && !plan.as_ref().is_some_and(Plan::draws) && !args.quiet {
-        eprintln!("bdmorph: warning: --texture only affects PNG, GIF and HTML output");
-    }
-    let options = MorphOptions::default()
-        .with_tolerance(args.tolerance)
-        .with_max_iterations(args.max_iterations);
-    let morph = match &args.program {
-        Some(path) => {
-            let program = super::compile::load(path, &args.source, &source)?;
-            Morph::with_program(program, &source, &target, options)
+    let keys = &inputs.keyframes;
+    let as_path = keys.len() > 2 || !args.easing.is_empty() || !args.durations.is_empty();
+    let animation = if as_path {
+        let path_options = PathOptions::default()
+            .with_morph(options)
+            .with_durations(args.durations.clone())
+            .with_easings(args.easing.clone());
+        match program {
+            Some(p) => Path::with_program(p, keys, path_options),
+            None => Path::with_options(keys, path_options),
         }
-        None => Morph::new(&source, &target, options),
+        .map(Animation::Path)
+    } else {
+        match program {
+            Some(p) => Morph::with_program(p, &keys[0], &keys[1], options),
+            None => Morph::new(&keys[0], &keys[1], options),
+        }
+        .map(Animation::Morph)
     };
-    let mut morph = morph.map_err(|e| {
-        format!(
-            "{} -> {}: {e}",
-            args.source.display(),
-            args.target.display()
-        )
-    })?;
+    let mut animation = animation.map_err(|e| setup_error(e, &args.meshes))?;
 
-    let bar = progress_bar(times.len(), args.quiet, "morphing");
+    let colour = args.out.color_by.is_some();
+    let bar = progress_bar(times.len(), args.out.quiet, "morphing");
     let mut frames = Vec::with_capacity(if plan.is_some() { times.len() } else { 0 });
     let mut stdout = std::io::stdout().lock();
     let mut failed = 0usize;
     for (index, &t) in times.iter().enumerate() {
-        let frame = match morph.frame(t) {
+        let frame = match animation.frame(t) {
             Ok(frame) => frame,
             // One frame: its error is the command's. Several: report it, write the others.
             Err(e) if times.len() == 1 => return Err(e.to_string()),
             Err(e) => {
                 failed += 1;
-                if args.stats {
+                if args.out.stats {
                     writeln!(
                         stdout,
                         "{{\"t\":{t},\"error\":\"{}\"}}",
@@ -100,10 +213,10 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
                 continue;
             }
         };
-        if args.stats {
+        if args.out.stats {
             writeln!(stdout, "{}", frame.stats.to_json()).map_err(|e| e.to_string())?;
         }
-        if frame.stats.flipped_triangles > 0 && !args.quiet {
+        if frame.stats.flipped_triangles > 0 && !args.out.quiet {
             bar.suspend(|| {
                 eprintln!(
                     "bdmorph: warning: t = {t}: {} flipped triangles",
@@ -112,7 +225,12 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             });
         }
         if plan.is_some() {
-            frames.push((index, t, frame.positions.to_vec()));
+            frames.push(output::Frame {
+                index,
+                t,
+                positions: frame.positions.to_vec(),
+                distortion: colour.then(|| frame.distortion.to_vec()),
+            });
         }
         bar.inc(1);
     }
@@ -134,45 +252,66 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             plan.path.display()
         ));
     }
-
-    let corner_uv = texture.as_ref().map(|_| {
-        texcoords
-            .clone()
-            .unwrap_or_else(|| source.normalized_texcoords())
-            .corner_uv()
-    });
-    let title = format!(
-        "bdmorph: {} -> {}",
-        args.source.display(),
-        args.target.display()
-    );
-    let look = Look {
-        faces: morph.faces(),
-        texcoords: texcoords.as_ref(),
-        texture: texture.as_ref().zip(corner_uv.as_deref()),
-        size: args.size,
-        fps: args.fps,
-        title: &title,
-    };
-    let bar = progress_bar(frames.len(), args.quiet, "rendering");
-    let files = output::render(&plan, &look, &frames, || bar.inc(1))?;
-    bar.finish_and_clear();
-    output::write(&plan, &files)?;
-    if !args.quiet {
-        if plan.directory {
-            eprintln!("wrote {} files to {}", files.len(), plan.path.display());
-        } else {
-            eprintln!("wrote {}", plan.path.display());
-        }
-    }
+    let names: Vec<String> = args
+        .meshes
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    let title = format!("bdmorph: {}", names.join(" -> "));
+    write_frames(
+        &plan,
+        &args.out,
+        &inputs,
+        animation.faces(),
+        &title,
+        &frames,
+    )?;
     if failed > 0 {
         return Err(failures());
     }
     Ok(())
 }
 
+/// Renders and writes computed frames as `plan` says, then tells where (unless quiet).
+pub(super) fn write_frames(
+    plan: &Plan,
+    out: &OutputArgs,
+    inputs: &Inputs,
+    faces: &[[u32; 3]],
+    title: &str,
+    frames: &[output::Frame],
+) -> Result<(), String> {
+    let corner_uv = inputs.texture.as_ref().map(|_| {
+        inputs
+            .texcoords
+            .clone()
+            .unwrap_or_else(|| inputs.keyframes[0].normalized_texcoords())
+            .corner_uv()
+    });
+    let look = Look {
+        faces,
+        texcoords: inputs.texcoords.as_ref(),
+        texture: inputs.texture.as_ref().zip(corner_uv.as_deref()),
+        size: out.size,
+        fps: out.fps,
+        title,
+    };
+    let bar = progress_bar(frames.len(), out.quiet, "rendering");
+    let files = output::render(plan, &look, frames, || bar.inc(1))?;
+    bar.finish_and_clear();
+    output::write(plan, &files)?;
+    if !out.quiet {
+        if plan.directory {
+            eprintln!("wrote {} files to {}", files.len(), plan.path.display());
+        } else {
+            eprintln!("wrote {}", plan.path.display());
+        }
+    }
+    Ok(())
+}
+
 /// Escapes a message for a JSON string.
-fn json_escape(text: &str) -> String {
+pub(super) fn json_escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {

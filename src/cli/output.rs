@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use bdmorph::io::{self, TexCoords};
-use bdmorph::render::{html, raster, svg, Drawing, Image, ImageSize, Viewport};
+use bdmorph::render::{colour, html, raster, svg, Drawing, Image, ImageSize, Viewport};
 
 /// An output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -108,9 +108,30 @@ pub struct Look<'a> {
     pub title: &'a str,
 }
 
-/// One computed frame: its index among the requested frames (which names its file), its time
-/// and its positions.
-pub type Frame = (usize, f64, Vec<[f64; 2]>);
+/// One computed frame.
+pub struct Frame {
+    /// Its index among the requested frames (which names its file).
+    pub index: usize,
+    /// Its time (NaN for a blend).
+    pub t: f64,
+    /// Its positions.
+    pub positions: Vec<[f64; 2]>,
+    /// The conformal distortion of each triangle, when pictures are coloured by it.
+    pub distortion: Option<Vec<f64>>,
+}
+
+/// Per-frame shades (and the scale's maximum) when frames carry their distortion.
+fn distortion_shading(frames: &[Frame]) -> Option<(Vec<Vec<u8>>, f64)> {
+    if frames.iter().any(|f| f.distortion.is_none()) {
+        return None;
+    }
+    let max = colour::distortion_scale(frames.iter().filter_map(|f| f.distortion.as_deref()));
+    let shades = frames
+        .iter()
+        .map(|f| colour::distortion_shades(f.distortion.as_deref().unwrap_or(&[]), max))
+        .collect();
+    Some((shades, max))
+}
 
 /// Renders every frame into files in memory: `(path, bytes)`.
 pub fn render(
@@ -119,11 +140,22 @@ pub fn render(
     frames: &[Frame],
     mut progress: impl FnMut(),
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
-    let view = Viewport::fit(frames.iter().map(|(_, _, p)| p.as_slice()));
-    let drawing = Drawing {
+    let view = Viewport::fit(frames.iter().map(|f| f.positions.as_slice()));
+    let shading = distortion_shading(frames);
+    let colours: Vec<Option<Vec<[u8; 3]>>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, _)| {
+            shading
+                .as_ref()
+                .map(|(shades, _)| colour::shade_colours(&shades[i]))
+        })
+        .collect();
+    let drawing = |i: usize| Drawing {
         faces: look.faces,
         corner_uv: look.texture.map(|(_, uv)| uv),
         texture: look.texture.map(|(img, _)| img),
+        face_colours: colours[i].as_deref(),
     };
     let name = |i: usize| {
         if plan.directory {
@@ -137,41 +169,45 @@ pub fn render(
     let mut files = Vec::new();
     match plan.format {
         Format::Obj => {
-            for &(i, t, ref pos) in frames {
+            for f in frames {
                 let mut bytes = Vec::new();
-                let t_line = format!("t = {t}");
+                let t_line = if f.t.is_nan() {
+                    String::new()
+                } else {
+                    format!("t = {}", f.t)
+                };
                 io::format_obj_2d_textured(
                     &mut bytes,
-                    pos,
+                    &f.positions,
                     look.faces,
                     look.texcoords,
                     &[look.title, &t_line],
                 )
-                .map_err(|e| format!("{}: {e}", name(i).display()))?;
-                files.push((name(i), bytes));
+                .map_err(|e| format!("{}: {e}", name(f.index).display()))?;
+                files.push((name(f.index), bytes));
                 progress();
             }
         }
         Format::Svg => {
-            for &(i, _, ref pos) in frames {
+            for (i, f) in frames.iter().enumerate() {
                 files.push((
-                    name(i),
-                    svg::svg(pos, &drawing, &view, look.size).into_bytes(),
+                    name(f.index),
+                    svg::svg(&f.positions, &drawing(i), &view, look.size).into_bytes(),
                 ));
                 progress();
             }
         }
         Format::Png => {
-            for &(i, _, ref pos) in frames {
-                let img = raster::render(pos, &drawing, &view, look.size);
-                files.push((name(i), raster::encode_png(&img).map_err(err)?));
+            for (i, f) in frames.iter().enumerate() {
+                let img = raster::render(&f.positions, &drawing(i), &view, look.size);
+                files.push((name(f.index), raster::encode_png(&img).map_err(err)?));
                 progress();
             }
         }
         Format::Gif => {
             let mut images = Vec::with_capacity(frames.len());
-            for (_, _, pos) in frames {
-                images.push(raster::render(pos, &drawing, &view, look.size));
+            for (i, f) in frames.iter().enumerate() {
+                images.push(raster::render(&f.positions, &drawing(i), &view, look.size));
                 progress();
             }
             let delay = (100 / look.fps.clamp(1, 100)) as u16;
@@ -182,14 +218,22 @@ pub fn render(
                 Some((img, _)) => Some(raster::encode_png(img).map_err(err)?),
                 None => None,
             };
-            let refs: Vec<(f64, &[[f64; 2]])> =
-                frames.iter().map(|(_, t, p)| (*t, p.as_slice())).collect();
-            let page = html::html(
+            let refs: Vec<(f64, &[[f64; 2]])> = frames
+                .iter()
+                .map(|f| (f.t, f.positions.as_slice()))
+                .collect();
+            let shading = shading.as_ref().map(|(shades, max)| html::Shading {
+                shades,
+                label: "conformal distortion",
+                max: *max,
+            });
+            let page = html::html_shaded(
                 look.title,
                 &refs,
                 look.faces,
-                drawing.corner_uv,
+                look.texture.map(|(_, uv)| uv),
                 texture_png.as_deref(),
+                shading.as_ref(),
                 &view,
             );
             files.push((name(0), page.into_bytes()));

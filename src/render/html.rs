@@ -34,6 +34,7 @@
 
 use std::fmt::Write;
 
+use super::colour::shade_colour;
 use super::Viewport;
 
 /// A self-contained HTML page animating `frames` (each a time `t` and one position per
@@ -51,6 +52,33 @@ pub fn html(
     faces: &[[u32; 3]],
     corner_uv: Option<&[[[f64; 2]; 3]]>,
     texture_png: Option<&[u8]>,
+    view: &Viewport,
+) -> String {
+    html_shaded(title, frames, faces, corner_uv, texture_png, None, view)
+}
+
+/// Per-frame shades of the triangles for [`html_shaded`], drawn instead of the flat fill and
+/// the texture, with a legend.
+#[derive(Clone, Copy, Debug)]
+pub struct Shading<'a> {
+    /// One shade per face (0 to 255, coloured by [`super::colour::shade_colour`]) for each
+    /// frame; a frame without one face's worth is drawn flat.
+    pub shades: &'a [Vec<u8>],
+    /// What the shades show, for the legend (HTML-escaped).
+    pub label: &'a str,
+    /// The value of the brightest shade; the darkest is 1 (logarithmic scale).
+    pub max: f64,
+}
+
+/// As [`html`], with the triangles of each frame coloured by `shading` when given: the page
+/// then shows a colour bar from 1 to `shading.max` beside the slider (`id="legend"`).
+pub fn html_shaded(
+    title: &str,
+    frames: &[(f64, &[[f64; 2]])],
+    faces: &[[u32; 3]],
+    corner_uv: Option<&[[[f64; 2]; 3]]>,
+    texture_png: Option<&[u8]>,
+    shading: Option<&Shading>,
     view: &Viewport,
 ) -> String {
     let vertices = frames.iter().map(|(_, p)| p.len()).max().unwrap_or(0);
@@ -91,10 +119,32 @@ pub fn html(
          <button id=\"play\" type=\"button\">Play</button>\
          <input id=\"t\" type=\"range\" min=\"0\" max=\"{max}\" step=\"1\" value=\"0\" \
          aria-label=\"frame\"><span id=\"label\"></span>\
-         <label><input id=\"edges\" type=\"checkbox\"{checked}> edges</label></div>\n\
+         <label><input id=\"edges\" type=\"checkbox\"{checked}> edges</label>{legend}</div>\n\
          <div id=\"stage\"><canvas id=\"view\"></canvas></div>\n",
         max = frames.len().saturating_sub(1),
-        checked = if texture.is_some() { "" } else { " checked" },
+        checked = if texture.is_some() && shading.is_none() {
+            ""
+        } else {
+            " checked"
+        },
+        legend = match shading {
+            Some(sh) => {
+                let stops: Vec<String> = (0..=8)
+                    .map(|i| {
+                        let [r, g, b] = shade_colour((i * 255 / 8) as u8);
+                        format!("#{r:02x}{g:02x}{b:02x}")
+                    })
+                    .collect();
+                format!(
+                    "<span id=\"legend\">{label} 1 <span class=\"ramp\" \
+                     style=\"background:linear-gradient(to right,{stops})\"></span> {max}</span>",
+                    label = escape(sh.label),
+                    stops = stops.join(","),
+                    max = number(sh.max),
+                )
+            }
+            None => String::new(),
+        },
     );
     if let Some((_, png)) = texture {
         out.push_str("<img id=\"texture\" hidden alt=\"\" src=\"data:image/png;base64,");
@@ -144,6 +194,32 @@ pub fn html(
     } else {
         out.push_str("null");
     }
+    out.push_str(",\nshades: ");
+    match shading {
+        Some(sh) => {
+            out.push_str("[\n");
+            for i in 0..frames.len() {
+                out.push('"');
+                if let Some(frame) = sh.shades.get(i).filter(|s| s.len() == faces.len()) {
+                    bytes.clear();
+                    bytes.extend(kept.iter().map(|&f| frame[f]));
+                    base64_into(&mut out, &bytes);
+                }
+                out.push_str("\",\n");
+            }
+            out.push_str("],\npalette: [");
+            for s in 0..=255u8 {
+                let [r, g, b] = shade_colour(s);
+                let _ = write!(
+                    out,
+                    "{}\"#{r:02x}{g:02x}{b:02x}\"",
+                    if s > 0 { "," } else { "" }
+                );
+            }
+            out.push(']');
+        }
+        None => out.push_str("null,\npalette: null"),
+    }
     out.push_str(",\nframes: [\n");
     for (i, (_, positions)) in frames.iter().enumerate() {
         bytes.clear();
@@ -182,7 +258,9 @@ input{accent-color:#555}\
 #t{flex:1;min-width:60px}\
 #label{font-variant-numeric:tabular-nums;white-space:nowrap}\
 #stage{flex:1;min-height:0;display:flex;align-items:center;justify-content:center}\
-canvas{display:block}";
+canvas{display:block}\
+#legend{display:flex;align-items:center;gap:4px;white-space:nowrap}\
+.ramp{display:inline-block;width:90px;height:10px;border:1px solid #888}";
 
 /// The viewer; reads `DATA`.
 const SCRIPT: &str = r##"(function () {
@@ -213,6 +291,12 @@ const SCRIPT: &str = r##"(function () {
   const NV = DATA.vertices, NT = DATA.frames.length;
   const F = uints(DATA.faces), NF = F.length / 3;
   const UV = DATA.uv === null ? null : floats(DATA.uv);
+  const SHADES = DATA.shades, decodedShades = new Array(NT);
+  function shades(i) {
+    if (SHADES === null || SHADES[i] === undefined || SHADES[i].length === 0) return null;
+    if (!decodedShades[i]) decodedShades[i] = bytes(SHADES[i]);
+    return decodedShades[i].length === NF ? decodedShades[i] : null;
+  }
   const decoded = new Array(NT);
   function positions(i) {
     if (!decoded[i]) decoded[i] = floats(DATA.frames[i]);
@@ -299,15 +383,21 @@ const SCRIPT: &str = r##"(function () {
         X[v] = 0.5 * W + s * P[2 * v];
         Y[v] = 0.5 * H - s * P[2 * v + 1]; // world y up, screen y down
       }
-      const textured = textureReady();
+      const S = shades(frame);
+      const textured = S === null && textureReady();
       const good = new Path2D(), bad = new Path2D(), lines = new Path2D();
+      const buckets = S === null ? null : new Map();
       for (let f = 0; f < NF; f++) {
         const a = F[3 * f], b = F[3 * f + 1], c = F[3 * f + 2];
         if (!(Number.isFinite(X[a] + Y[a] + X[b] + Y[b] + X[c] + Y[c]))) continue;
         // Signed area in world coordinates: non-positive means flipped.
         const ax = P[2 * a], ay = P[2 * a + 1];
         const area = (P[2 * b] - ax) * (P[2 * c + 1] - ay) - (P[2 * c] - ax) * (P[2 * b + 1] - ay);
-        const path = area > 0 ? good : bad;
+        let path = area > 0 ? good : bad;
+        if (area > 0 && S !== null) {
+          path = buckets.get(S[f]);
+          if (path === undefined) { path = new Path2D(); buckets.set(S[f], path); }
+        }
         if (area > 0 && textured && texturedTriangle(f, a, b, c, dpr)) {
           // drawn
         } else {
@@ -323,6 +413,12 @@ const SCRIPT: &str = r##"(function () {
       }
       ctx.fillStyle = "#9cc1ec";
       ctx.fill(good);
+      if (buckets !== null) {
+        for (const [shade, path] of buckets) {
+          ctx.fillStyle = DATA.palette[shade];
+          ctx.fill(path);
+        }
+      }
       ctx.fillStyle = "#e0201b";
       ctx.fill(bad);
       if (edges.checked) {

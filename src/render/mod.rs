@@ -3,6 +3,7 @@
 //! All renderers share the types here. A [`Viewport`] is fixed for a whole animation (fit to
 //! every frame), so frames line up; world `y` points up, image `y` down.
 
+pub mod colour;
 pub mod html;
 pub mod raster;
 pub mod svg;
@@ -18,6 +19,10 @@ pub struct Drawing<'a> {
     pub corner_uv: Option<&'a [[[f64; 2]; 3]]>,
     /// The texture, drawn through `corner_uv` (ignored without it).
     pub texture: Option<&'a Image>,
+    /// A fill colour per face (parallel to `faces`), instead of the flat fill and the
+    /// texture; ignored when its length differs from the number of faces. See
+    /// [`colour`] for colouring by distortion.
+    pub face_colours: Option<&'a [[u8; 3]]>,
 }
 
 /// An RGBA8 image, rows top to bottom, not premultiplied.

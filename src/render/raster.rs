@@ -11,7 +11,7 @@
 //! use bdmorph::render::{raster, Drawing, ImageSize, Viewport};
 //!
 //! let mesh = generate::disk(4, 0.0);
-//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None };
+//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None };
 //! let view = Viewport::fit([&mesh.positions[..]]);
 //! let size = ImageSize { width: 64, height: 48 };
 //! let image = raster::render(&mesh.positions, &drawing, &view, size);
@@ -244,6 +244,16 @@ fn fill_union<'a>(
     }
 }
 
+/// Fills the unflipped triangles with their face's colour, one path per colour (so
+/// neighbours of one colour leave no seams).
+fn fill_by_colour(pixmap: &mut Pixmap, triangles: &[PixelTriangle], colours: &[[u8; 3]]) {
+    let mut order: Vec<&PixelTriangle> = triangles.iter().filter(|t| !t.flipped).collect();
+    order.sort_by_key(|t| colours[t.face]);
+    for group in order.chunk_by(|a, b| colours[a.face] == colours[b.face]) {
+        fill_union(pixmap, group.iter().copied(), colours[group[0].face]);
+    }
+}
+
 /// Strokes every edge once (shared edges are not drawn twice), 1 px wide and anti-aliased.
 /// When the mesh is so dense that edges would hide the fills, they fade.
 fn stroke_edges(pixmap: &mut Pixmap, triangles: &[PixelTriangle], faces: &[[u32; 3]]) {
@@ -412,7 +422,8 @@ fn fill_textured(
 /// the affine map its corners define; otherwise triangles are light blue with dark blue,
 /// 1 px, anti-aliased edges (fading when the median edge is shorter than 12 px, so a dense
 /// mesh does not turn solid blue). Flipped triangles (world signed area zero or negative) are
-/// filled red on top in both cases. Faces with out-of-range vertex indices or non-finite (or
+/// filled red on top in both cases. With per-face colours (one per face), triangles are
+/// filled with those instead of the flat fill or the texture, with edges. Faces with out-of-range vertex indices or non-finite (or
 /// beyond 10^7 px) positions are skipped. A texture whose `corner_uv` length differs from the
 /// number of faces is ignored.
 ///
@@ -441,12 +452,16 @@ pub fn render(
         }
         _ => None,
     };
-    match &textured {
-        Some((texture, uv)) => fill_textured(&mut pixmap, &triangles, uv, texture),
-        None => fill_union(&mut pixmap, triangles.iter().filter(|t| !t.flipped), FILL),
+    let coloured = drawing
+        .face_colours
+        .filter(|c| c.len() == drawing.faces.len());
+    match (coloured, &textured) {
+        (Some(colours), _) => fill_by_colour(&mut pixmap, &triangles, colours),
+        (None, Some((texture, uv))) => fill_textured(&mut pixmap, &triangles, uv, texture),
+        (None, None) => fill_union(&mut pixmap, triangles.iter().filter(|t| !t.flipped), FILL),
     }
     fill_union(&mut pixmap, triangles.iter().filter(|t| t.flipped), FLIPPED);
-    if textured.is_none() {
+    if textured.is_none() || coloured.is_some() {
         stroke_edges(&mut pixmap, &triangles, drawing.faces);
     }
     Image {
@@ -807,6 +822,7 @@ mod tests {
             faces,
             corner_uv: None,
             texture: None,
+            face_colours: None,
         }
     }
 
@@ -923,6 +939,7 @@ mod tests {
             faces: &faces,
             corner_uv: Some(&uv),
             texture: Some(&texture),
+            face_colours: None,
         };
         let img = render(&pos, &drawing, &VIEW, SIZE);
         for (p, rgb) in [
@@ -951,6 +968,7 @@ mod tests {
             faces: &faces,
             corner_uv: Some(&uv),
             texture: Some(&grey),
+            face_colours: None,
         };
         let img = render(&pos, &drawing, &VIEW, SIZE);
         // Every pixel with its centre inside the square, the diagonal included, is the

@@ -10,14 +10,14 @@
 //! use bdmorph::render::{svg::svg, Drawing, ImageSize, Viewport};
 //!
 //! let mesh = generate::disk(2, 0.0);
-//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None };
+//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None };
 //! let view = Viewport::fit([&mesh.positions[..]]);
 //! let doc = svg(&mesh.positions, &drawing, &view, ImageSize { width: 120, height: 90 });
 //! assert!(doc.starts_with("<svg"));
 //! assert_eq!(doc.matches("<polygon").count(), mesh.faces.len());
 //! ```
 
-use super::raster::{pixel_triangles, EDGE, FILL, FLIPPED};
+use super::raster::{pixel_triangles, PixelTriangle, EDGE, FILL, FLIPPED};
 use super::{Drawing, ImageSize, Viewport};
 use std::fmt::Write;
 
@@ -49,7 +49,8 @@ fn hex([r, g, b]: [u8; 3]) -> String {
 /// with a 1 px dark blue outline. Coordinates have at most two decimals. Faces with
 /// out-of-range vertex indices or non-finite positions are left out.
 ///
-/// Textures are ignored: SVG output is always untextured.
+/// Textures are ignored: SVG output is always untextured. With per-face colours (one per
+/// face), unflipped triangles are grouped by their colour instead of the flat fill.
 pub fn svg(positions: &[[f64; 2]], drawing: &Drawing, view: &Viewport, size: ImageSize) -> String {
     let (w, h) = (size.width, size.height);
     let mut out = String::with_capacity(200 + 40 * drawing.faces.len());
@@ -59,9 +60,24 @@ pub fn svg(positions: &[[f64; 2]], drawing: &Drawing, view: &Viewport, size: Ima
     );
     let _ = writeln!(out, r##"<rect width="{w}" height="{h}" fill="#ffffff"/>"##);
     let triangles: Vec<_> = pixel_triangles(positions, drawing.faces, view, size).collect();
-    for (flipped, fill) in [(false, FILL), (true, FLIPPED)] {
-        let mut group = triangles.iter().filter(|t| t.flipped == flipped).peekable();
-        if group.peek().is_none() {
+    let coloured = drawing
+        .face_colours
+        .filter(|c| c.len() == drawing.faces.len());
+    // Groups of one fill: unflipped triangles by colour, then the flipped ones.
+    let mut groups: Vec<([u8; 3], Vec<&PixelTriangle>)> = Vec::new();
+    match coloured {
+        Some(colours) => {
+            let mut order: Vec<&PixelTriangle> = triangles.iter().filter(|t| !t.flipped).collect();
+            order.sort_by_key(|t| colours[t.face]);
+            for group in order.chunk_by(|a, b| colours[a.face] == colours[b.face]) {
+                groups.push((colours[group[0].face], group.to_vec()));
+            }
+        }
+        None => groups.push((FILL, triangles.iter().filter(|t| !t.flipped).collect())),
+    }
+    groups.push((FLIPPED, triangles.iter().filter(|t| t.flipped).collect()));
+    for (fill, group) in groups {
+        if group.is_empty() {
             continue;
         }
         let _ = writeln!(
@@ -123,6 +139,7 @@ mod tests {
             faces: &faces,
             corner_uv: None,
             texture: None,
+            face_colours: None,
         };
         let view = Viewport {
             min: [-0.25, -0.25],
@@ -173,6 +190,7 @@ mod tests {
             faces: &faces,
             corner_uv: None,
             texture: None,
+            face_colours: None,
         };
         let textured = Drawing {
             corner_uv: Some(&uv),

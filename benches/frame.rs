@@ -18,6 +18,8 @@
 //! - `solve`: one solve with that factor ([`Vm::solve`]), the unit of work of a conjugate-
 //!   gradient iteration;
 //! - `embed`: the layout ([`Vm::embed`]);
+//! - `distortion`: every triangle's conformal distortion from the source
+//!   ([`RestShape::distortion_into`]), which every frame computes for its statistics;
 //! - `warm_frame`: one frame of a sweep `t = 0, 0.1, ..., 1, 0.9, ..., 0` repeated, each frame
 //!   warm-started from the previous ones ([`Morph::frame_into`], default options: extrapolated
 //!   starts, reused factors); `warm_frame_plain` the same with both levers off (a factorisation
@@ -33,6 +35,7 @@ use std::cell::OnceCell;
 use std::hint::black_box;
 use std::time::Duration;
 
+use bdmorph::distortion::RestShape;
 use bdmorph::reference::{self, Unknowns};
 use bdmorph::{generate, Morph, MorphOptions, NewtonOptions, PlanarMesh, Vm};
 use criterion::measurement::WallTime;
@@ -272,6 +275,22 @@ fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
     group.finish();
 }
 
+/// The per-frame conformal distortion of every triangle (part of every frame since the
+/// distortion reports), against the warm frame it is part of.
+fn bench_distortion(c: &mut Criterion, cases: &mut [Case]) {
+    let mut group = c.benchmark_group("distortion");
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let m = case.meshes();
+            let rest = RestShape::new(&m.source.positions, &m.source.faces);
+            let mut out = vec![0.0; m.source.faces.len()];
+            b.iter(|| rest.distortion_into(black_box(&m.target.positions), &mut out));
+        });
+    }
+    group.finish();
+}
+
 /// Times along the sweep 0, 0.1, ..., 1, 0.9, ..., 0.1 (then again from 0).
 fn sweep() -> Vec<f64> {
     (0..=10)
@@ -378,6 +397,7 @@ fn benches(c: &mut Criterion) {
     bench_symbolic(c, &mut cases);
     bench_iteration_stream(c, &mut cases);
     bench_factorization(c, &mut cases);
+    bench_distortion(c, &mut cases);
     bench_warm_frame(c, &mut cases);
 }
 

@@ -10,6 +10,11 @@
 //! streams that a VM ([`bdmorph_vm`]) executes every Newton iteration, with the Hessian's
 //! symbolic Cholesky factorisation computed once per mesh.
 //!
+//! Beyond two poses, [`Blend`] mixes any number of keyframes by weights and [`Path`] walks
+//! through them in order (with durations and [`Easing`] curves); all three extrapolate
+//! slightly outside their range while the metric stays Euclidean, and report every frame's
+//! conformal distortion from the first keyframe ([`distortion`]).
+//!
 //! ```
 //! use bdmorph::{generate, Morph, MorphOptions};
 //! let source = generate::disk(10, 0.2);

@@ -431,3 +431,61 @@ fn distortion_never_exceeds_the_targets_on_the_man_poses() {
         );
     }
 }
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        /// Any weights summing to 1 give either a converged frame (without flips inside the
+        /// simplex) or the typed extrapolation error whose limit lies between the nearest
+        /// simplex point and the weights; never another error or a panic.
+        #[test]
+        fn any_weights_give_a_frame_or_a_named_limit(
+            raw in proptest::collection::vec(-0.6f64..1.2, 3),
+        ) {
+            let keys = poses();
+            let mut blend = Blend::new(&keys).expect("blend");
+            let shift = (1.0 - raw.iter().sum::<f64>()) / 3.0;
+            let w: Vec<f64> = raw.iter().map(|x| x + shift).collect();
+            match blend.frame_weights(&w) {
+                Ok(f) => {
+                    prop_assert!(f.stats.gradient_norm < 1e-10);
+                    if w.iter().all(|&x| x >= 0.0) {
+                        prop_assert_eq!(f.stats.flipped_triangles, 0);
+                    }
+                }
+                Err(MorphError::MetricBreaks { face, limit: FrameAt::Weights(limit), .. }) => {
+                    prop_assert!(w.iter().any(|&x| x < 0.0));
+                    prop_assert!(!euclidean(blended_face(&keys, &w, face)));
+                    prop_assert!((limit.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+                    // Every weight of the limit lies between its simplex point's and w's.
+                    for (l, x) in limit.iter().zip(&w) {
+                        prop_assert!(*l >= x.min(0.0) - 1e-12 && *l <= x.max(1.0) + 1e-12);
+                    }
+                }
+                Err(e) => prop_assert!(false, "{w:?}: {e}"),
+            }
+        }
+
+        /// Any finite t gives a frame or a limit between the nearer of 0 and 1 and t.
+        #[test]
+        fn any_time_gives_a_frame_or_a_limit_on_the_way(t in -3.0f64..4.0) {
+            let a = generate::disk(6, 0.2);
+            let b = generate::bend(&generate::stretch(&a, 1.8), 0.5);
+            let mut m = Morph::new(&a, &b, MorphOptions::default()).expect("morph");
+            match m.frame(t) {
+                Ok(f) => prop_assert!(f.stats.gradient_norm < 1e-10),
+                Err(MorphError::MetricBreaks { limit: FrameAt::Time(limit), .. }) => {
+                    prop_assert!(!(0.0..=1.0).contains(&t));
+                    let near = t.clamp(0.0, 1.0);
+                    prop_assert!((limit - near) * (t - near) > 0.0, "limit {limit}, t {t}");
+                    prop_assert!((limit - near).abs() < (t - near).abs());
+                }
+                Err(e) => prop_assert!(false, "t = {t}: {e}"),
+            }
+        }
+    }
+}

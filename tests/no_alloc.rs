@@ -3,7 +3,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use bdmorph::{generate, Morph, MorphOptions, NewtonOptions, Vm};
+use bdmorph::{generate, Blend, Easing, Morph, MorphOptions, NewtonOptions, Path, PathOptions, Vm};
 
 struct Counting;
 
@@ -76,4 +76,29 @@ fn newton_iterations_and_frames_do_not_allocate() {
     let during = allocations() - before;
     assert!(iterations > 0);
     assert_eq!(during, 0, "{during} allocations over 18 frames");
+
+    // Blends (including weights slightly outside the simplex, which are checked triangle by
+    // triangle) and eased paths across segment boundaries.
+    let keys = [a.clone(), b.clone(), generate::stretch(&a, 1.5)];
+    let mut blend = Blend::new(&keys).expect("blend");
+    blend
+        .frame_weights_into(&[0.2, 0.3, 0.5], &mut out)
+        .expect("warm-up");
+    let mut path = Path::with_options(&keys, PathOptions::default().with_easing(Easing::EaseInOut))
+        .expect("path");
+    path.frame_into(0.0, &mut out).expect("warm-up");
+    let before = allocations();
+    for i in 0..=10 {
+        let x = f64::from(i) / 10.0;
+        blend
+            .frame_weights_into(&[0.1 - 0.15 * x, 0.45 + 0.15 * x, 0.45], &mut out)
+            .expect("blend frame");
+        path.frame_into(x, &mut out).expect("path frame");
+        path.frame(x * 0.5).expect("path frame");
+    }
+    let during = allocations() - before;
+    assert_eq!(
+        during, 0,
+        "{during} allocations over 33 blend and path frames"
+    );
 }

@@ -13,6 +13,7 @@
 
 use std::f64::consts::TAU;
 
+use crate::io::SurfaceMesh;
 use crate::mesh::PlanarMesh;
 
 /// A number in [-1, 1) from an integer, by a fixed hash (SplitMix64).
@@ -339,6 +340,113 @@ pub fn wave(mesh: &PlanarMesh, amount: f64) -> PlanarMesh {
         }
         q
     })
+}
+
+/// A unit sphere: the icosahedron subdivided `subdivisions` times (each triangle into four),
+/// vertices projected onto the sphere; `10 · 4^s + 2` vertices, outward-facing triangles.
+/// Vertex 0 is `(0, 1, φ)` normalised, as in the usual icosahedron.
+pub fn icosphere(subdivisions: u32) -> SurfaceMesh {
+    let phi = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut positions: Vec<[f64; 3]> = [
+        [-1.0, phi, 0.0],
+        [1.0, phi, 0.0],
+        [-1.0, -phi, 0.0],
+        [1.0, -phi, 0.0],
+        [0.0, -1.0, phi],
+        [0.0, 1.0, phi],
+        [0.0, -1.0, -phi],
+        [0.0, 1.0, -phi],
+        [phi, 0.0, -1.0],
+        [phi, 0.0, 1.0],
+        [-phi, 0.0, -1.0],
+        [-phi, 0.0, 1.0],
+    ]
+    .iter()
+    .map(|&p| normalize(p))
+    .collect();
+    let mut faces: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..subdivisions {
+        let mut midpoint = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, positions: &mut Vec<[f64; 3]>| -> u32 {
+            *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (p, q) = (positions[a as usize], positions[b as usize]);
+                positions.push(normalize([p[0] + q[0], p[1] + q[1], p[2] + q[2]]));
+                (positions.len() - 1) as u32
+            })
+        };
+        let mut next = Vec::with_capacity(4 * faces.len());
+        for &[a, b, c] in &faces {
+            let (ab, bc, ca) = (
+                mid(a, b, &mut positions),
+                mid(b, c, &mut positions),
+                mid(c, a, &mut positions),
+            );
+            next.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        faces = next;
+    }
+    SurfaceMesh {
+        positions,
+        faces,
+        texcoords: None,
+    }
+}
+
+/// The part of [`icosphere`] with `z >= z_min`, re-indexed: a spherical cap (a hemisphere for
+/// `z_min = 0`), a disk-topology surface with a boundary. Faces with any vertex below `z_min`
+/// are dropped.
+pub fn sphere_cap(subdivisions: u32, z_min: f64) -> SurfaceMesh {
+    let sphere = icosphere(subdivisions);
+    let keep: Vec<bool> = sphere
+        .positions
+        .iter()
+        .map(|p| p[2] >= z_min - 1e-12)
+        .collect();
+    let mut index = vec![u32::MAX; sphere.positions.len()];
+    let mut positions = Vec::new();
+    for (v, p) in sphere.positions.iter().enumerate() {
+        if keep[v] {
+            index[v] = positions.len() as u32;
+            positions.push(*p);
+        }
+    }
+    let faces = sphere
+        .faces
+        .iter()
+        .filter(|f| f.iter().all(|&v| keep[v as usize]))
+        .map(|f| f.map(|v| index[v as usize]))
+        .collect();
+    SurfaceMesh {
+        positions,
+        faces,
+        texcoords: None,
+    }
+}
+
+fn normalize(p: [f64; 3]) -> [f64; 3] {
+    let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+    [p[0] / n, p[1] / n, p[2] / n]
 }
 
 #[cfg(test)]

@@ -40,6 +40,7 @@
 pub mod blend;
 pub mod distortion;
 pub mod generate;
+pub mod geodesic;
 pub mod info;
 pub mod io;
 mod keyframes;
@@ -53,6 +54,7 @@ pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
 pub use bdmorph_isa::{disassemble, LoadError, MeshKey, Program};
 pub use bdmorph_vm::{NewtonOptions, TriangleReport, Vm, VmError};
 pub use blend::Blend;
+pub use io::SurfaceMesh;
 pub use mesh::{MeshError, PlanarMesh};
 pub use morph::{Frame, FrameAt, FrameStats, Morph, MorphError, MorphOptions};
 pub use path::{Easing, Path, PathOptions};

@@ -691,3 +691,111 @@ fn pictures_can_be_coloured_by_distortion() {
     let plain = String::from_utf8(picture("plain.html", false)).expect("utf8");
     assert!(!plain.contains("id=\"legend\"") && plain.contains("shades: null"));
 }
+
+fn write_surface(dir: &Path, name: &str, mesh: &bdmorph::SurfaceMesh) -> PathBuf {
+    let mut text = String::new();
+    for p in &mesh.positions {
+        text.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+    }
+    for f in &mesh.faces {
+        text.push_str(&format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1));
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("write");
+    path
+}
+
+#[test]
+fn geodesic_writes_distances_columns_and_pictures() {
+    let dir = scratch("geodesic");
+    let sphere = generate::icosphere(2);
+    let n = sphere.positions.len();
+    let mesh = write_surface(&dir, "sphere.obj", &sphere);
+    // One field: one value per line, zero at the sources.
+    let out = dir.join("d.txt");
+    run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--source", "0", "--source", "5", "-o"])
+            .arg(&out),
+    );
+    let values: Vec<f64> = std::fs::read_to_string(&out)
+        .expect("written")
+        .lines()
+        .map(|l| l.parse().expect("a number"))
+        .collect();
+    assert_eq!(values.len(), n);
+    assert_eq!((values[0], values[5]), (0.0, 0.0));
+    assert!(values.iter().all(|d| (0.0..3.3).contains(d)));
+    // One column per source.
+    let out = dir.join("each.txt");
+    let r = run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--each-source", "0,5,7", "--stats", "-o"])
+            .arg(&out),
+    );
+    let text = std::fs::read_to_string(&out).expect("written");
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .map(|l| l.split(' ').map(|x| x.parse().expect("a number")).collect())
+        .collect();
+    assert_eq!(rows.len(), n);
+    assert!(rows.iter().all(|r| r.len() == 3));
+    assert_eq!((rows[0][0], rows[5][1], rows[7][2]), (0.0, 0.0, 0.0));
+    // The nearest-source field is close to the minimum of the columns (within about an
+    // edge, 0.3 on this coarse sphere, along the ridge where the sources are equally near).
+    let mut mean = 0.0;
+    for (v, row) in rows.iter().enumerate() {
+        let nearest = row[0].min(row[1]);
+        assert!((values[v] - nearest).abs() < 0.5, "vertex {v}");
+        mean += (values[v] - nearest).abs() / n as f64;
+    }
+    assert!(mean < 0.1, "mean difference {mean}");
+    let stats = String::from_utf8(r.stdout).expect("utf8");
+    assert!(
+        stats.contains("\"fields\":3") && stats.contains("\"setup_seconds\":"),
+        "{stats}"
+    );
+    // Pictures.
+    for name in ["d.png", "d.html"] {
+        let out = dir.join(name);
+        run_ok(
+            bin()
+                .arg("geodesic")
+                .arg(&mesh)
+                .args(["--source", "0", "--size", "160x120", "-o"])
+                .arg(&out),
+        );
+        let bytes = std::fs::read(&out).expect("written");
+        if name.ends_with(".png") {
+            let img = bdmorph::render::raster::decode_image(&bytes).expect("a PNG");
+            assert_eq!((img.width, img.height), (160, 120));
+        } else {
+            let page = String::from_utf8(bytes).expect("utf8");
+            assert!(page.contains("<figure><img") && page.contains("Isolines every"));
+        }
+    }
+    // Errors: a vertex that does not exist, an unknown extension, no source.
+    for (args, says) in [
+        (&["--source", "9999", "-o", "x.txt"][..], "does not exist"),
+        (
+            &["--source", "0", "-o", "x.obj"][..],
+            "unknown output extension",
+        ),
+        (&["-o", "x.txt"][..], "--source"),
+    ] {
+        let r = bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8(r.stderr).expect("utf8");
+        assert!(!r.status.success() && err.contains(says), "{args:?}: {err}");
+    }
+    assert!(!dir.join("x.txt").exists());
+}

@@ -3,6 +3,7 @@
 mod blend;
 mod compile;
 mod demo;
+mod geodesic;
 mod info;
 mod morph;
 mod output;
@@ -82,6 +83,26 @@ enum Command {
     ///   bdmorph blend man.obj man2.obj man3.obj --weights 0.1,0.4,0.5 --stats
     #[command(verbatim_doc_comment)]
     Blend(BlendArgs),
+    /// Geodesic distances on a 3D triangle mesh by the heat method.
+    ///
+    /// The mesh (OBJ or OFF, any triangle mesh: closed, with boundaries, several pieces) is
+    /// prepared once (intrinsic Delaunay triangulation, cotan Laplacian, two Cholesky
+    /// factorisations); each field is then two back-substitutions. Vertices are 0-based.
+    ///
+    /// --source V (repeatable): one field, the distance to the nearest source, written one
+    /// value per line in vertex order. --each-source V1,V2,...: one field per source, one line
+    /// per vertex with one column per source, separated by spaces. Vertices on pieces of the
+    /// mesh without a source are `inf`. -o OUT.png draws the field(s) as a colour map with
+    /// isolines (an orthographic view along the mesh's thinnest direction; one picture per
+    /// field, side by side); -o OUT.html puts the same pictures in a page.
+    ///
+    /// Examples:
+    ///   bdmorph geodesic camelhead.off --source 0 -o distance.txt
+    ///   bdmorph geodesic camelhead.off --source 0 --source 500 -o nearest.png
+    ///   bdmorph geodesic sphere.obj --each-source 0,10,20 -o fields.txt
+    ///   bdmorph geodesic bunny.off --source 0 --stats -o bunny.html
+    #[command(verbatim_doc_comment)]
+    Geodesic(GeodesicArgs),
     /// Compile a mesh's triangles once into a program file, for `morph --program`.
     ///
     /// SOURCE is read and checked as `morph` does, and its connectivity is compiled into the
@@ -227,6 +248,51 @@ fn parse_easing(text: &str) -> Result<Easing, String> {
 }
 
 #[derive(Args, Debug)]
+struct GeodesicArgs {
+    /// The mesh (OBJ or OFF).
+    mesh: PathBuf,
+    /// A source vertex (0-based); give several for the distance to the nearest.
+    #[arg(long = "source", value_name = "V", conflicts_with = "each_source")]
+    sources: Vec<u32>,
+    /// One field per source vertex.
+    #[arg(long = "each-source", value_name = "V1,V2,...", value_delimiter = ',')]
+    each_source: Vec<u32>,
+    /// Output: .txt (distances), .png or .html (pictures).
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// The heat flows for t = M h^2, h the mean edge length.
+    #[arg(long, value_name = "M", default_value_t = 1.0)]
+    time_factor: f64,
+    /// Boundary conditions of the heat flow on meshes with a boundary.
+    #[arg(long, value_enum, value_name = "BC", default_value = "neumann")]
+    boundary: BoundaryArg,
+    /// Build the operators on the mesh's own triangles, not its intrinsic Delaunay
+    /// triangulation (less accurate on poor triangles).
+    #[arg(long)]
+    no_intrinsic_delaunay: bool,
+    /// Picture size for PNG and HTML output, as WxH (per field).
+    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    size: ImageSize,
+    /// Print set-up and query times and counts as one JSON object on stdout.
+    #[arg(long)]
+    stats: bool,
+    /// Print nothing but errors (and --stats).
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// Boundary conditions, on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum BoundaryArg {
+    /// Zero flux.
+    Neumann,
+    /// Zero heat.
+    Dirichlet,
+    /// The mean of both (a third back-substitution per field).
+    Average,
+}
+
+#[derive(Args, Debug)]
 struct CompileArgs {
     /// The mesh to compile (OBJ or OFF): a counter-clockwise planar disk.
     source: PathBuf,
@@ -270,6 +336,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Morph(args) => morph::run(args),
         Command::Blend(args) => blend::run(args),
+        Command::Geodesic(args) => geodesic::run(args),
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),

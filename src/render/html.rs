@@ -514,6 +514,46 @@ const SCRIPT: &str = r##"(function () {
 })();
 "##;
 
+/// A self-contained page of still pictures (PNG files' bytes), each with a caption, under a
+/// title and a line of legend: for fields drawn by [`super::surface::render_field`]. No
+/// script; captions, title and legend are HTML-escaped.
+///
+/// ```
+/// use bdmorph::render::html::picture_page;
+/// let page = picture_page("t", "0 <- distance -> 1", &[("source 0".into(), vec![1, 2, 3])]);
+/// assert!(page.contains("<figcaption>source 0</figcaption>"));
+/// assert!(page.contains("data:image/png;base64,AQID"));
+/// ```
+pub fn picture_page(title: &str, legend: &str, pictures: &[(String, Vec<u8>)]) -> String {
+    let title = escape(title);
+    let mut out = String::with_capacity(
+        4096 + pictures
+            .iter()
+            .map(|p| p.1.len() * 4 / 3 + 200)
+            .sum::<usize>(),
+    );
+    out.push_str(HEAD);
+    let _ = write!(
+        out,
+        "<title>{title}</title>\n<style>body{{margin:16px;font:14px system-ui,sans-serif;color:#222}}\
+         figure{{display:inline-block;margin:0 16px 16px 0}}img{{max-width:100%;border:1px solid #ddd}}\
+         .ramp{{display:inline-block;width:140px;height:10px;border:1px solid #888;vertical-align:middle}}</style>\n\
+         </head>\n<body>\n<h1 style=\"font-size:18px\">{title}</h1>\n<p id=\"legend\">{legend}</p>\n",
+        legend = escape(legend),
+    );
+    for (caption, png) in pictures {
+        out.push_str("<figure><img alt=\"\" src=\"data:image/png;base64,");
+        base64_into(&mut out, png);
+        let _ = writeln!(
+            out,
+            "\"><figcaption>{}</figcaption></figure>",
+            escape(caption)
+        );
+    }
+    out.push_str("</body>\n</html>\n");
+    out
+}
+
 /// A number for a script: the shortest text that reads back exactly, `null` if not finite.
 fn number(x: f64) -> String {
     if x.is_finite() {

@@ -6,6 +6,7 @@
 pub mod colour;
 pub mod html;
 pub mod raster;
+pub mod surface;
 pub mod svg;
 
 /// What to draw besides the positions: the triangles and, optionally, a texture mapped through

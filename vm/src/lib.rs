@@ -46,6 +46,7 @@ pub mod kernel;
 pub mod lobachevsky;
 mod newton;
 mod plan;
+pub mod sparse;
 
 pub use bdmorph_isa::Program;
 pub use error::VmError;

@@ -197,7 +197,7 @@ pub(crate) fn analyse(
 /// workspace per thread on first use (twice the L3 cache's size; its packing differs for
 /// products of at most 48 rows and of more). Two small products here make that allocation
 /// on the thread that builds the VM rather than in its first Newton iteration.
-fn warm_up_dense_kernels() {
+pub(crate) fn warm_up_dense_kernels() {
     let b = Mat::<f64>::zeros(64, 64);
     for rows in [32, 64] {
         let a = Mat::<f64>::zeros(rows, 64);

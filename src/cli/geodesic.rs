@@ -1,0 +1,187 @@
+//! `bdmorph geodesic MESH --source V ... -o OUT`.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use bdmorph::geodesic::{Boundary, HeatGeodesics, HeatOptions};
+use bdmorph::render::{html, raster, surface, Image};
+
+use super::{BoundaryArg, GeodesicArgs};
+
+/// What `-o` asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Output {
+    Text,
+    Png,
+    Html,
+}
+
+fn output_kind(path: &Path) -> Result<Output, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        None | Some("txt") => Ok(Output::Text),
+        Some("png") => Ok(Output::Png),
+        Some("html" | "htm") => Ok(Output::Html),
+        Some(other) => Err(format!(
+            "{}: unknown output extension '.{other}' (use .txt, .png or .html)",
+            path.display()
+        )),
+    }
+}
+
+pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
+    let each = !args.each_source.is_empty();
+    let sources = if each {
+        &args.each_source
+    } else {
+        &args.sources
+    };
+    if sources.is_empty() {
+        return Err("give --source V (repeatable) or --each-source V1,V2,...".into());
+    }
+    if args.output.is_none() && !args.stats {
+        return Err("nothing to do: give -o OUT, --stats, or both".into());
+    }
+    let kind = match &args.output {
+        Some(path) => Some(output_kind(path)?),
+        None => None,
+    };
+    let mesh = bdmorph::io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
+    if let Some(&v) = sources
+        .iter()
+        .find(|&&v| v as usize >= mesh.positions.len())
+    {
+        return Err(format!(
+            "{}: source vertex {v} does not exist (the mesh has {} vertices, numbered from 0)",
+            args.mesh.display(),
+            mesh.positions.len()
+        ));
+    }
+    let options = HeatOptions::default()
+        .with_time_factor(args.time_factor)
+        .with_boundary(match args.boundary {
+            BoundaryArg::Neumann => Boundary::Neumann,
+            BoundaryArg::Dirichlet => Boundary::Dirichlet,
+            BoundaryArg::Average => Boundary::Average,
+        })
+        .with_intrinsic_delaunay(!args.no_intrinsic_delaunay);
+    let started = Instant::now();
+    let mut heat =
+        HeatGeodesics::new(&mesh, options).map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let setup = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let fields: Vec<Vec<f64>> = if each {
+        heat.distances_each(sources)
+    } else {
+        heat.distance(sources).map(|d| vec![d])
+    }
+    .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let query = started.elapsed().as_secs_f64();
+    if args.stats {
+        let s = heat.stats();
+        writeln!(
+            std::io::stdout().lock(),
+            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
+            s.vertices, s.faces, s.flips, s.has_boundary, s.time, s.factor_nnz, setup, fields.len(), query
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    let (Some(path), Some(kind)) = (&args.output, kind) else {
+        return Ok(());
+    };
+    let bytes = match kind {
+        Output::Text => text(&fields).into_bytes(),
+        Output::Png | Output::Html => {
+            let pictures: Vec<Image> = fields
+                .iter()
+                .map(|f| surface::render_field(&mesh.positions, &mesh.faces, f, args.size))
+                .collect();
+            match kind {
+                Output::Png => {
+                    let sheet = raster::strip(&pictures, pictures.len().min(4));
+                    raster::encode_png(&sheet).map_err(|e| e.to_string())?
+                }
+                _ => {
+                    let mut pages = Vec::with_capacity(pictures.len());
+                    let captions: Vec<String> = if each {
+                        sources
+                            .iter()
+                            .map(|s| format!("distance from vertex {s}"))
+                            .collect()
+                    } else {
+                        vec![format!(
+                            "distance to the nearest of vertices {}",
+                            list(sources)
+                        )]
+                    };
+                    for (img, caption) in pictures.iter().zip(captions) {
+                        pages.push((caption, raster::encode_png(img).map_err(|e| e.to_string())?));
+                    }
+                    let first_max = fields[0]
+                        .iter()
+                        .copied()
+                        .filter(|d| d.is_finite())
+                        .fold(0.0, f64::max);
+                    let legend = format!(
+                        "Colour: distance from 0 (dark purple) to the largest of each picture \
+                         (yellow; {first_max:.4} in the first). Isolines every {} in the first \
+                         picture. Grey: unreachable from the sources.",
+                        surface::isoline_spacing(first_max)
+                    );
+                    html::picture_page(
+                        &format!("bdmorph geodesic: {}", args.mesh.display()),
+                        &legend,
+                        &pages,
+                    )
+                    .into_bytes()
+                }
+            }
+        }
+    };
+    bdmorph::io::write_bytes_atomic(path, &bytes).map_err(|e| e.to_string())?;
+    if !args.quiet {
+        eprintln!(
+            "wrote {} ({} field{}; set-up {:.0} ms, {:.1} ms per field)",
+            path.display(),
+            fields.len(),
+            if fields.len() == 1 { "" } else { "s" },
+            setup * 1e3,
+            query * 1e3 / fields.len() as f64
+        );
+    }
+    Ok(())
+}
+
+fn list(sources: &[u32]) -> String {
+    sources
+        .iter()
+        .map(u32::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// One line per vertex, one column per field.
+fn text(fields: &[Vec<f64>]) -> String {
+    let n = fields.first().map_or(0, Vec::len);
+    let mut out = String::with_capacity(n * fields.len() * 12);
+    for v in 0..n {
+        for (k, f) in fields.iter().enumerate() {
+            if k > 0 {
+                out.push(' ');
+            }
+            let d = f[v];
+            if d.is_finite() {
+                let _ = write!(out, "{d}");
+            } else {
+                out.push_str("inf");
+            }
+        }
+        out.push('\n');
+    }
+    out
+}

@@ -1,0 +1,413 @@
+//! Intrinsic triangulations: a triangle mesh known only by its connectivity and edge lengths,
+//! and edge flips that make it Delaunay.
+//!
+//! Flipping an edge of an intrinsic triangulation replaces it by the other diagonal of its two
+//! triangles, laid out flat side by side, with the length measured in that layout: the surface
+//! (and its metric) is unchanged, only the triangulation on it is. Flipping every edge whose
+//! opposite angles sum to more than π ends in the intrinsic Delaunay triangulation, on which
+//! the cotan Laplacian has non-negative weights (Bobenko and Springborn 2007; Fisher et al.
+//! 2006; Sharp, Soliman and Crane 2019).
+//!
+//! The connectivity is a half-edge structure: half-edge `h` runs from `origin[h]` around its
+//! face (`next`), `twin[h]` is the opposite half-edge or [`NONE`] on the boundary. After flips
+//! the triangulation may join a vertex pair by several edges; everything here works per
+//! half-edge and never looks edges up by their vertices.
+
+/// No twin: a boundary half-edge.
+pub const NONE: u32 = u32::MAX;
+
+/// Why a mesh cannot be made into a half-edge triangulation.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TriangulationError {
+    /// Two faces use the same edge in the same direction: the mesh is not manifold there, or
+    /// its faces are not consistently oriented.
+    #[error("edge {a}-{b} is used twice in the same direction (faces {first} and {second}): the mesh is non-manifold or inconsistently oriented there")]
+    NonManifoldEdge {
+        /// Origin vertex.
+        a: u32,
+        /// Destination vertex.
+        b: u32,
+        /// First face using it.
+        first: usize,
+        /// Second face using it.
+        second: usize,
+    },
+    /// A face names one vertex twice or an index out of range.
+    #[error("face {face} ({} {} {}) repeats a vertex or names one out of range", vertices[0], vertices[1], vertices[2])]
+    BadFace {
+        /// The face.
+        face: usize,
+        /// Its vertices.
+        vertices: [u32; 3],
+    },
+    /// A face whose edge lengths do not make a triangle of positive area.
+    #[error("face {face} is degenerate (edge lengths {} {} {})", lengths[0], lengths[1], lengths[2])]
+    Degenerate {
+        /// The face.
+        face: usize,
+        /// Its edge lengths.
+        lengths: [f64; 3],
+    },
+}
+
+/// A triangle mesh by connectivity and edge lengths.
+#[derive(Clone, Debug)]
+pub struct Intrinsic {
+    origin: Vec<u32>,
+    next: Vec<u32>,
+    twin: Vec<u32>,
+    /// Length of each half-edge's edge (twins agree).
+    len: Vec<f64>,
+    /// Face of each half-edge, and a half-edge of each face.
+    face_of: Vec<u32>,
+    face_he: Vec<u32>,
+    n_vertices: usize,
+}
+
+impl Intrinsic {
+    /// The triangulation of `faces` over `n_vertices` vertices with the Euclidean lengths of
+    /// `positions`.
+    pub fn from_mesh(
+        positions: &[[f64; 3]],
+        faces: &[[u32; 3]],
+    ) -> Result<Intrinsic, TriangulationError> {
+        let n = positions.len();
+        let m = faces.len();
+        let mut origin = Vec::with_capacity(3 * m);
+        let mut next = Vec::with_capacity(3 * m);
+        let mut len = Vec::with_capacity(3 * m);
+        for (f, &[a, b, c]) in faces.iter().enumerate() {
+            if a == b || b == c || c == a || [a, b, c].iter().any(|&v| v as usize >= n) {
+                return Err(TriangulationError::BadFace {
+                    face: f,
+                    vertices: [a, b, c],
+                });
+            }
+            let base = 3 * f as u32;
+            for (k, (p, q)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
+                origin.push(p);
+                next.push(base + (k as u32 + 1) % 3);
+                let (x, y) = (positions[p as usize], positions[q as usize]);
+                len.push(
+                    ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt(),
+                );
+            }
+            let l = [len[3 * f], len[3 * f + 1], len[3 * f + 2]];
+            if !positive(triangle_area(l[0], l[1], l[2])) {
+                return Err(TriangulationError::Degenerate {
+                    face: f,
+                    lengths: l,
+                });
+            }
+        }
+        // Twins: sort half-edges by (origin, destination) and match each with its reverse.
+        let dest = |h: usize| origin[next[h] as usize];
+        let mut keyed: Vec<(u32, u32, u32)> =
+            (0..3 * m).map(|h| (origin[h], dest(h), h as u32)).collect();
+        keyed.sort_unstable();
+        for w in keyed.windows(2) {
+            if w[0].0 == w[1].0 && w[0].1 == w[1].1 {
+                return Err(TriangulationError::NonManifoldEdge {
+                    a: w[0].0,
+                    b: w[0].1,
+                    first: w[0].2 as usize / 3,
+                    second: w[1].2 as usize / 3,
+                });
+            }
+        }
+        let mut twin = vec![NONE; 3 * m];
+        for h in 0..3 * m {
+            let key = (dest(h), origin[h]);
+            if let Ok(k) = keyed.binary_search_by(|e| (e.0, e.1).cmp(&key)) {
+                twin[h] = keyed[k].2;
+            }
+        }
+        Ok(Intrinsic {
+            face_of: (0..3 * m as u32).map(|h| h / 3).collect(),
+            face_he: (0..m as u32).map(|f| 3 * f).collect(),
+            origin,
+            next,
+            twin,
+            len,
+            n_vertices: n,
+        })
+    }
+
+    /// Number of vertices.
+    pub fn n_vertices(&self) -> usize {
+        self.n_vertices
+    }
+
+    /// Number of faces.
+    pub fn n_faces(&self) -> usize {
+        self.face_he.len()
+    }
+
+    /// Face `f`'s vertices `[a, b, c]` (counter-clockwise) and edge lengths
+    /// `[|bc|, |ca|, |ab|]` (opposite each vertex).
+    pub fn face(&self, f: usize) -> ([u32; 3], [f64; 3]) {
+        let h0 = self.face_he[f] as usize;
+        let h1 = self.next[h0] as usize;
+        let h2 = self.next[h1] as usize;
+        (
+            [self.origin[h0], self.origin[h1], self.origin[h2]],
+            [self.len[h1], self.len[h2], self.len[h0]],
+        )
+    }
+
+    /// Whether a vertex lies on the boundary (is the origin of a half-edge without twin).
+    pub fn boundary_vertices(&self) -> Vec<bool> {
+        let mut on = vec![false; self.n_vertices];
+        for (h, &t) in self.twin.iter().enumerate() {
+            if t == NONE {
+                on[self.origin[h] as usize] = true;
+                on[self.origin[self.next[h] as usize] as usize] = true;
+            }
+        }
+        on
+    }
+
+    /// The sum of the cotangents of the two angles opposite `h`'s edge (one when it is a
+    /// boundary edge); negative when the edge is not Delaunay.
+    fn cot_sum(&self, h: usize) -> f64 {
+        let opposite = |h: usize| {
+            let n = self.next[h] as usize;
+            let p = self.next[n] as usize;
+            cot_opposite(self.len[h], self.len[n], self.len[p])
+        };
+        let t = self.twin[h];
+        if t == NONE {
+            opposite(h)
+        } else {
+            opposite(h) + opposite(t as usize)
+        }
+    }
+
+    /// Flips edges until every interior edge is Delaunay (its opposite angles sum to at most
+    /// π, to a relative 1e-12), and returns the number of flips.
+    pub fn flip_to_delaunay(&mut self) -> usize {
+        let nh = self.origin.len();
+        // A stack of half-edges to check, one per edge, and whether each edge is on it.
+        let mut queued = vec![false; nh];
+        let mut stack: Vec<u32> = Vec::with_capacity(nh / 2);
+        for (h, (q, &t)) in queued.iter_mut().zip(&self.twin).enumerate() {
+            if t != NONE && (h as u32) < t {
+                *q = true;
+                stack.push(h as u32);
+            }
+        }
+        let key = |this: &Intrinsic, h: u32| h.min(this.twin[h as usize]) as usize;
+        let mut flips = 0;
+        // Delaunay flipping terminates; the cap only guards against round-off cycles.
+        let cap = 64 * nh + 1000;
+        while let Some(h) = stack.pop() {
+            queued[h as usize] = false;
+            if flips >= cap {
+                break;
+            }
+            let h = h as usize;
+            if self.cot_sum(h) >= -1e-12 {
+                continue;
+            }
+            if !self.flip(h) {
+                continue;
+            }
+            flips += 1;
+            let t = self.twin[h] as usize;
+            for e in [
+                self.next[h],
+                self.next[self.next[h] as usize],
+                self.next[t],
+                self.next[self.next[t] as usize],
+            ] {
+                if self.twin[e as usize] != NONE {
+                    let k = key(self, e);
+                    if !queued[k] {
+                        queued[k] = true;
+                        stack.push(k as u32);
+                    }
+                }
+            }
+        }
+        flips
+    }
+
+    /// Flips the interior edge of half-edge `h`; false (and no change) when it cannot be
+    /// flipped (a boundary edge, both sides one face, or a degenerate layout).
+    fn flip(&mut self, h: usize) -> bool {
+        let t = self.twin[h];
+        if t == NONE {
+            return false;
+        }
+        let t = t as usize;
+        let (f1, f2) = (self.face_of[h], self.face_of[t]);
+        if f1 == f2 {
+            return false;
+        }
+        // Face 1: h (a -> b), hn (b -> c), hp (c -> a); face 2: t (b -> a), tn (a -> d),
+        // tp (d -> b).
+        let (hn, tn) = (self.next[h] as usize, self.next[t] as usize);
+        let (hp, tp) = (self.next[hn] as usize, self.next[tn] as usize);
+        let (c, d) = (self.origin[hp], self.origin[tp]);
+        let (ab, bc, ca) = (self.len[h], self.len[hn], self.len[hp]);
+        let (ad, db) = (self.len[tn], self.len[tp]);
+        // Lay the two triangles out with a at the origin and b on the positive x axis.
+        let cx = (ab * ab + ca * ca - bc * bc) / (2.0 * ab);
+        let cy = (ca * ca - cx * cx).max(0.0).sqrt();
+        let dx = (ab * ab + ad * ad - db * db) / (2.0 * ab);
+        let dy = -(ad * ad - dx * dx).max(0.0).sqrt();
+        let cd = (cx - dx).hypot(cy - dy);
+        // The new triangles (d, c, a) and (c, d, b) must have positive area.
+        if !(positive(triangle_area(cd, ca, ad)) && positive(triangle_area(cd, db, bc))) {
+            return false;
+        }
+        self.origin[h] = d;
+        self.origin[t] = c;
+        self.len[h] = cd;
+        self.len[t] = cd;
+        // Face 1 becomes h (d -> c), hp (c -> a), tn (a -> d); face 2 t (c -> d), tp (d -> b),
+        // hn (b -> c).
+        self.next[h] = hp as u32;
+        self.next[hp] = tn as u32;
+        self.next[tn] = h as u32;
+        self.next[t] = tp as u32;
+        self.next[tp] = hn as u32;
+        self.next[hn] = t as u32;
+        self.face_of[tn] = f1;
+        self.face_of[hn] = f2;
+        self.face_he[f1 as usize] = h as u32;
+        self.face_he[f2 as usize] = t as u32;
+        true
+    }
+
+    /// The largest violation of the Delaunay condition: the most negative sum of opposite
+    /// cotangents over interior edges (0 when Delaunay).
+    pub fn worst_cot_sum(&self) -> f64 {
+        (0..self.origin.len())
+            .filter(|&h| self.twin[h] != NONE)
+            .map(|h| self.cot_sum(h))
+            .fold(0.0, f64::min)
+    }
+}
+
+/// Area of a triangle with side lengths `a`, `b`, `c` (Heron, in Kahan's stable form); NaN
+/// or zero when they break the triangle inequality.
+pub fn triangle_area(a: f64, b: f64, c: f64) -> f64 {
+    // Sort so that a >= b >= c.
+    let (mut a, mut b, mut c) = (a, b, c);
+    if a < b {
+        std::mem::swap(&mut a, &mut b);
+    }
+    if b < c {
+        std::mem::swap(&mut b, &mut c);
+    }
+    if a < b {
+        std::mem::swap(&mut a, &mut b);
+    }
+    let p = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c));
+    0.25 * p.sqrt()
+}
+
+/// Whether `x` is a positive number (false for NaN).
+fn positive(x: f64) -> bool {
+    x > 0.0
+}
+
+/// Cotangent of the angle opposite side `a` in the triangle with sides `a`, `b`, `c`.
+pub fn cot_opposite(a: f64, b: f64, c: f64) -> f64 {
+    (b * b + c * c - a * a) / (4.0 * triangle_area(a, b, c))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square split along the diagonal 0-2 into two right triangles: Delaunay (the
+    /// opposite angles sum to exactly pi).
+    fn square(stretch: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        (
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, stretch, 0.0],
+                [0.0, stretch, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+    }
+
+    #[test]
+    fn heron_and_cotangents_of_a_right_triangle() {
+        assert!((triangle_area(3.0, 4.0, 5.0) - 6.0).abs() < 1e-14);
+        assert!(cot_opposite(5.0, 3.0, 4.0).abs() < 1e-15);
+        assert!((cot_opposite(3.0, 4.0, 5.0) - 4.0 / 3.0).abs() < 1e-14);
+        assert!(!positive(triangle_area(1.0, 1.0, 3.0)));
+    }
+
+    #[test]
+    fn a_thin_quad_flips_to_its_short_diagonal_and_keeps_its_area() {
+        // A rhombus made of two thin triangles sharing the long diagonal: flipping makes the
+        // short diagonal the edge.
+        let pos = vec![
+            [0.0, 0.0, 0.0],
+            [4.0, 0.0, 0.0],
+            [2.0, 0.5, 0.0],
+            [2.0, -0.5, 0.0],
+        ];
+        let faces = vec![[0, 1, 2], [1, 0, 3]];
+        let mut tri = Intrinsic::from_mesh(&pos, &faces).expect("valid");
+        let area = |t: &Intrinsic| {
+            (0..t.n_faces())
+                .map(|f| {
+                    let (_, l) = t.face(f);
+                    triangle_area(l[0], l[1], l[2])
+                })
+                .sum::<f64>()
+        };
+        let before = area(&tri);
+        assert!(tri.worst_cot_sum() < 0.0);
+        assert_eq!(tri.flip_to_delaunay(), 1);
+        assert!(tri.worst_cot_sum() >= -1e-12);
+        assert!((area(&tri) - before).abs() < 1e-12);
+        // The new edge joins 2 and 3, of length 1.
+        let has_short = (0..2).any(|f| {
+            let (v, l) = tri.face(f);
+            (0..3).any(|k| {
+                let (p, q) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+                ((p == 2 && q == 3) || (p == 3 && q == 2)) && (l[k] - 1.0).abs() < 1e-12
+            })
+        });
+        assert!(has_short, "{:?} {:?}", tri.face(0), tri.face(1));
+    }
+
+    #[test]
+    fn a_delaunay_square_is_left_alone_and_boundaries_are_found() {
+        let (pos, faces) = square(1.0);
+        let mut tri = Intrinsic::from_mesh(&pos, &faces).expect("valid");
+        assert_eq!(tri.flip_to_delaunay(), 0);
+        assert_eq!(tri.boundary_vertices(), vec![true; 4]);
+    }
+
+    #[test]
+    fn bad_meshes_are_refused() {
+        let (pos, _) = square(1.0);
+        assert!(matches!(
+            Intrinsic::from_mesh(&pos, &[[0, 1, 2], [0, 1, 3]]),
+            Err(TriangulationError::NonManifoldEdge { a: 0, b: 1, .. })
+        ));
+        assert!(matches!(
+            Intrinsic::from_mesh(&pos, &[[0, 1, 1]]),
+            Err(TriangulationError::BadFace { face: 0, .. })
+        ));
+        assert!(matches!(
+            Intrinsic::from_mesh(&pos, &[[0, 1, 9]]),
+            Err(TriangulationError::BadFace { .. })
+        ));
+        let line = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        assert!(matches!(
+            Intrinsic::from_mesh(&line, &[[0, 1, 2]]),
+            Err(TriangulationError::Degenerate { face: 0, .. })
+        ));
+    }
+}

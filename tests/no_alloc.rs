@@ -101,4 +101,18 @@ fn newton_iterations_and_frames_do_not_allocate() {
         during, 0,
         "{during} allocations over 33 blend and path frames"
     );
+
+    // Heat-method geodesic queries after the first.
+    let sphere = generate::icosphere(3);
+    let mut heat =
+        bdmorph::geodesic::HeatGeodesics::new(&sphere, bdmorph::geodesic::HeatOptions::default())
+            .expect("set up");
+    let mut d = vec![0.0; sphere.positions.len()];
+    heat.distance_into(&[0], &mut d).expect("first query");
+    let before = allocations();
+    for s in 1..6u32 {
+        heat.distance_into(&[s, 100 + s], &mut d).expect("query");
+    }
+    let during = allocations() - before;
+    assert_eq!(during, 0, "{during} allocations over 5 geodesic queries");
 }

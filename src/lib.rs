@@ -46,6 +46,7 @@ pub mod io;
 mod keyframes;
 pub mod mesh;
 pub mod morph;
+pub mod param;
 pub mod path;
 pub mod reference;
 pub mod render;

@@ -32,6 +32,7 @@ mod topology;
 pub use error::CompileError;
 pub use ids::{FaceId, VertexId};
 pub use ordering::{nested_dissection, LEAF_SIZE};
+pub use topology::disk_boundary;
 
 use bdmorph_isa::{Program, ProgramParts};
 use topology::Topology;

@@ -256,6 +256,34 @@ impl Topology {
     }
 }
 
+/// Checks that `faces` over `n_vertices` vertices form a disk (manifold, consistently
+/// oriented, connected, one boundary loop, Euler characteristic 1) and returns the boundary
+/// loop's vertices in order, following the boundary half-edges (counter-clockwise around the
+/// disk when the faces are).
+///
+/// ```
+/// // Two triangles of a square.
+/// let loop_ = bdmorph_compiler::disk_boundary(4, &[[0, 1, 2], [0, 2, 3]]).unwrap();
+/// assert_eq!(loop_.len(), 4);
+/// assert!(bdmorph_compiler::disk_boundary(4, &[[0, 1, 2], [0, 2, 1]]).is_err());
+/// ```
+pub fn disk_boundary(n_vertices: usize, faces: &[[u32; 3]]) -> Result<Vec<u32>, CompileError> {
+    let topo = Topology::new(n_vertices, faces)?;
+    let start = (0..topo.twin.len() as u32)
+        .find(|&he| topo.twin[he as usize] == NONE)
+        .ok_or(CompileError::ClosedSurface { euler: 2 })?;
+    let mut out = Vec::new();
+    let mut cur = start;
+    loop {
+        out.push(topo.from(cur));
+        cur = topo.first_out[topo.to(cur) as usize];
+        if cur == start || out.len() > topo.twin.len() {
+            break;
+        }
+    }
+    Ok(out)
+}
+
 /// Refuses a triangle listed twice, in either orientation, naming the first repeat in face
 /// order. (Otherwise it would show up as an inconsistent orientation or a closed surface.)
 fn check_duplicates(faces: &[[u32; 3]]) -> Result<(), CompileError> {

@@ -7,6 +7,7 @@ mod geodesic;
 mod info;
 mod morph;
 mod output;
+mod param;
 
 use std::path::PathBuf;
 
@@ -103,6 +104,24 @@ enum Command {
     ///   bdmorph geodesic bunny.off --source 0 --stats -o bunny.html
     #[command(verbatim_doc_comment)]
     Geodesic(GeodesicArgs),
+    /// Flatten a disk-topology 3D mesh into the plane (a parameterisation).
+    ///
+    /// Methods: tutte (uniform weights, boundary on a circle; never flips), lscm (least-
+    /// squares conformal, free boundary), asap and arap (local/global iterations from Tutte),
+    /// sd, mips and arap-newton (projected Newton on the symmetric Dirichlet, MIPS or ARAP
+    /// energy from Tutte; never flips a triangle). The mesh must be a manifold disk (one
+    /// boundary loop); closed meshes, meshes with holes and non-manifold ones are refused.
+    ///
+    /// -o OUT.obj writes the input's `v` lines, one `vt` per vertex (the parameter-plane
+    /// coordinates) and the faces as `f a/a b/b c/c`; -o OUT.png draws the flattened mesh
+    /// (flipped triangles red) beside the 3D mesh with a checkerboard texture through the map.
+    ///
+    /// Examples:
+    ///   bdmorph param camelhead.off --method sd -o camel_uv.obj
+    ///   bdmorph param camelhead.off --method arap --iterations 100 -o camel_arap.png
+    ///   bdmorph param camelhead.off --method mips --stats
+    #[command(verbatim_doc_comment)]
+    Param(ParamArgs),
     /// Compile a mesh's triangles once into a program file, for `morph --program`.
     ///
     /// SOURCE is read and checked as `morph` does, and its connectivity is compiled into the
@@ -293,6 +312,35 @@ enum BoundaryArg {
 }
 
 #[derive(Args, Debug)]
+struct ParamArgs {
+    /// The mesh (OBJ or OFF): a disk-topology triangle mesh.
+    mesh: PathBuf,
+    /// tutte, lscm, asap, arap, sd, mips or arap-newton.
+    #[arg(long, value_name = "METHOD", default_value = "sd", value_parser = parse_method)]
+    method: bdmorph::param::Method,
+    /// The most iterations of an iterative method (default 100 for asap and arap, 200 for
+    /// the projected Newton methods, which usually stop much sooner).
+    #[arg(long, value_name = "N")]
+    iterations: Option<u32>,
+    /// Output: .obj (the mesh with `vt`) or .png (a picture of the flattened mesh).
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Size of each of the two pictures of PNG output, as WxH.
+    #[arg(long, value_name = "WxH", default_value = "600x600")]
+    size: ImageSize,
+    /// Print one JSON line per iteration and a summary line on stdout.
+    #[arg(long)]
+    stats: bool,
+    /// Print nothing but errors (and --stats).
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn parse_method(text: &str) -> Result<bdmorph::param::Method, String> {
+    text.parse()
+}
+
+#[derive(Args, Debug)]
 struct CompileArgs {
     /// The mesh to compile (OBJ or OFF): a counter-clockwise planar disk.
     source: PathBuf,
@@ -337,6 +385,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Morph(args) => morph::run(args),
         Command::Blend(args) => blend::run(args),
         Command::Geodesic(args) => geodesic::run(args),
+        Command::Param(args) => param::run(args),
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),

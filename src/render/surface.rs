@@ -113,6 +113,81 @@ pub fn render_field(
     values: &[f64],
     size: ImageSize,
 ) -> Image {
+    let n = positions.len().min(values.len());
+    let max = values[..n]
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let colour = |f: &[u32; 3]| {
+        let mean = f.iter().map(|&v| values[v as usize]).sum::<f64>() / 3.0;
+        if mean.is_finite() {
+            let s = if max > 0.0 {
+                (255.0 * mean / max).round().clamp(0.0, 255.0)
+            } else {
+                0.0
+            };
+            shade_colour(s as u8)
+        } else {
+            UNREACHED
+        }
+    };
+    draw(
+        positions,
+        faces,
+        n,
+        &colour,
+        Some((values, isoline_spacing(max))),
+        size,
+    )
+}
+
+/// The mesh textured with a checkerboard through the map `uv` (one 2D point per vertex):
+/// 16 squares across the map's longer side, each triangle coloured by the square its
+/// centroid maps into. Squares that stay square on the surface mean a map without
+/// distortion; triangles the map inverts are red.
+pub fn render_checker(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    uv: &[[f64; 2]],
+    size: ImageSize,
+) -> Image {
+    let n = positions.len().min(uv.len());
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &uv[..n] {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let cell = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300) / 16.0;
+    let colour = |f: &[u32; 3]| {
+        let [a, b, c] = f.map(|v| uv[v as usize]);
+        let det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+        if det.is_nan() || det <= 0.0 {
+            return [0xe0, 0x50, 0x50];
+        }
+        let cx = ((a[0] + b[0] + c[0]) / 3.0 - lo[0]) / cell;
+        let cy = ((a[1] + b[1] + c[1]) / 3.0 - lo[1]) / cell;
+        if (cx.floor() as i64 + cy.floor() as i64).rem_euclid(2) == 0 {
+            [60, 90, 150]
+        } else {
+            [235, 238, 245]
+        }
+    };
+    draw(positions, faces, n, &colour, None, size)
+}
+
+/// Draws the faces (those whose vertices are all below `n`) in `colour`, lit, back to front,
+/// with isolines of `field` at multiples of its spacing when given.
+fn draw(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    n: usize,
+    colour: &dyn Fn(&[u32; 3]) -> [u8; 3],
+    field: Option<(&[f64], f64)>,
+    size: ImageSize,
+) -> Image {
     let blank = || Image {
         width: size.width,
         height: size.height,
@@ -122,7 +197,6 @@ pub fn render_field(
         return blank();
     };
     pixmap.fill(Color::WHITE);
-    let n = positions.len().min(values.len());
     let faces: Vec<[u32; 3]> = faces
         .iter()
         .copied()
@@ -156,12 +230,6 @@ pub fn render_field(
             (0.5 * h - scale * (p[1] - mid[1])) as f32,
         ]
     };
-    let max = values[..n]
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .fold(0.0, f64::max);
-    let spacing = isoline_spacing(max);
     // Back to front.
     let mut order: Vec<usize> = (0..faces.len()).collect();
     let depth = |f: &[u32; 3]| f.iter().map(|&v| projected[v as usize][2]).sum::<f64>();
@@ -181,7 +249,6 @@ pub fn render_field(
             projected[b as usize],
             projected[cc as usize],
         );
-        let (va, vb, vc) = (values[a as usize], values[b as usize], values[cc as usize]);
         // Soft light from the viewer: brighter where the triangle faces it.
         let normal = cross(
             [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]],
@@ -194,17 +261,7 @@ pub fn render_field(
             1.0
         };
         let light = 0.6 + 0.4 * facing;
-        let mean = (va + vb + vc) / 3.0;
-        let rgb = if mean.is_finite() {
-            let s = if max > 0.0 {
-                (255.0 * mean / max).round().clamp(0.0, 255.0)
-            } else {
-                0.0
-            };
-            shade_colour(s as u8)
-        } else {
-            UNREACHED
-        };
+        let rgb = colour(&faces[f]);
         let lit = rgb.map(|x| (f64::from(x) * light).round().clamp(0.0, 255.0) as u8);
         let mut paint = Paint::default();
         paint.set_color(Color::from_rgba8(lit[0], lit[1], lit[2], 255));
@@ -225,6 +282,10 @@ pub fn render_field(
                 None,
             );
         }
+        let Some((values, spacing)) = field else {
+            continue;
+        };
+        let (va, vb, vc) = (values[a as usize], values[b as usize], values[cc as usize]);
         if !(va.is_finite() && vb.is_finite() && vc.is_finite()) {
             continue;
         }

@@ -1,0 +1,273 @@
+//! Projected Newton (Teran et al. 2005; Smith, de Goes, Kim 2019) on an isotropic distortion
+//! energy, flip-free.
+//!
+//! Each iteration assembles the gradient and the projected (positive semi-definite) Hessian
+//! per triangle from the analytic eigensystem ([`super::energy`]) into a sparse pattern fixed
+//! at set-up (its symbolic factorisation computed once), solves for the step, and searches
+//! along it: the first trial step is capped at 0.9 of the largest step before any triangle
+//! would invert (the smallest positive root of each triangle's `det F(α) = 0` quadratic), then
+//! halved until the Armijo condition holds. So a map that starts without inverted triangles
+//! never gets one, and the energy never increases.
+
+// Small fixed-size matrix algebra reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+use bdmorph_vm::sparse::{Cholesky, LowerPattern};
+
+use super::energy::{svd2, Energy};
+use super::frames::Frames;
+use super::ParamError;
+
+/// The Newton solver's fixed structures and buffers.
+pub(crate) struct Newton {
+    energy: Energy,
+    /// Per face, the 21 lower-triangle entries of its 6×6 block: (local row, local column,
+    /// slot) with the global row at or below the global column.
+    blocks: Vec<[(u8, u8, u32); 21]>,
+    pattern: LowerPattern,
+    chol: Cholesky,
+    values: Vec<f64>,
+    grad: Vec<f64>,
+    step: Vec<f64>,
+    trial: Vec<[f64; 2]>,
+}
+
+/// What one iteration did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// Energy (area-weighted mean) before and after.
+    pub energy_before: f64,
+    /// Energy after the step.
+    pub energy_after: f64,
+    /// Gradient norm before the step.
+    pub gradient_norm: f64,
+    /// The step length taken (a fraction of the Newton step).
+    pub step: f64,
+    /// The largest step that keeps every triangle uninverted.
+    pub max_step: f64,
+}
+
+impl Newton {
+    pub fn new(frames: &Frames, n: usize, energy: Energy) -> Result<Newton, ParamError> {
+        let err = |source| ParamError::Solver {
+            what: "Newton",
+            source,
+        };
+        let dof = |f: &[u32; 3], local: usize| 2 * f[local / 2] + (local % 2) as u32;
+        let mut pairs: Vec<(u32, u32)> = (0..2 * n as u32).map(|i| (i, i)).collect();
+        for f in &frames.faces {
+            for p in 0..6 {
+                for q in 0..=p {
+                    pairs.push((dof(f, p), dof(f, q)));
+                }
+            }
+        }
+        let (pattern, _) = LowerPattern::new(2 * n, &pairs).map_err(err)?;
+        let blocks = frames
+            .faces
+            .iter()
+            .map(|f| {
+                let mut block = [(0u8, 0u8, 0u32); 21];
+                let mut k = 0;
+                for p in 0..6 {
+                    for q in 0..6 {
+                        let (gp, gq) = (dof(f, p), dof(f, q));
+                        if gp > gq || (gp == gq && p == q) {
+                            let slot = pattern.slot(gp, gq).expect("pattern holds the block");
+                            block[k] = (p as u8, q as u8, slot);
+                            k += 1;
+                        }
+                    }
+                }
+                debug_assert_eq!(k, 21);
+                block
+            })
+            .collect();
+        let mut chol = Cholesky::new(&pattern).map_err(err)?;
+        chol.reserve_columns(1).map_err(err)?;
+        Ok(Newton {
+            energy,
+            blocks,
+            values: vec![0.0; pattern.nnz()],
+            pattern,
+            chol,
+            grad: vec![0.0; 2 * n],
+            step: vec![0.0; 2 * n],
+            trial: vec![[0.0; 2]; n],
+        })
+    }
+
+    /// One projected Newton step with the flip-free line search, in place.
+    pub fn iterate(
+        &mut self,
+        frames: &Frames,
+        uv: &mut [[f64; 2]],
+    ) -> Result<StepReport, ParamError> {
+        let total = frames.total_area;
+        self.values.fill(0.0);
+        self.grad.fill(0.0);
+        let mut energy_before = 0.0;
+        for (f, face) in frames.faces.iter().enumerate() {
+            let fmat = frames.gradient(f, uv);
+            let svd = svd2(fmat);
+            let w = frames.area[f] / total;
+            energy_before += w * self.energy.psi(svd.sigma);
+            let p = self.energy.first_piola(&svd);
+            let h = self.energy.projected_hessian(&svd);
+            let g = &frames.g[f];
+            // Gradient: ∂E/∂u[v][r] = Σ_c P[r][c] g[v][c].
+            for (k, &v) in face.iter().enumerate() {
+                for r in 0..2 {
+                    self.grad[2 * v as usize + r] += w * (p[r][0] * g[k][0] + p[r][1] * g[k][1]);
+                }
+            }
+            // Hessian: H[(v,r),(w,s)] = Σ_{c,d} H_F[(r,c),(s,d)] g[v][c] g[w][d].
+            for &(lp, lq, slot) in &self.blocks[f] {
+                let (vp, r) = ((lp / 2) as usize, (lp % 2) as usize);
+                let (vq, s) = ((lq / 2) as usize, (lq % 2) as usize);
+                let mut sum = 0.0;
+                for c in 0..2 {
+                    for d in 0..2 {
+                        sum += h[2 * r + c][2 * s + d] * g[vp][c] * g[vq][d];
+                    }
+                }
+                self.values[slot as usize] += w * sum;
+            }
+        }
+        let gradient_norm = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // The energies are invariant to translations (and more): a tiny multiple of the
+        // identity keeps the projected Hessian definite without changing the step.
+        let diag_mean = {
+            let mut s = 0.0;
+            for j in 0..self.pattern.dim() {
+                s += self.values[self.pattern.slot(j as u32, j as u32).unwrap_or(0) as usize];
+            }
+            s / self.pattern.dim().max(1) as f64
+        };
+        for j in 0..self.pattern.dim() as u32 {
+            if let Some(slot) = self.pattern.slot(j, j) {
+                self.values[slot as usize] += 1e-9 * diag_mean + 1e-300;
+            }
+        }
+        self.chol
+            .factorize(&self.values)
+            .map_err(|source| ParamError::Solver {
+                what: "Newton",
+                source,
+            })?;
+        for (s, g) in self.step.iter_mut().zip(&self.grad) {
+            *s = -g;
+        }
+        self.chol
+            .solve_in_place(&mut self.step, 1)
+            .map_err(|source| ParamError::Solver {
+                what: "Newton",
+                source,
+            })?;
+        let max_step = max_flip_free_step(frames, uv, &self.step);
+        let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, s)| g * s).sum();
+        let mut alpha = (0.9 * max_step).min(1.0);
+        let mut energy_after = energy_before;
+        let mut taken = 0.0;
+        for _ in 0..60 {
+            for (v, t) in self.trial.iter_mut().enumerate() {
+                *t = [
+                    uv[v][0] + alpha * self.step[2 * v],
+                    uv[v][1] + alpha * self.step[2 * v + 1],
+                ];
+            }
+            let e = mean_energy(self.energy, frames, &self.trial);
+            if e.is_finite() && e <= energy_before + 1e-4 * alpha * slope {
+                energy_after = e;
+                taken = alpha;
+                uv.copy_from_slice(&self.trial);
+                break;
+            }
+            alpha *= 0.5;
+        }
+        Ok(StepReport {
+            energy_before,
+            energy_after,
+            gradient_norm,
+            step: taken,
+            max_step,
+        })
+    }
+}
+
+/// The area-weighted mean of `energy` over the triangles of the map `uv`.
+pub(crate) fn mean_energy(energy: Energy, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
+    let mut e = 0.0;
+    for f in 0..frames.len() {
+        let svd = svd2(frames.gradient(f, uv));
+        e += frames.area[f] * energy.psi(svd.sigma);
+    }
+    e / frames.total_area
+}
+
+/// The largest `α` (at most infinity) such that no triangle's `det F` reaches zero along
+/// `uv + α d`: per triangle the smallest positive root of `det(Ds + α dDs) = 0`.
+pub(crate) fn max_flip_free_step(frames: &Frames, uv: &[[f64; 2]], d: &[f64]) -> f64 {
+    let mut best = f64::INFINITY;
+    for &[a, b, c] in &frames.faces {
+        let p = |v: u32| uv[v as usize];
+        let q = |v: u32| [d[2 * v as usize], d[2 * v as usize + 1]];
+        let (e1, e2) = (
+            [p(b)[0] - p(a)[0], p(b)[1] - p(a)[1]],
+            [p(c)[0] - p(a)[0], p(c)[1] - p(a)[1]],
+        );
+        let (f1, f2) = (
+            [q(b)[0] - q(a)[0], q(b)[1] - q(a)[1]],
+            [q(c)[0] - q(a)[0], q(c)[1] - q(a)[1]],
+        );
+        // det(e + α f) = c0 + c1 α + c2 α².
+        let c0 = e1[0] * e2[1] - e1[1] * e2[0];
+        let c1 = e1[0] * f2[1] + f1[0] * e2[1] - e1[1] * f2[0] - f1[1] * e2[0];
+        let c2 = f1[0] * f2[1] - f1[1] * f2[0];
+        if let Some(root) = smallest_positive_root(c2, c1, c0) {
+            best = best.min(root);
+        }
+    }
+    best
+}
+
+/// The smallest positive root of `a α² + b α + c`, if any (stable formulas).
+fn smallest_positive_root(a: f64, b: f64, c: f64) -> Option<f64> {
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 {
+        return None;
+    }
+    let roots: [f64; 2] = if a.abs() <= 1e-14 * scale {
+        if b == 0.0 {
+            return None;
+        }
+        [-c / b, f64::NAN]
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            return None;
+        }
+        let sq = disc.sqrt();
+        let qq = -0.5 * (b + b.signum() * sq);
+        let r1 = qq / a;
+        let r2 = if qq != 0.0 { c / qq } else { f64::NAN };
+        [r1, r2]
+    };
+    roots
+        .into_iter()
+        .filter(|r| r.is_finite() && *r > 0.0)
+        .min_by(f64::total_cmp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quadratic_roots() {
+        assert_eq!(smallest_positive_root(1.0, -3.0, 2.0), Some(1.0));
+        assert_eq!(smallest_positive_root(0.0, -2.0, 1.0), Some(0.5));
+        assert_eq!(smallest_positive_root(1.0, 0.0, 1.0), None);
+        assert_eq!(smallest_positive_root(1.0, 3.0, 2.0), None);
+    }
+}

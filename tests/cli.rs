@@ -799,3 +799,84 @@ fn geodesic_writes_distances_columns_and_pictures() {
     }
     assert!(!dir.join("x.txt").exists());
 }
+
+#[test]
+fn param_writes_vt_per_vertex_and_pictures() {
+    let dir = scratch("param");
+    let cap = generate::sphere_cap(3, 0.2);
+    let mesh = write_surface(&dir, "cap.obj", &cap);
+    let out = dir.join("flat.obj");
+    let r = run_ok(
+        bin()
+            .arg("param")
+            .arg(&mesh)
+            .args(["--method", "sd", "--iterations", "5", "--stats", "-o"])
+            .arg(&out),
+    );
+    let text = std::fs::read_to_string(&out).expect("written");
+    let n = cap.positions.len();
+    assert_eq!(text.lines().filter(|l| l.starts_with("v ")).count(), n);
+    assert_eq!(text.lines().filter(|l| l.starts_with("vt ")).count(), n);
+    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
+    assert_eq!(faces.len(), cap.faces.len());
+    let [a, b, c] = cap.faces[0].map(|v| v + 1);
+    assert_eq!(faces[0], format!("f {a}/{a} {b}/{b} {c}/{c}"));
+    // The file reads back with its texture coordinates.
+    let back = bdmorph::io::read_mesh(&out).expect("readable");
+    assert_eq!(back.faces, cap.faces);
+    assert!(back.texcoords.is_some());
+    let stdout = String::from_utf8(r.stdout).expect("utf8");
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(lines.len() >= 2 && lines.len() <= 6, "{stdout}");
+    assert!(
+        lines[0].starts_with("{\"iteration\":1,\"energy\":"),
+        "{stdout}"
+    );
+    assert!(
+        lines.last().expect("summary").contains("\"method\":\"sd\"")
+            && stdout.contains("\"flipped\":0")
+    );
+    // Every method runs; PNG output decodes.
+    for method in ["tutte", "lscm", "asap", "arap", "mips", "arap-newton"] {
+        run_ok(bin().arg("param").arg(&mesh).args([
+            "--method",
+            method,
+            "--iterations",
+            "3",
+            "--stats",
+        ]));
+    }
+    let png = dir.join("flat.png");
+    run_ok(
+        bin()
+            .arg("param")
+            .arg(&mesh)
+            .args(["--method", "tutte", "--size", "120x100", "-o"])
+            .arg(&png),
+    );
+    let img =
+        bdmorph::render::raster::decode_image(&std::fs::read(&png).expect("png")).expect("decodes");
+    assert_eq!(img.height, 100);
+    assert!(img.width > 240);
+    // A closed mesh and an unknown method are refused with their cause.
+    let sphere = write_surface(&dir, "sphere.obj", &generate::icosphere(1));
+    for (args, says) in [
+        (
+            vec![sphere.clone().into_os_string(), "--stats".into()],
+            "not a disk",
+        ),
+        (
+            vec![
+                mesh.clone().into_os_string(),
+                "--method".into(),
+                "slim".into(),
+                "--stats".into(),
+            ],
+            "unknown method",
+        ),
+    ] {
+        let r = bin().arg("param").args(&args).output().expect("runs");
+        let err = String::from_utf8(r.stderr).expect("utf8");
+        assert!(!r.status.success() && err.contains(says), "{err}");
+    }
+}

@@ -116,12 +116,35 @@ enum Command {
     /// coordinates) and the faces as `f a/a b/b c/c`; -o OUT.png draws the flattened mesh
     /// (flipped triangles red) beside the 3D mesh with a checkerboard texture through the map.
     ///
+    /// --method bounded pushes the starting map (--init tutte or lscm) under the bound
+    /// --max-distortion K on every triangle's conformal distortion, without inverted
+    /// triangles, keeping the --pin constraints (Kovalsky et al. 2015); when the bound cannot
+    /// be met it says so, names the worst triangles and exits with 1 (the map found is still
+    /// written).
+    ///
     /// Examples:
     ///   bdmorph param camelhead.off --method sd -o camel_uv.obj
     ///   bdmorph param camelhead.off --method arap --iterations 100 -o camel_arap.png
     ///   bdmorph param camelhead.off --method mips --stats
+    ///   bdmorph param camelhead.off --method bounded --max-distortion 3 -o camel_k3.obj
     #[command(verbatim_doc_comment)]
     Param(ParamArgs),
+    /// Deform a planar mesh by handles, with every triangle's distortion bounded.
+    ///
+    /// The vertices given by --pin move to their targets; the rest follows with a flip-free
+    /// map whose conformal distortion (largest over smallest singular value of each
+    /// triangle's affine map) is at most --max-distortion, by the large-scale bounded
+    /// distortion method (Kovalsky et al. 2015) from the identity. The result can be a
+    /// morphing target: it has the input's triangles. When the bound cannot be met with
+    /// those pins, the command says so and names the worst triangles (exit code 1; the
+    /// closest map found is still written).
+    ///
+    /// -o OUT.obj writes `v x y 0` lines and the input's faces; .svg and .png draw it.
+    ///
+    /// Example:
+    ///   bdmorph deform man.obj --pin 0:0,0 --pin 120:1.5,2 --max-distortion 3 -o posed.obj
+    #[command(verbatim_doc_comment)]
+    Deform(DeformArgs),
     /// Compile a mesh's triangles once into a program file, for `morph --program`.
     ///
     /// SOURCE is read and checked as `morph` does, and its connectivity is compiled into the
@@ -315,9 +338,19 @@ enum BoundaryArg {
 struct ParamArgs {
     /// The mesh (OBJ or OFF): a disk-topology triangle mesh.
     mesh: PathBuf,
-    /// tutte, lscm, asap, arap, sd, mips or arap-newton.
+    /// tutte, lscm, asap, arap, sd, mips, arap-newton, or bounded (with --max-distortion).
     #[arg(long, value_name = "METHOD", default_value = "sd", value_parser = parse_method)]
-    method: bdmorph::param::Method,
+    method: ParamMethod,
+    /// For --method bounded: the bound K >= 1 on every triangle's conformal distortion.
+    #[arg(long, value_name = "K")]
+    max_distortion: Option<f64>,
+    /// For --method bounded: the starting map.
+    #[arg(long, value_enum, value_name = "INIT", default_value = "tutte")]
+    init: InitArg,
+    /// For --method bounded: a positional constraint, vertex V (0-based) at (X, Y);
+    /// repeatable.
+    #[arg(long = "pin", value_name = "V:X,Y", value_parser = parse_pin, allow_hyphen_values = true)]
+    pins: Vec<(u32, [f64; 2])>,
     /// The most iterations of an iterative method (default 100 for asap and arap, 200 for
     /// the projected Newton methods, which usually stop much sooner).
     #[arg(long, value_name = "N")]
@@ -336,8 +369,71 @@ struct ParamArgs {
     quiet: bool,
 }
 
-fn parse_method(text: &str) -> Result<bdmorph::param::Method, String> {
+/// A parameterisation method on the command line: one of the library's, or bounded
+/// distortion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ParamMethod {
+    Param(bdmorph::param::Method),
+    Bounded,
+}
+
+fn parse_method(text: &str) -> Result<ParamMethod, String> {
+    if text == "bounded" {
+        return Ok(ParamMethod::Bounded);
+    }
     text.parse()
+        .map(ParamMethod::Param)
+        .map_err(|e: String| e.replace("or arap-newton)", "arap-newton or bounded)"))
+}
+
+/// The starting map of a bounded-distortion parameterisation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum InitArg {
+    /// Tutte's embedding.
+    Tutte,
+    /// The least-squares conformal map.
+    Lscm,
+}
+
+/// `V:X,Y`.
+fn parse_pin(text: &str) -> Result<(u32, [f64; 2]), String> {
+    let bad = || format!("pin '{text}' is not V:X,Y (a vertex index, a colon, two numbers)");
+    let (v, xy) = text.split_once(':').ok_or_else(bad)?;
+    let (x, y) = xy.split_once(',').ok_or_else(bad)?;
+    let v: u32 = v.trim().parse().map_err(|_| bad())?;
+    let x: f64 = x.trim().parse().map_err(|_| bad())?;
+    let y: f64 = y.trim().parse().map_err(|_| bad())?;
+    if !(x.is_finite() && y.is_finite()) {
+        return Err(bad());
+    }
+    Ok((v, [x, y]))
+}
+
+#[derive(Args, Debug)]
+struct DeformArgs {
+    /// The planar mesh (OBJ or OFF, z = 0).
+    mesh: PathBuf,
+    /// A handle: vertex V (0-based) moves to (X, Y); repeatable, at least one.
+    #[arg(long = "pin", value_name = "V:X,Y", value_parser = parse_pin, required = true, allow_hyphen_values = true)]
+    pins: Vec<(u32, [f64; 2])>,
+    /// The bound K >= 1 on every triangle's conformal distortion.
+    #[arg(long, value_name = "K")]
+    max_distortion: f64,
+    /// The most iterations.
+    #[arg(long, value_name = "N", default_value_t = 5000)]
+    iterations: u32,
+    /// Output: .obj, .svg or .png.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Picture size for SVG and PNG output, as WxH.
+    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    size: ImageSize,
+    /// Print one JSON object of statistics on stdout.
+    #[arg(long)]
+    stats: bool,
+    /// Print nothing but errors (and --stats).
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -386,6 +482,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Blend(args) => blend::run(args),
         Command::Geodesic(args) => geodesic::run(args),
         Command::Param(args) => param::run(args),
+        Command::Deform(args) => param::deform(args),
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),

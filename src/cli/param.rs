@@ -3,11 +3,13 @@
 use std::fmt::Write as _;
 use std::io::Write as _;
 
+use bdmorph::param::bounded::{BoundedDistortion, BoundedOptions, BoundedReport};
 use bdmorph::param::{Method, ParamOptions, Parameterization};
 use bdmorph::render::{raster, surface, Drawing, Image, Viewport};
 
 use super::morph::progress_bar;
-use super::ParamArgs;
+use super::output;
+use super::{DeformArgs, InitArg, ParamArgs, ParamMethod};
 
 fn method_name(m: Method) -> &'static str {
     match m {
@@ -51,43 +53,86 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
         }
     }
     let mesh = bdmorph::io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
-    let mut options = ParamOptions::default();
-    if let Some(n) = args.iterations {
-        options = options.with_iterations(n);
-    }
-    let name = method_name(args.method);
-    let mut p = Parameterization::new(&mesh, args.method, options)
-        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
-    let limit = args.iterations.unwrap_or(200) as usize;
-    let iterative = !matches!(args.method, Method::Tutte | Method::Lscm);
-    let bar = progress_bar(if iterative { limit } else { 0 }, args.quiet, name);
-    let mut lines = String::new();
-    let report = p
-        .solve_with(|i, r| {
-            bar.set_position(u64::from(i));
-            if args.stats {
-                let _ = writeln!(
-                    lines,
-                    "{{\"iteration\":{i},\"energy\":{},\"gradient_norm\":{},\"step\":{}}}",
-                    json(r.energy_after),
-                    json(r.gradient_norm),
-                    json(r.step)
-                );
+    let in_file = |e: bdmorph::param::ParamError| format!("{}: {e}", args.mesh.display());
+    let (name, uv, iterations, seconds, unmet) = match args.method {
+        ParamMethod::Param(method) => {
+            let mut options = ParamOptions::default();
+            if let Some(n) = args.iterations {
+                options = options.with_iterations(n);
             }
-        })
-        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
-    bar.finish_and_clear();
-    let e = p.energies();
+            let name = method_name(method);
+            let mut p = Parameterization::new(&mesh, method, options).map_err(in_file)?;
+            let limit = args.iterations.unwrap_or(200) as usize;
+            let iterative = !matches!(method, Method::Tutte | Method::Lscm);
+            let bar = progress_bar(if iterative { limit } else { 0 }, args.quiet, name);
+            let mut lines = String::new();
+            let report = p
+                .solve_with(|i, r| {
+                    bar.set_position(u64::from(i));
+                    if args.stats {
+                        let _ = writeln!(
+                            lines,
+                            "{{\"iteration\":{i},\"energy\":{},\"gradient_norm\":{},\"step\":{}}}",
+                            json(r.energy_after),
+                            json(r.gradient_norm),
+                            json(r.step)
+                        );
+                    }
+                })
+                .map_err(in_file)?;
+            bar.finish_and_clear();
+            if args.stats {
+                write!(std::io::stdout().lock(), "{lines}").map_err(|e| e.to_string())?;
+            }
+            (
+                name,
+                p.uv().to_vec(),
+                report.iterations,
+                report.seconds,
+                None,
+            )
+        }
+        ParamMethod::Bounded => {
+            let k = args
+                .max_distortion
+                .ok_or("--method bounded needs --max-distortion K")?;
+            let init = match args.init {
+                InitArg::Tutte => Method::Tutte,
+                InitArg::Lscm => Method::Lscm,
+            };
+            let start =
+                Parameterization::new(&mesh, init, ParamOptions::default()).map_err(in_file)?;
+            let mut uv = start.uv().to_vec();
+            let mut options = BoundedOptions::new(k);
+            if let Some(n) = args.iterations {
+                options = options.with_iterations(n);
+            }
+            let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
+            let bar = progress_bar(options.iterations as usize, args.quiet, "bounded");
+            let report = bd
+                .solve_with(&mut uv, |i, worst| {
+                    bar.set_position(u64::from(i));
+                    bar.set_message(format!("K {worst:.3}"));
+                })
+                .map_err(in_file)?;
+            bar.finish_and_clear();
+            if args.stats {
+                writeln!(std::io::stdout().lock(), "{}", bounded_json(&report))
+                    .map_err(|e| e.to_string())?;
+            }
+            let unmet = (!report.converged).then(|| unmet_message(&report, k));
+            ("bounded", uv, report.iterations, report.seconds, unmet)
+        }
+    };
+    let e = bdmorph::param::energies(&mesh, &uv).map_err(in_file)?;
     if args.stats {
-        let mut out = std::io::stdout().lock();
-        write!(out, "{lines}").map_err(|e| e.to_string())?;
         writeln!(
-            out,
+            std::io::stdout().lock(),
             "{{\"method\":\"{name}\",\"vertices\":{},\"faces\":{},\"iterations\":{},\"seconds\":{},\"symmetric_dirichlet\":{},\"arap\":{},\"mips\":{},\"flipped\":{}}}",
             mesh.positions.len(),
             mesh.faces.len(),
-            report.iterations,
-            report.seconds,
+            iterations,
+            seconds,
             json(e.symmetric_dirichlet),
             json(e.arap),
             json(e.mips),
@@ -96,9 +141,9 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     }
     let Some(path) = &args.output else {
-        return Ok(());
+        return unmet.map_or(Ok(()), Err);
     };
-    let uv = p.uv();
+    let uv = &uv;
     let bytes = if ext.as_deref() == Some("png") {
         let img = picture(&mesh.positions, uv, &mesh.faces, args.size);
         raster::encode_png(&img).map_err(|e| e.to_string())?
@@ -130,15 +175,61 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
         eprintln!(
             "wrote {} ({name}: {} iterations in {:.2} s; E_SD {:.5}, E_ARAP {:.5}, E_MIPS {:.5}, {} flipped)",
             path.display(),
-            report.iterations,
-            report.seconds,
+            iterations,
+            seconds,
             e.symmetric_dirichlet,
             e.arap,
             e.mips,
             e.flipped
         );
     }
-    Ok(())
+    unmet.map_or(Ok(()), Err)
+}
+
+/// The bounded-distortion report as one line of JSON.
+fn bounded_json(r: &BoundedReport) -> String {
+    let worst: Vec<String> = r
+        .worst
+        .iter()
+        .take(5)
+        .map(|(f, d)| format!("[{f},{}]", json(*d)))
+        .collect();
+    format!(
+        "{{\"converged\":{},\"iterations\":{},\"max_distortion\":{},\"inverted\":{},\"constraint_error\":{},\"seconds\":{},\"worst\":[{}]}}",
+        r.converged,
+        r.iterations,
+        json(r.max_distortion),
+        r.inverted,
+        json(r.constraint_error),
+        r.seconds,
+        worst.join(",")
+    )
+}
+
+/// Why the bound was not met, naming the worst triangles.
+fn unmet_message(r: &BoundedReport, k: f64) -> String {
+    let worst: Vec<String> = r
+        .worst
+        .iter()
+        .take(3)
+        .map(|(f, d)| {
+            format!(
+                "face {f} ({})",
+                if d.is_finite() {
+                    format!("{d:.3}")
+                } else {
+                    "inverted".into()
+                }
+            )
+        })
+        .collect();
+    format!(
+        "the distortion bound {k} was not met after {} iterations: largest distortion {}, {} inverted triangles; worst: {} (the constraints may be infeasible for this bound)",
+        r.iterations,
+        if r.max_distortion.is_finite() { format!("{:.4}", r.max_distortion) } else { "infinite".into() },
+        r.inverted,
+        worst.join(", ")
+    )
 }
 
 /// Two pictures side by side: the flattened mesh (triangles with edges, flipped ones red),
@@ -160,4 +251,69 @@ fn picture(
     let flat = raster::render(uv, &drawing, &view, size);
     let checker = surface::render_checker(positions, faces, uv, size);
     raster::strip(&[flat, checker], 2)
+}
+
+pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
+    let plan = match &args.output {
+        Some(path) => Some(output::Plan::new(path, None, 1)?),
+        None if args.stats => None,
+        None => return Err("nothing to do: give -o OUT, --stats, or both".into()),
+    };
+    if plan.as_ref().is_some_and(|p| p.format.is_animation()) {
+        return Err("deform writes one shape: use .obj, .svg or .png".into());
+    }
+    let (planar, texcoords) = super::morph::read(&args.mesh)?;
+    let mesh = bdmorph::SurfaceMesh {
+        positions: planar.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+        faces: planar.faces.clone(),
+        texcoords: None,
+    };
+    let in_file = |e: bdmorph::param::ParamError| format!("{}: {e}", args.mesh.display());
+    let options = BoundedOptions::new(args.max_distortion).with_iterations(args.iterations);
+    let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
+    let mut uv = planar.positions.clone();
+    let bar = progress_bar(args.iterations as usize, args.quiet, "deforming");
+    let report = bd
+        .solve_with(&mut uv, |i, worst| {
+            bar.set_position(u64::from(i));
+            bar.set_message(format!("K {worst:.3}"));
+        })
+        .map_err(in_file)?;
+    bar.finish_and_clear();
+    if args.stats {
+        writeln!(std::io::stdout().lock(), "{}", bounded_json(&report))
+            .map_err(|e| e.to_string())?;
+    }
+    let unmet = (!report.converged).then(|| unmet_message(&report, args.max_distortion));
+    if let Some(plan) = plan {
+        let title = format!("bdmorph deform: {}", args.mesh.display());
+        let look = output::Look {
+            faces: &planar.faces,
+            texcoords: texcoords.as_ref(),
+            texture: None,
+            size: args.size,
+            fps: 25,
+            title: &title,
+        };
+        let frames = [output::Frame {
+            index: 0,
+            t: f64::NAN,
+            positions: uv,
+            distortion: None,
+        }];
+        let files = output::render(&plan, &look, &frames, || {})?;
+        output::write(&plan, &files)?;
+        if !args.quiet {
+            eprintln!(
+                "wrote {} ({} iterations in {:.2} s; largest distortion {:.4}, {} inverted, constraints met to {:.1e})",
+                plan.path.display(),
+                report.iterations,
+                report.seconds,
+                report.max_distortion,
+                report.inverted,
+                report.constraint_error
+            );
+        }
+    }
+    unmet.map_or(Ok(()), Err)
 }

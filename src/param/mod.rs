@@ -28,6 +28,7 @@
 //! # Ok::<(), bdmorph::param::ParamError>(())
 //! ```
 
+pub mod bounded;
 pub mod energy;
 mod frames;
 mod linear;
@@ -140,6 +141,17 @@ pub enum ParamError {
         /// The face.
         face: usize,
     },
+    /// A distortion bound that is not a number of at least 1.
+    #[error("the distortion bound {0} must be a number of at least 1")]
+    BadBound(f64),
+    /// A positional constraint on a vertex that does not exist, or to a non-finite point.
+    #[error("constraint on vertex {vertex}: no such vertex (the mesh has {n_vertices}) or a non-finite target")]
+    BadPin {
+        /// The vertex.
+        vertex: u32,
+        /// Vertex count.
+        n_vertices: usize,
+    },
     /// A linear solve failed.
     #[error("{what}: {source}")]
     Solver {
@@ -172,6 +184,28 @@ pub struct SolveReport {
     pub energies: Vec<f64>,
     /// Wall-clock seconds.
     pub seconds: f64,
+}
+
+/// The distortion of the map `uv` (one point per vertex) of `mesh`.
+pub fn energies(mesh: &SurfaceMesh, uv: &[[f64; 2]]) -> Result<Energies, ParamError> {
+    let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
+    Ok(energies_of(&frames, uv))
+}
+
+fn energies_of(frames: &Frames, uv: &[[f64; 2]]) -> Energies {
+    let flipped = (0..frames.len())
+        .filter(|&f| {
+            let m = frames.gradient(f, uv);
+            let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+            det.is_nan() || det <= 0.0
+        })
+        .count();
+    Energies {
+        symmetric_dirichlet: mean_energy(Energy::SymmetricDirichlet, frames, uv),
+        arap: mean_energy(Energy::Arap, frames, uv),
+        mips: mean_energy(Energy::Mips, frames, uv),
+        flipped,
+    }
 }
 
 enum Solver {
@@ -259,19 +293,7 @@ impl Parameterization {
 
     /// The distortion of the current map.
     pub fn energies(&self) -> Energies {
-        let flipped = (0..self.frames.len())
-            .filter(|&f| {
-                let m = self.frames.gradient(f, &self.uv);
-                let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-                det.is_nan() || det <= 0.0
-            })
-            .count();
-        Energies {
-            symmetric_dirichlet: mean_energy(Energy::SymmetricDirichlet, &self.frames, &self.uv),
-            arap: mean_energy(Energy::Arap, &self.frames, &self.uv),
-            mips: mean_energy(Energy::Mips, &self.frames, &self.uv),
-            flipped,
-        }
+        energies_of(&self.frames, &self.uv)
     }
 
     /// The method's own energy of the current map (ARAP for `arap` and `arap-newton`, MIPS

@@ -1,0 +1,195 @@
+//! Bounded-distortion mappings: Tutte maps of the shared disks pushed under K = 2, 3, 5;
+//! 2D deformations by handles, feasible and not; typed errors.
+
+mod common;
+
+use bdmorph::generate;
+use bdmorph::param::bounded::{distortion, BoundedDistortion, BoundedOptions};
+use bdmorph::param::{Method, ParamError, ParamOptions, Parameterization};
+use bdmorph::SurfaceMesh;
+
+/// The largest distortion of a map.
+fn largest(mesh: &SurfaceMesh, uv: &[[f64; 2]]) -> f64 {
+    // Recompute independently of the solver: the affine map of each triangle.
+    mesh.faces
+        .iter()
+        .map(|&[a, b, c]| {
+            let p = |v: u32| mesh.positions[v as usize];
+            let q = |v: u32| uv[v as usize];
+            let (e1, e2) = (
+                [p(b)[0] - p(a)[0], p(b)[1] - p(a)[1], p(b)[2] - p(a)[2]],
+                [p(c)[0] - p(a)[0], p(c)[1] - p(a)[1], p(c)[2] - p(a)[2]],
+            );
+            let l1 = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
+            let x2 = (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) / l1;
+            let y2 = ((e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]) - x2 * x2).sqrt();
+            let (d1, d2) = (
+                [q(b)[0] - q(a)[0], q(b)[1] - q(a)[1]],
+                [q(c)[0] - q(a)[0], q(c)[1] - q(a)[1]],
+            );
+            // J = [d1 d2] [[l1, x2], [0, y2]]^-1.
+            let inv = [[1.0 / l1, -x2 / (l1 * y2)], [0.0, 1.0 / y2]];
+            let j = [
+                [d1[0] * inv[0][0], d1[0] * inv[0][1] + d2[0] * inv[1][1]],
+                [d1[1] * inv[0][0], d1[1] * inv[0][1] + d2[1] * inv[1][1]],
+            ];
+            distortion(j)
+        })
+        .fold(1.0, f64::max)
+}
+
+#[test]
+fn shared_disks_are_pushed_under_the_bound() {
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    for rel in [
+        "disk3d/libigl/camelhead.off",
+        "disk3d/ustc-cg/Cow_dABF.obj",
+        "disk3d/ustc-cg/Bunny_head.obj",
+        "disk3d/odedstein/hand_lowres.obj",
+    ] {
+        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let tutte =
+            Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect(rel);
+        let start = largest(&mesh, tutte.uv());
+        for k in [5.0, 3.0, 2.0] {
+            // Known gap: on the hand, K = 2 stalls at about 2.205 (alternating projections
+            // onto the non-convex bounded-distortion set); the run must then say so.
+            let stalls = rel.contains("hand") && k == 2.0;
+            let options = if stalls {
+                BoundedOptions::new(k).with_iterations(300)
+            } else {
+                BoundedOptions::new(k)
+            };
+            let mut uv = tutte.uv().to_vec();
+            let mut bd = BoundedDistortion::new(&mesh, &[], options).expect(rel);
+            let report = bd.solve_with(&mut uv, |_, _| {}).expect(rel);
+            if stalls {
+                eprintln!("{rel}: K = {k} not met: {report:?}");
+                assert!(!report.converged && report.inverted == 0 && !report.worst.is_empty());
+                assert!(report.max_distortion < 2.3, "{report:?}");
+                continue;
+            }
+            eprintln!(
+                "{rel}: Tutte distortion {start:.1} -> {:.4} under K = {k} in {} iterations, {:.2} s",
+                report.max_distortion, report.iterations, report.seconds
+            );
+            assert!(report.converged, "{rel} K = {k}: {report:?}");
+            assert_eq!(report.inverted, 0);
+            let end = largest(&mesh, &uv);
+            assert!(end <= k * (1.0 + 1e-3), "{rel} K = {k}: {end}");
+        }
+        if rel.contains("camelhead") {
+            assert!(
+                start > 100.0,
+                "the camel head's Tutte map is distorted: {start}"
+            );
+        }
+    }
+}
+
+#[test]
+fn generated_disks_are_pushed_under_the_bound() {
+    let cap = generate::sphere_cap(4, 0.0);
+    let tutte = Parameterization::new(&cap, Method::Tutte, ParamOptions::default()).expect("tutte");
+    for k in [1.2, 2.0] {
+        let mut uv = tutte.uv().to_vec();
+        let mut bd = BoundedDistortion::new(&cap, &[], BoundedOptions::new(k)).expect("set up");
+        let report = bd.solve_with(&mut uv, |_, _| {}).expect("solve");
+        assert!(
+            report.converged && report.inverted == 0,
+            "K = {k}: {report:?}"
+        );
+        assert!(largest(&cap, &uv) <= k * (1.0 + 1e-3));
+    }
+}
+
+fn planar(mesh: &bdmorph::PlanarMesh) -> SurfaceMesh {
+    SurfaceMesh {
+        positions: mesh.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+        faces: mesh.faces.clone(),
+        texcoords: None,
+    }
+}
+
+#[test]
+fn handles_deform_a_planar_mesh_within_the_bound() {
+    let disk = generate::disk(10, 0.2);
+    let mesh = planar(&disk);
+    // The centre stays, a rim vertex is pulled out to 1.8 times the radius, another is
+    // pushed in: a pull that forces distortion.
+    let rim = disk.positions.len() - 1;
+    let other = disk.positions.len() - 16;
+    let q = disk.positions[other];
+    let pins = vec![
+        (0u32, disk.positions[0]),
+        (
+            rim as u32,
+            [1.8 * disk.positions[rim][0], 1.8 * disk.positions[rim][1]],
+        ),
+        (other as u32, [0.8 * q[0], 0.8 * q[1]]),
+    ];
+    let mut uv = disk.positions.clone();
+    let before = {
+        let mut moved = uv.clone();
+        for &(v, t) in &pins {
+            moved[v as usize] = t;
+        }
+        largest(&mesh, &moved)
+    };
+    let mut bd = BoundedDistortion::new(&mesh, &pins, BoundedOptions::new(2.5)).expect("set up");
+    let report = bd.solve_with(&mut uv, |_, _| {}).expect("solve");
+    eprintln!("deform: pinned start {before:.2} -> {report:?}");
+    assert!(report.converged, "{report:?}");
+    assert_eq!(report.inverted, 0);
+    assert!(largest(&mesh, &uv) <= 2.5 * (1.0 + 1e-3));
+    for &(v, t) in &pins {
+        assert!(
+            (uv[v as usize][0] - t[0]).abs() < 1e-12 && (uv[v as usize][1] - t[1]).abs() < 1e-12
+        );
+    }
+    // The handle pulled the rim: the map is far from the identity.
+    assert!(before > 2.5);
+}
+
+#[test]
+fn infeasible_handles_are_reported_with_the_worst_triangles() {
+    // Three handles in a shape that is not similar to theirs cannot be met by a conformal
+    // (K = 1) map of a connected mesh.
+    let disk = generate::disk(5, 0.2);
+    let mesh = planar(&disk);
+    let n = disk.positions.len();
+    let pins = vec![
+        (0u32, [0.0, 0.0]),
+        ((n - 1) as u32, [3.0, 0.0]),
+        ((n - 8) as u32, [0.0, 0.3]),
+    ];
+    let mut uv = disk.positions.clone();
+    let mut bd =
+        BoundedDistortion::new(&mesh, &pins, BoundedOptions::new(1.0).with_iterations(200))
+            .expect("set up");
+    let report = bd.solve_with(&mut uv, |_, _| {}).expect("solve");
+    assert!(!report.converged, "{report:?}");
+    assert_eq!(report.iterations, 200);
+    assert!(report.max_distortion > 1.001);
+    assert!(!report.worst.is_empty() && report.worst[0].1 >= report.worst.last().unwrap().1);
+    assert!(report.constraint_error < 1e-12, "pins are hard constraints");
+}
+
+#[test]
+fn bad_bounds_and_pins_are_typed_errors() {
+    let mesh = planar(&generate::disk(3, 0.0));
+    assert!(matches!(
+        BoundedDistortion::new(&mesh, &[], BoundedOptions::new(0.5)),
+        Err(ParamError::BadBound(_))
+    ));
+    assert!(matches!(
+        BoundedDistortion::new(&mesh, &[], BoundedOptions::new(f64::NAN)),
+        Err(ParamError::BadBound(_))
+    ));
+    assert!(matches!(
+        BoundedDistortion::new(&mesh, &[(999, [0.0, 0.0])], BoundedOptions::new(2.0)),
+        Err(ParamError::BadPin { vertex: 999, .. })
+    ));
+}

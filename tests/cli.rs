@@ -880,3 +880,95 @@ fn param_writes_vt_per_vertex_and_pictures() {
         assert!(!r.status.success() && err.contains(says), "{err}");
     }
 }
+
+#[test]
+fn bounded_param_and_deform_meet_the_bound_or_say_why() {
+    let dir = scratch("bounded");
+    let cap = generate::sphere_cap(3, 0.0);
+    let mesh = write_surface(&dir, "cap.obj", &cap);
+    let out = dir.join("k2.obj");
+    let r = run_ok(
+        bin()
+            .arg("param")
+            .arg(&mesh)
+            .args([
+                "--method",
+                "bounded",
+                "--max-distortion",
+                "2",
+                "--stats",
+                "-o",
+            ])
+            .arg(&out),
+    );
+    let stdout = String::from_utf8(r.stdout).expect("utf8");
+    assert!(stdout.starts_with("{\"converged\":true,"), "{stdout}");
+    assert!(std::fs::read_to_string(&out)
+        .expect("written")
+        .contains("\nvt "));
+    // Without the bound: refused.
+    let r = bin()
+        .arg("param")
+        .arg(&mesh)
+        .args(["--method", "bounded", "--stats"])
+        .output()
+        .expect("runs");
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--max-distortion"));
+
+    // deform: a planar disk, the centre held and a rim vertex pulled out.
+    let disk = generate::disk(6, 0.2);
+    let planar = write(&dir, "disk.obj", &disk);
+    let rim = disk.positions.len() - 1;
+    let p = disk.positions[rim];
+    let out = dir.join("posed.obj");
+    let pull = format!("{rim}:{},{}", 1.6 * p[0], 1.6 * p[1]);
+    let r = run_ok(
+        bin()
+            .arg("deform")
+            .arg(&planar)
+            .args([
+                "--pin",
+                "0:0,0",
+                "--pin",
+                &pull,
+                "--max-distortion",
+                "3",
+                "--stats",
+                "-o",
+            ])
+            .arg(&out),
+    );
+    let stdout = String::from_utf8(r.stdout).expect("utf8");
+    assert!(
+        stdout.contains("\"converged\":true") && stdout.contains("\"inverted\":0"),
+        "{stdout}"
+    );
+    let posed = PlanarMesh::read(&out).expect("readable");
+    assert_eq!(posed.faces, disk.faces);
+    assert!((posed.positions[rim][0] - 1.6 * p[0]).abs() < 1e-9);
+    // The posed disk is a valid morphing target.
+    run_ok(
+        morph()
+            .arg(&planar)
+            .arg(&out)
+            .args(["--t", "0.5", "--stats"]),
+    );
+    // An infeasible bound is reported, the closest map still written, exit code 1.
+    let out = dir.join("tight.obj");
+    let r = bin()
+        .arg("deform")
+        .arg(&planar)
+        .args(["--pin", "0:0,0", "--pin", &pull, "--pin", "5:0,0.05"])
+        .args(["--max-distortion", "1", "--iterations", "50", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("was not met") && err.contains("worst: face"),
+        "{err}"
+    );
+    assert!(out.is_file());
+}

@@ -114,7 +114,8 @@ enum Command {
     ///
     /// -o OUT.obj writes the input's `v` lines, one `vt` per vertex (the parameter-plane
     /// coordinates) and the faces as `f a/a b/b c/c`; -o OUT.png draws the flattened mesh
-    /// (flipped triangles red) beside the 3D mesh with a checkerboard texture through the map.
+    /// with a checkerboard texture (flipped triangles red) beside the 3D mesh with the same
+    /// checkerboard through the map.
     ///
     /// --method bounded pushes the starting map (--init tutte or lscm) under the bound
     /// --max-distortion K on every triangle's conformal distortion, without inverted

@@ -232,19 +232,55 @@ fn unmet_message(r: &BoundedReport, k: f64) -> String {
     )
 }
 
-/// Two pictures side by side: the flattened mesh (triangles with edges, flipped ones red),
-/// and the 3D mesh textured with a checkerboard through the map (squares that stay square
-/// mean little distortion).
+/// Two pictures side by side: the flattened mesh with a checkerboard texture (16 squares
+/// across its longer side; flipped triangles red), and the 3D mesh with the same
+/// checkerboard through the map (squares that stay square mean little distortion).
 fn picture(
     positions: &[[f64; 3]],
     uv: &[[f64; 2]],
     faces: &[[u32; 3]],
     size: bdmorph::render::ImageSize,
 ) -> Image {
+    let side = 512u32;
+    let cell = side / 16;
+    let mut rgba = Vec::with_capacity((side * side * 4) as usize);
+    for y in 0..side {
+        for x in 0..side {
+            // The colours of `surface::render_checker`, so both pictures match.
+            let c: [u8; 3] = if ((x / cell) + (y / cell)) % 2 == 0 {
+                [60, 90, 150]
+            } else {
+                [235, 238, 245]
+            };
+            rgba.extend_from_slice(&[c[0], c[1], c[2], 255]);
+        }
+    }
+    let texture = Image {
+        width: side,
+        height: side,
+        rgba,
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in uv {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300);
+    let corner_uv: Vec<[[f64; 2]; 3]> = faces
+        .iter()
+        .map(|f| {
+            f.map(|v| {
+                let p = uv.get(v as usize).copied().unwrap_or([0.0; 2]);
+                [(p[0] - lo[0]) / span, (p[1] - lo[1]) / span]
+            })
+        })
+        .collect();
     let drawing = Drawing {
         faces,
-        corner_uv: None,
-        texture: None,
+        corner_uv: Some(&corner_uv),
+        texture: Some(&texture),
         face_colours: None,
     };
     let view = Viewport::fit([uv]);

@@ -1,6 +1,6 @@
 //! The prefactored heat method.
 
-use bdmorph_vm::sparse::{Cholesky, LowerPattern};
+use bdmorph_vm::sparse::Cholesky;
 use bdmorph_vm::VmError;
 
 use super::intrinsic::{Intrinsic, TriangulationError, NONE};
@@ -182,13 +182,7 @@ impl System {
             system: name,
             source,
         };
-        let (pattern, slots) = LowerPattern::new(k, &pairs).map_err(factor)?;
-        let mut matrix = vec![0.0; pattern.nnz()];
-        for (s, v) in slots.iter().zip(&values) {
-            matrix[*s as usize] += v;
-        }
-        let mut chol = Cholesky::new(&pattern).map_err(factor)?;
-        chol.factorize(&matrix).map_err(factor)?;
+        let chol = Cholesky::assemble(k, &pairs, &values, 1).map_err(factor)?;
         Ok(System {
             index,
             vertex,

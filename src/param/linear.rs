@@ -1,7 +1,7 @@
 //! The linear methods: Tutte's embedding and the least-squares conformal map (LSCM), each one
 //! sparse factorisation and solve.
 
-use bdmorph_vm::sparse::{Cholesky, LowerPattern};
+use bdmorph_vm::sparse::Cholesky;
 
 use super::frames::Frames;
 use super::ParamError;
@@ -19,15 +19,14 @@ fn solve(
     what: &'static str,
 ) -> Result<(), ParamError> {
     let err = |source| ParamError::Solver { what, source };
+    // Every diagonal entry, then the lower triangle of the given entries.
     let mut pairs: Vec<(u32, u32)> = (0..n as u32).map(|i| (i, i)).collect();
-    pairs.extend(entries.iter().filter(|e| e.0 >= e.1).map(|e| (e.0, e.1)));
-    let (pattern, slots) = LowerPattern::new(n, &pairs).map_err(err)?;
-    let mut values = vec![0.0; pattern.nnz()];
-    for (e, s) in entries.iter().filter(|e| e.0 >= e.1).zip(&slots[n..]) {
-        values[*s as usize] += e.2;
+    let mut values = vec![0.0; n];
+    for e in entries.iter().filter(|e| e.0 >= e.1) {
+        pairs.push((e.0, e.1));
+        values.push(e.2);
     }
-    let mut chol = Cholesky::new(&pattern).map_err(err)?;
-    chol.factorize(&values).map_err(err)?;
+    let mut chol = Cholesky::assemble(n, &pairs, &values, columns).map_err(err)?;
     chol.solve_in_place(rhs, columns).map_err(err)
 }
 

@@ -15,7 +15,7 @@
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use bdmorph_vm::sparse::{Cholesky, LowerPattern};
+use bdmorph_vm::sparse::Cholesky;
 
 use super::frames::Frames;
 use super::ParamError;
@@ -80,14 +80,7 @@ impl LocalGlobal {
                 }
             }
         }
-        let (pattern, slots) = LowerPattern::new(k as usize, &pairs).map_err(err)?;
-        let mut values = vec![0.0; pattern.nnz()];
-        for (s, v) in slots.iter().zip(&vals) {
-            values[*s as usize] += v;
-        }
-        let mut chol = Cholesky::new(&pattern).map_err(err)?;
-        chol.reserve_columns(2).map_err(err)?;
-        chol.factorize(&values).map_err(err)?;
+        let chol = Cholesky::assemble(k as usize, &pairs, &vals, 2).map_err(err)?;
         Ok(LocalGlobal {
             fit,
             index,

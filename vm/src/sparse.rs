@@ -187,6 +187,33 @@ impl Cholesky {
         Ok(this)
     }
 
+    /// Assembles the symmetric `n` by `n` matrix whose entry `pairs[k]` (either triangle)
+    /// receives `values[k]` (entries of one slot add up: give each off-diagonal pair once),
+    /// analyses it, makes room for solves with `columns` right-hand sides, and factors it.
+    pub fn assemble(
+        n: usize,
+        pairs: &[(u32, u32)],
+        values: &[f64],
+        columns: usize,
+    ) -> Result<Cholesky, VmError> {
+        if pairs.len() != values.len() {
+            return Err(VmError::Length {
+                what: "entry values",
+                expected: pairs.len(),
+                got: values.len(),
+            });
+        }
+        let (pattern, slots) = LowerPattern::new(n, pairs)?;
+        let mut matrix = vec![0.0; pattern.nnz()];
+        for (s, v) in slots.iter().zip(values) {
+            matrix[*s as usize] += v;
+        }
+        let mut chol = Cholesky::new(&pattern)?;
+        chol.reserve_columns(columns)?;
+        chol.factorize(&matrix)?;
+        Ok(chol)
+    }
+
     /// Makes room in the workspace for solves with up to `columns` right-hand sides at once
     /// (allocates only when it grows).
     pub fn reserve_columns(&mut self, columns: usize) -> Result<(), VmError> {
@@ -279,6 +306,24 @@ impl Cholesky {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn assemble_sums_entries_and_factors() {
+        // [[2, -1], [-1, 2]] given as diagonal halves and one off-diagonal entry.
+        let pairs = [(0, 0), (0, 0), (1, 1), (0, 1)];
+        let values = [1.0, 1.0, 2.0, -1.0];
+        let mut chol = Cholesky::assemble(2, &pairs, &values, 1).expect("SPD");
+        let mut x = vec![1.0, 1.0];
+        chol.solve_in_place(&mut x, 1).expect("solve");
+        assert!(
+            (x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14,
+            "{x:?}"
+        );
+        assert!(matches!(
+            Cholesky::assemble(2, &pairs, &values[..3], 1),
+            Err(VmError::Length { .. })
+        ));
+    }
 
     #[test]
     fn pattern_slots_are_shared_by_symmetric_pairs_and_sorted() {

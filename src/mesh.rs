@@ -235,6 +235,18 @@ impl PlanarMesh {
     }
 }
 
+/// The edges of `faces`, each once, as `(lo, hi)` vertex pairs in sorted order.
+pub fn unique_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut edges: Vec<(u32, u32)> = faces
+        .iter()
+        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

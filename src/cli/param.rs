@@ -108,18 +108,15 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
                 options = options.with_iterations(n);
             }
             let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
-            let bar = progress_bar(options.iterations as usize, args.quiet, "bounded");
-            let report = bd
-                .solve_with(&mut uv, |i, worst| {
-                    bar.set_position(u64::from(i));
-                    bar.set_message(format!("K {worst:.3}"));
-                })
-                .map_err(in_file)?;
-            bar.finish_and_clear();
-            if args.stats {
-                writeln!(std::io::stdout().lock(), "{}", bounded_json(&report))
-                    .map_err(|e| e.to_string())?;
-            }
+            let report = run_bounded(
+                &mut bd,
+                &mut uv,
+                options.iterations,
+                "bounded",
+                args.quiet,
+                args.stats,
+                &in_file,
+            )?;
             let unmet = (!report.converged).then(|| unmet_message(&report, k));
             ("bounded", uv, report.iterations, report.seconds, unmet)
         }
@@ -184,6 +181,32 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
         );
     }
     unmet.map_or(Ok(()), Err)
+}
+
+/// Runs the bounded-distortion iterations with a progress bar (showing the largest
+/// distortion) and, with `stats`, prints the report as JSON.
+fn run_bounded(
+    bd: &mut BoundedDistortion,
+    uv: &mut [[f64; 2]],
+    iterations: u32,
+    label: &str,
+    quiet: bool,
+    stats: bool,
+    in_file: &dyn Fn(bdmorph::param::ParamError) -> String,
+) -> Result<BoundedReport, String> {
+    let bar = progress_bar(iterations as usize, quiet, label);
+    let report = bd
+        .solve_with(uv, |i, worst| {
+            bar.set_position(u64::from(i));
+            bar.set_message(format!("K {worst:.3}"));
+        })
+        .map_err(in_file)?;
+    bar.finish_and_clear();
+    if stats {
+        writeln!(std::io::stdout().lock(), "{}", bounded_json(&report))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(report)
 }
 
 /// The bounded-distortion report as one line of JSON.
@@ -308,18 +331,15 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     let options = BoundedOptions::new(args.max_distortion).with_iterations(args.iterations);
     let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
     let mut uv = planar.positions.clone();
-    let bar = progress_bar(args.iterations as usize, args.quiet, "deforming");
-    let report = bd
-        .solve_with(&mut uv, |i, worst| {
-            bar.set_position(u64::from(i));
-            bar.set_message(format!("K {worst:.3}"));
-        })
-        .map_err(in_file)?;
-    bar.finish_and_clear();
-    if args.stats {
-        writeln!(std::io::stdout().lock(), "{}", bounded_json(&report))
-            .map_err(|e| e.to_string())?;
-    }
+    let report = run_bounded(
+        &mut bd,
+        &mut uv,
+        args.iterations,
+        "deforming",
+        args.quiet,
+        args.stats,
+        &in_file,
+    )?;
     let unmet = (!report.converged).then(|| unmet_message(&report, args.max_distortion));
     if let Some(plan) = plan {
         let title = format!("bdmorph deform: {}", args.mesh.display());

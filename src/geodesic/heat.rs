@@ -502,14 +502,7 @@ impl HeatGeodesics {
 
 /// Mean length of the mesh's edges (each counted once).
 fn mean_edge_length(mesh: &SurfaceMesh) -> f64 {
-    let mut edges: Vec<(u32, u32)> = mesh
-        .faces
-        .iter()
-        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
+    let edges = crate::mesh::unique_edges(&mesh.faces);
     let total: f64 = edges
         .iter()
         .map(|&(a, b)| {

@@ -66,14 +66,7 @@ pub(crate) fn tutte(
             k += 1;
         }
     }
-    let mut edges: Vec<(u32, u32)> = frames
-        .faces
-        .iter()
-        .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
+    let edges = crate::mesh::unique_edges(&frames.faces);
     let mut entries = Vec::with_capacity(3 * edges.len());
     let mut rhs = vec![0.0; 2 * k as usize];
     for &(a, b) in &edges {

@@ -444,6 +444,47 @@ pub fn sphere_cap(subdivisions: u32, z_min: f64) -> SurfaceMesh {
     }
 }
 
+/// A coarse "finger": an open tube of unit radius along `z` with `rings` rings of `around`
+/// vertices (`spacing` apart, alternate rings turned by half a step), closed at the top by a
+/// fan to one tip vertex; open (the disk's boundary) at `z = 0`. Flattening it needs a scale
+/// that falls exponentially towards the tip, which coarse triangles cannot follow with low
+/// distortion: a hard case for bounded-distortion mappings, like the fingers of a hand.
+pub fn finger(around: u32, rings: u32, spacing: f64) -> SurfaceMesh {
+    let around = around.max(3);
+    let rings = rings.max(1);
+    let mut positions = Vec::with_capacity((around * rings + 1) as usize);
+    for r in 0..rings {
+        for i in 0..around {
+            let a =
+                std::f64::consts::TAU * (f64::from(i) + 0.5 * f64::from(r % 2)) / f64::from(around);
+            positions.push([a.cos(), a.sin(), spacing * f64::from(r)]);
+        }
+    }
+    let tip = positions.len() as u32;
+    positions.push([0.0, 0.0, spacing * f64::from(rings - 1) + 0.8]);
+    let id = |r: u32, i: u32| r * around + i % around;
+    let mut faces = Vec::with_capacity((2 * around * rings) as usize);
+    for r in 0..rings - 1 {
+        for i in 0..around {
+            if r % 2 == 0 {
+                faces.push([id(r, i), id(r, i + 1), id(r + 1, i)]);
+                faces.push([id(r, i + 1), id(r + 1, i + 1), id(r + 1, i)]);
+            } else {
+                faces.push([id(r, i), id(r, i + 1), id(r + 1, i + 1)]);
+                faces.push([id(r, i), id(r + 1, i + 1), id(r + 1, i)]);
+            }
+        }
+    }
+    for i in 0..around {
+        faces.push([id(rings - 1, i), id(rings - 1, i + 1), tip]);
+    }
+    SurfaceMesh {
+        positions,
+        faces,
+        texcoords: None,
+    }
+}
+
 fn normalize(p: [f64; 3]) -> [f64; 3] {
     let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
     [p[0] / n, p[1] / n, p[2] / n]
@@ -455,6 +496,36 @@ mod tests {
 
     fn all_ccw(m: &PlanarMesh) -> bool {
         m.faces.iter().all(|f| m.signed_area(f) > 0.0)
+    }
+
+    #[test]
+    fn fingers_are_disks_open_at_the_base() {
+        let m = finger(6, 8, 0.6);
+        assert_eq!(m.positions.len(), 6 * 8 + 1);
+        let mut count = std::collections::HashMap::new();
+        for f in &m.faces {
+            for k in 0..3 {
+                let (a, b) = (f[k], f[(k + 1) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        let boundary: Vec<_> = count
+            .iter()
+            .filter(|(_, &c)| c == 1)
+            .map(|(e, _)| *e)
+            .collect();
+        assert!(count.values().all(|&c| c <= 2));
+        // Euler characteristic 1 (a disk), and the boundary is the base ring.
+        assert_eq!(m.positions.len() + m.faces.len(), count.len() + 1);
+        assert_eq!(boundary.len(), 6);
+        assert!(boundary.iter().all(|&(a, b)| a < 6 && b < 6));
+        // Consistent orientation: every interior edge is used once each way.
+        let mut directed = std::collections::HashSet::new();
+        for f in &m.faces {
+            for k in 0..3 {
+                assert!(directed.insert((f[k], f[(k + 1) % 3])), "{f:?}");
+            }
+        }
     }
 
     #[test]

@@ -54,21 +54,21 @@ fn shared_disks_are_pushed_under_the_bound() {
             Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect(rel);
         let start = largest(&mesh, tutte.uv());
         for k in [5.0, 3.0, 2.0] {
-            // Known gap: on the hand, K = 2 stalls at about 2.205 (alternating projections
-            // onto the non-convex bounded-distortion set); the run must then say so.
+            // Known gap: on the hand, K = 2 is not met. Alternating projections stall at
+            // 2.205 and the Newton finish ends in a local minimum of the excess at 2.1419
+            // (the same from Tutte, LSCM, MIPS and symmetric Dirichlet starts; the lowest
+            // bound met is 2.114): the run must stop by itself and say so.
             let stalls = rel.contains("hand") && k == 2.0;
-            let options = if stalls {
-                BoundedOptions::new(k).with_iterations(300)
-            } else {
-                BoundedOptions::new(k)
-            };
             let mut uv = tutte.uv().to_vec();
-            let mut bd = BoundedDistortion::new(&mesh, &[], options).expect(rel);
+            let mut bd = BoundedDistortion::new(&mesh, &[], BoundedOptions::new(k)).expect(rel);
             let report = bd.solve_with(&mut uv, |_, _| {}).expect(rel);
             if stalls {
                 eprintln!("{rel}: K = {k} not met: {report:?}");
-                assert!(!report.converged && report.inverted == 0 && !report.worst.is_empty());
-                assert!(report.max_distortion < 2.3, "{report:?}");
+                assert!(!report.converged && report.stalled, "{report:?}");
+                assert!(report.inverted == 0 && !report.worst.is_empty());
+                assert!(report.newton_iterations > 0, "{report:?}");
+                assert!(report.max_distortion < 2.15, "{report:?}");
+                assert!(report.iterations < 1000, "stops by itself: {report:?}");
                 continue;
             }
             eprintln!(
@@ -103,6 +103,47 @@ fn generated_disks_are_pushed_under_the_bound() {
         );
         assert!(largest(&cap, &uv) <= k * (1.0 + 1e-3));
     }
+}
+
+/// Where the bound cannot be met, the Newton finish ends by itself with a lower largest
+/// distortion than alternating projections alone, and without inverted triangles (the
+/// projections alone end with some on this finger).
+#[test]
+fn the_newton_finish_lowers_what_projections_alone_leave() {
+    let mesh = generate::finger(6, 8, 0.6);
+    let tutte =
+        Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect("tutte");
+    let run = |finish: bool| {
+        let mut uv = tutte.uv().to_vec();
+        let options = BoundedOptions::new(1.5)
+            .with_iterations(1500)
+            .with_newton_finish(finish);
+        let mut bd = BoundedDistortion::new(&mesh, &[], options).expect("set up");
+        let report = bd.solve_with(&mut uv, |_, _| {}).expect("solve");
+        assert_eq!(
+            report.max_distortion,
+            largest(&mesh, &uv).max(report.max_distortion)
+        );
+        report
+    };
+    let alone = run(false);
+    let finished = run(true);
+    eprintln!("projections alone: {alone:?}\nwith the Newton finish: {finished:?}");
+    assert!(!alone.converged && !alone.stalled && alone.newton_iterations == 0);
+    assert_eq!(alone.iterations, 1500);
+    assert!(!finished.converged && finished.stalled, "{finished:?}");
+    assert!(finished.newton_iterations > 0 && finished.iterations < 1500);
+    assert_eq!(finished.inverted, 0);
+    assert!(finished.max_distortion < alone.max_distortion);
+    assert!(finished.max_distortion < 1.8, "{finished:?}");
+    // Met comfortably above that: alternating projections alone suffice.
+    let mut uv = tutte.uv().to_vec();
+    let mut bd = BoundedDistortion::new(&mesh, &[], BoundedOptions::new(1.8)).expect("set up");
+    let report = bd.solve_with(&mut uv, |_, _| {}).expect("solve");
+    assert!(
+        report.converged && report.newton_iterations == 0,
+        "{report:?}"
+    );
 }
 
 fn planar(mesh: &bdmorph::PlanarMesh) -> SurfaceMesh {

@@ -218,9 +218,11 @@ fn bounded_json(r: &BoundedReport) -> String {
         .map(|(f, d)| format!("[{f},{}]", json(*d)))
         .collect();
     format!(
-        "{{\"converged\":{},\"iterations\":{},\"max_distortion\":{},\"inverted\":{},\"constraint_error\":{},\"seconds\":{},\"worst\":[{}]}}",
+        "{{\"converged\":{},\"stalled\":{},\"iterations\":{},\"newton_iterations\":{},\"max_distortion\":{},\"inverted\":{},\"constraint_error\":{},\"seconds\":{},\"worst\":[{}]}}",
         r.converged,
+        r.stalled,
         r.iterations,
+        r.newton_iterations,
         json(r.max_distortion),
         r.inverted,
         json(r.constraint_error),
@@ -246,9 +248,15 @@ fn unmet_message(r: &BoundedReport, k: f64) -> String {
             )
         })
         .collect();
+    let why = if r.stalled {
+        "neither alternating projections nor the Newton finish could lower it further: the bound may be infeasible for this mesh and these constraints"
+    } else {
+        "the iteration limit was reached; --iterations raises it"
+    };
     format!(
-        "the distortion bound {k} was not met after {} iterations: largest distortion {}, {} inverted triangles; worst: {} (the constraints may be infeasible for this bound)",
+        "the distortion bound {k} was not met after {} iterations ({} of them Newton): largest distortion {}, {} inverted triangles; worst: {} ({why})",
         r.iterations,
+        r.newton_iterations,
         if r.max_distortion.is_finite() { format!("{:.4}", r.max_distortion) } else { "infinite".into() },
         r.inverted,
         worst.join(", ")

@@ -23,12 +23,21 @@
 
 use bdmorph_vm::sparse::Cholesky;
 
-use super::energy::svd2;
+use super::energy::{svd2, Energy};
 use super::frames::Frames;
+use super::newton::Newton;
 use super::ParamError;
 use crate::io::SurfaceMesh;
 
 const NONE: u32 = u32::MAX;
+
+/// Alternating-projection iterations without progress before the finishing phase starts.
+pub const STALL_WINDOW: u32 = 30;
+
+/// Iterations (counted from the last progress of the alternating projections, so Newton
+/// iterations included) without the largest distortion falling by a relative 1e-4 after
+/// which the finishing phase gives up.
+pub const NEWTON_STALL_WINDOW: u32 = 5 * STALL_WINDOW;
 
 /// The projection of a 2×2 matrix (rows) onto the set of orientation-preserving matrices
 /// whose conformal distortion `σ₁ / σ₂` is at most `k` (`k ≥ 1`), in the Frobenius norm:
@@ -80,6 +89,9 @@ pub struct BoundedOptions {
     pub iterations: u32,
     /// Done when every triangle's distortion is at most `K (1 + tolerance)` (default 1e-3).
     pub tolerance: f64,
+    /// Whether stalled alternating projections hand over to the projected Newton finish
+    /// (default true; see [`BoundedDistortion::solve_with`]).
+    pub newton_finish: bool,
 }
 
 impl BoundedOptions {
@@ -89,11 +101,17 @@ impl BoundedOptions {
             max_distortion,
             iterations: 5000,
             tolerance: 1e-3,
+            newton_finish: true,
         }
     }
     /// Sets the iteration limit.
     pub fn with_iterations(mut self, iterations: u32) -> Self {
         self.iterations = iterations;
+        self
+    }
+    /// Turns the projected Newton finish on or off (alternating projections only).
+    pub fn with_newton_finish(mut self, on: bool) -> Self {
+        self.newton_finish = on;
         self
     }
 }
@@ -103,8 +121,15 @@ impl BoundedOptions {
 pub struct BoundedReport {
     /// Whether every triangle ended within the bound (and none inverted).
     pub converged: bool,
-    /// Iterations run.
+    /// Iterations run, both phases.
     pub iterations: u32,
+    /// Whether the iterations stopped before the limit because neither phase could lower the
+    /// largest distortion any further (a local minimum of the excess: the bound may be
+    /// infeasible for this mesh and these constraints).
+    pub stalled: bool,
+    /// Of those, the projected Newton iterations of the finishing phase (zero when the
+    /// alternating projections alone met the bound).
+    pub newton_iterations: u32,
     /// The largest distortion at the end (infinite if a triangle is inverted).
     pub max_distortion: f64,
     /// Inverted (or degenerate) triangles at the end.
@@ -236,6 +261,13 @@ impl BoundedDistortion {
     /// Iterates from the map `uv` (one point per vertex) until every triangle is within the
     /// bound or the iteration limit, in place. `progress` sees each iteration's largest
     /// distortion.
+    ///
+    /// When the alternating projections stop improving (the largest distortion not down by
+    /// a relative 1e-4 in [`STALL_WINDOW`] iterations) on a map with no inverted triangle, a
+    /// finishing phase minimises the excess distortion ([`Energy::Excess`], with the bound
+    /// set half the tolerance inside `K`) by projected Newton with the pins held: its line
+    /// search never inverts a triangle, and its energy is zero exactly on the maps within
+    /// the bound.
     pub fn solve_with(
         &mut self,
         uv: &mut [[f64; 2]],
@@ -248,16 +280,53 @@ impl BoundedDistortion {
         let k_bound = self.options.max_distortion;
         let limit = k_bound * (1.0 + self.options.tolerance);
         let mut iterations = 0;
+        let mut newton_iterations = 0;
+        let (mut best, mut since_best) = (f64::INFINITY, 0);
+        let mut newton: Option<Newton> = None;
+        let mut stalled = false;
         loop {
             let (worst, inverted) = self.measure(uv);
             progress(iterations, worst);
             if (worst <= limit && inverted == 0) || iterations >= self.options.iterations {
                 break;
             }
-            self.iterate(uv)?;
-            iterations += 1;
+            if worst < best * (1.0 - 1e-4) {
+                (best, since_best) = (worst, 0);
+            } else {
+                since_best += 1;
+            }
+            if self.options.newton_finish
+                && newton.is_none()
+                && since_best >= STALL_WINDOW
+                && inverted == 0
+            {
+                let bound = (k_bound * (1.0 - 0.5 * self.options.tolerance)).max(1.0);
+                let mut solver = Newton::new(&self.frames, uv.len(), Energy::Excess { bound })?;
+                solver.fix(self.pins.iter().map(|&(v, _)| v));
+                newton = Some(solver);
+            }
+            match newton.as_mut() {
+                Some(solver) => {
+                    let step = solver.iterate(&self.frames, uv)?;
+                    newton_iterations += 1;
+                    iterations += 1;
+                    if step.step == 0.0 || since_best >= NEWTON_STALL_WINDOW {
+                        // The line search found no decrease, or the largest distortion has
+                        // not moved for long: a local minimum with excess.
+                        stalled = true;
+                        break;
+                    }
+                }
+                None => {
+                    self.iterate(uv)?;
+                    iterations += 1;
+                }
+            }
         }
-        Ok(self.report(uv, iterations, started.elapsed().as_secs_f64()))
+        let mut report = self.report(uv, iterations, started.elapsed().as_secs_f64());
+        report.newton_iterations = newton_iterations;
+        report.stalled = stalled && !report.converged;
+        Ok(report)
     }
 
     /// The largest distortion and the number of inverted triangles of `uv`.
@@ -289,6 +358,8 @@ impl BoundedDistortion {
             converged: worst <= self.options.max_distortion * (1.0 + self.options.tolerance)
                 && inverted == 0,
             iterations,
+            newton_iterations: 0,
+            stalled: false,
             max_distortion: worst,
             inverted,
             worst: all.into_iter().take(10).collect(),

@@ -16,7 +16,7 @@
 #![allow(clippy::needless_range_loop)]
 
 /// A distortion energy.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Energy {
     /// Symmetric Dirichlet `σ₁² + σ₂² + σ₁⁻² + σ₂⁻²` (4 for an isometry).
     SymmetricDirichlet,
@@ -24,6 +24,29 @@ pub enum Energy {
     Arap,
     /// MIPS (conformal) `σ₁/σ₂ + σ₂/σ₁` (2 for a similarity).
     Mips,
+    /// The excess of the conformal distortion over a bound: with `m = (σ₁/σ₂ + σ₂/σ₁) / 2`
+    /// (half MIPS, `(D + 1/D) / 2` for the distortion `D = σ₁/σ₂`) and `c` the value of `m`
+    /// at `D = bound`, `ε (m − 1) + max(0, m − c)²` with `ε` = [`EXCESS_CONFORMAL_WEIGHT`].
+    /// Zero excess exactly when the triangle is within the bound; the small conformal term
+    /// keeps the Hessian definite where it is, and the barrier of `m` at `det F = 0` keeps
+    /// triangles from inverting.
+    Excess {
+        /// The bound on `σ₁/σ₂` (at least 1).
+        bound: f64,
+    },
+}
+
+/// The weight `ε` of the conformal term in [`Energy::Excess`].
+pub const EXCESS_CONFORMAL_WEIGHT: f64 = 1e-4;
+
+/// `φ'(m)` and `φ''(m)` for [`Energy::Excess`] at half-MIPS `m`.
+fn excess_slopes(bound: f64, m: f64) -> [f64; 2] {
+    let c = 0.5 * (bound + 1.0 / bound);
+    if m > c {
+        [EXCESS_CONFORMAL_WEIGHT + 2.0 * (m - c), 2.0]
+    } else {
+        [EXCESS_CONFORMAL_WEIGHT, 0.0]
+    }
 }
 
 /// The signed singular value decomposition of a 2×2 matrix (rows): `F = U diag(σ) Vᵀ` with
@@ -102,6 +125,14 @@ impl Energy {
                 }
                 s1 / s2 + s2 / s1
             }
+            Energy::Excess { bound } => {
+                if s1 * s2 <= 0.0 {
+                    return f64::INFINITY;
+                }
+                let m = 0.5 * (s1 / s2 + s2 / s1);
+                let c = 0.5 * (bound + 1.0 / bound);
+                EXCESS_CONFORMAL_WEIGHT * (m - 1.0) + (m - c).max(0.0).powi(2)
+            }
         }
     }
 
@@ -113,6 +144,11 @@ impl Energy {
             }
             Energy::Arap => [2.0 * (s1 - 1.0), 2.0 * (s2 - 1.0)],
             Energy::Mips => [1.0 / s2 - s2 / (s1 * s1), 1.0 / s1 - s1 / (s2 * s2)],
+            Energy::Excess { bound } => {
+                let [d1, _] = excess_slopes(bound, 0.5 * (s1 / s2 + s2 / s1));
+                let [g1, g2] = Energy::Mips.gradient([s1, s2]);
+                [0.5 * d1 * g1, 0.5 * d1 * g2]
+            }
         }
     }
 
@@ -126,6 +162,17 @@ impl Energy {
                 -1.0 / (s1 * s1) - 1.0 / (s2 * s2),
                 2.0 * s1 / s2.powi(3),
             ],
+            Energy::Excess { bound } => {
+                let [d1, d2] = excess_slopes(bound, 0.5 * (s1 / s2 + s2 / s1));
+                let [h11, h12, h22] = Energy::Mips.hessian([s1, s2]);
+                let [g1, g2] = Energy::Mips.gradient([s1, s2]);
+                // φ' ∇²m + φ'' ∇m ∇mᵀ with m = MIPS / 2.
+                [
+                    0.5 * d1 * h11 + 0.25 * d2 * g1 * g1,
+                    0.5 * d1 * h12 + 0.25 * d2 * g1 * g2,
+                    0.5 * d1 * h22 + 0.25 * d2 * g2 * g2,
+                ]
+            }
         }
     }
 
@@ -153,6 +200,12 @@ impl Energy {
             Energy::Mips => {
                 let p = s1 * s1 * s2 * s2;
                 [-(s1 - s2).powi(2) / p, (s1 + s2).powi(2) / p]
+            }
+            Energy::Excess { bound } => {
+                // (Ψ₁ ± Ψ₂) / (σ₁ ± σ₂) = φ' (m₁ ± m₂) / (σ₁ ± σ₂).
+                let [d1, _] = excess_slopes(bound, 0.5 * (s1 / s2 + s2 / s1));
+                let [t, f] = Energy::Mips.twist_flip([s1, s2]);
+                [0.5 * d1 * t, 0.5 * d1 * f]
             }
         }
     }
@@ -252,7 +305,12 @@ mod tests {
     #[test]
     fn analytic_eigensystem_matches_numeric_eigendecomposition() {
         let mut st = 0x9e37_79b9_7f4a_7c15;
-        for energy in [Energy::SymmetricDirichlet, Energy::Arap, Energy::Mips] {
+        for energy in [
+            Energy::SymmetricDirichlet,
+            Energy::Arap,
+            Energy::Mips,
+            Energy::Excess { bound: 1.2 },
+        ] {
             let mut checked = 0;
             while checked < 200 {
                 let f = [
@@ -275,6 +333,13 @@ mod tests {
                     || (svd.sigma[0] + svd.sigma[1]).abs() < 1e-3
                 {
                     continue;
+                }
+                // The excess energy has a kink in its second derivative at the bound.
+                if let Energy::Excess { bound } = energy {
+                    let ratio = svd.sigma[0] / svd.sigma[1];
+                    if (ratio - bound).abs() < 1e-3 {
+                        continue;
+                    }
                 }
                 checked += 1;
                 // Gradient: analytic against finite differences of Ψ.

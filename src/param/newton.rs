@@ -30,6 +30,8 @@ pub(crate) struct Newton {
     grad: Vec<f64>,
     step: Vec<f64>,
     trial: Vec<[f64; 2]>,
+    /// Vertices held where they are (positional constraints).
+    fixed: Vec<bool>,
 }
 
 /// What one iteration did.
@@ -94,7 +96,15 @@ impl Newton {
             grad: vec![0.0; 2 * n],
             step: vec![0.0; 2 * n],
             trial: vec![[0.0; 2]; n],
+            fixed: vec![false; n],
         })
+    }
+
+    /// Holds `vertices` where they are: their rows of the step are zero.
+    pub fn fix(&mut self, vertices: impl IntoIterator<Item = u32>) {
+        for v in vertices {
+            self.fixed[v as usize] = true;
+        }
     }
 
     /// One projected Newton step with the flip-free line search, in place.
@@ -123,6 +133,9 @@ impl Newton {
             let g = &frames.g[f];
             // Gradient: ∂E/∂u[v][r] = Σ_c P[r][c] g[v][c].
             for (k, &v) in face.iter().enumerate() {
+                if self.fixed[v as usize] {
+                    continue;
+                }
                 for r in 0..2 {
                     self.grad[2 * v as usize + r] += w * (p[r][0] * g[k][0] + p[r][1] * g[k][1]);
                 }
@@ -131,6 +144,9 @@ impl Newton {
             for &(lp, lq, slot) in &self.blocks[f] {
                 let (vp, r) = ((lp / 2) as usize, (lp % 2) as usize);
                 let (vq, s) = ((lq / 2) as usize, (lq % 2) as usize);
+                if self.fixed[face[vp] as usize] || self.fixed[face[vq] as usize] {
+                    continue;
+                }
                 let mut sum = 0.0;
                 for c in 0..2 {
                     for d in 0..2 {
@@ -138,6 +154,15 @@ impl Newton {
                     }
                 }
                 self.values[slot as usize] += w * sum;
+            }
+        }
+        // A fixed vertex's rows are the identity (and its gradient zero): its step is zero.
+        for (v, _) in self.fixed.iter().enumerate().filter(|(_, &f)| f) {
+            for r in 0..2 {
+                let j = (2 * v + r) as u32;
+                if let Some(slot) = self.pattern.slot(j, j) {
+                    self.values[slot as usize] = 1.0;
+                }
             }
         }
         energy_before
@@ -151,18 +176,14 @@ impl Newton {
         energy_before: f64,
     ) -> Result<StepReport, ParamError> {
         let gradient_norm = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
-        // The energies are invariant to translations (and more): a tiny multiple of the
-        // identity keeps the projected Hessian definite without changing the step.
-        let diag_mean = {
-            let mut s = 0.0;
-            for j in 0..self.pattern.dim() {
-                s += self.values[self.pattern.slot(j as u32, j as u32).unwrap_or(0) as usize];
-            }
-            s / self.pattern.dim().max(1) as f64
-        };
+        // The energies are invariant to translations (and more): a tiny relative increase of
+        // the diagonal keeps the projected Hessian definite without changing the step. It is
+        // relative per entry, not to the mean, because the entries of a map whose scale
+        // varies by orders of magnitude (a conformal flattening of long fingers) do too.
         for j in 0..self.pattern.dim() as u32 {
             if let Some(slot) = self.pattern.slot(j, j) {
-                self.values[slot as usize] += 1e-9 * diag_mean + 1e-300;
+                let d = &mut self.values[slot as usize];
+                *d += 1e-9 * *d + 1e-300;
             }
         }
         self.chol
@@ -307,7 +328,12 @@ mod tests {
     fn assembled_gradient_and_hessian_match_finite_differences() {
         let (frames, uv) = setup();
         let n = uv.len();
-        for energy in [Energy::SymmetricDirichlet, Energy::Arap, Energy::Mips] {
+        for energy in [
+            Energy::SymmetricDirichlet,
+            Energy::Arap,
+            Energy::Mips,
+            Energy::Excess { bound: 1.02 },
+        ] {
             let mut newton = Newton::new(&frames, n, energy).expect("set up");
             newton.assemble(&frames, &uv);
             let grad = newton.grad.clone();
@@ -329,7 +355,7 @@ mod tests {
             }
             // H d against the change of the gradient along d (MIPS clamps its twist, so its
             // projected Hessian is not the true one).
-            if energy == Energy::Mips {
+            if matches!(energy, Energy::Mips | Energy::Excess { .. }) {
                 continue;
             }
             let d: Vec<f64> = (0..2 * n)
@@ -357,6 +383,29 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Fixed vertices stay exactly where they are; the rest lower the excess distortion.
+    #[test]
+    fn fixed_vertices_do_not_move() {
+        let (frames, mut uv) = setup();
+        // Shear the map so that some triangles exceed the bound.
+        for p in uv.iter_mut() {
+            p[0] += 0.6 * p[1];
+        }
+        let n = uv.len();
+        let energy = Energy::Excess { bound: 1.3 };
+        let mut newton = Newton::new(&frames, n, energy).expect("set up");
+        newton.fix([0, 7]);
+        let (p0, p7) = (uv[0], uv[7]);
+        let before = mean_energy(energy, &frames, &uv);
+        for _ in 0..5 {
+            let r = newton.iterate(&frames, &mut uv).expect("step");
+            assert!(r.energy_after <= r.energy_before);
+        }
+        assert_eq!((uv[0], uv[7]), (p0, p7));
+        let after = mean_energy(energy, &frames, &uv);
+        assert!(after < 0.5 * before, "{before} -> {after}");
     }
 
     #[test]

@@ -42,6 +42,7 @@ mod cg;
 mod embed;
 mod error;
 mod evaluate;
+mod exp;
 pub mod kernel;
 pub mod lobachevsky;
 mod newton;
@@ -248,9 +249,7 @@ impl Vm {
 
     /// `scale = exp(u / 2)` per unknown (its last entry, for boundary vertices, stays 1).
     fn update_scale(&mut self) {
-        for (s, &u) in self.scale.iter_mut().zip(&self.u) {
-            *s = (0.5 * u).exp();
-        }
+        exp::exp_half_into(&self.u, &mut self.scale);
     }
 
     fn evaluate_with<const ENERGY: bool>(&mut self) {

@@ -12,7 +12,7 @@
 
 use bdmorph_isa::{operand, Op, Program};
 
-use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners, Corner};
+use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners_into, Corner};
 
 /// A verified program's iteration stream with every operand resolved.
 #[derive(Clone, Debug, Default)]
@@ -118,8 +118,7 @@ impl Plan {
             *len = l0 * scale[a as usize] * scale[b as usize];
         }
         for (out, &[e0, e1, e2]) in temps.chunks_exact_mut(3).zip(&self.triangles) {
-            let corners = triangle_corners([len[e0 as usize], len[e1 as usize], len[e2 as usize]]);
-            out.copy_from_slice(&corners);
+            triangle_corners_into([len[e0 as usize], len[e1 as usize], len[e2 as usize]], out);
         }
         let temps = &*temps;
         for (k, (w, &m)) in self.vertex_start.windows(2).zip(&self.lower).enumerate() {

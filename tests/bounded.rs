@@ -43,12 +43,7 @@ fn shared_disks_are_pushed_under_the_bound() {
     let Some(dir) = common::shared_data() else {
         return;
     };
-    for rel in [
-        "disk3d/libigl/camelhead.off",
-        "disk3d/ustc-cg/Cow_dABF.obj",
-        "disk3d/ustc-cg/Bunny_head.obj",
-        "disk3d/odedstein/hand_lowres.obj",
-    ] {
+    for rel in common::SHARED_DISKS {
         let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
         let tutte =
             Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect(rel);

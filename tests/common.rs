@@ -26,6 +26,15 @@ pub fn align(a: &[[f64; 2]], b: &[[f64; 2]], i: usize, j: usize) -> Vec<[f64; 2]
         .collect()
 }
 
+/// The shared disk-topology meshes the parameterisation issues name (camel head, cow, bunny
+/// head, hand), relative to the shared data folder.
+pub const SHARED_DISKS: [&str; 4] = [
+    "disk3d/libigl/camelhead.off",
+    "disk3d/ustc-cg/Cow_dABF.obj",
+    "disk3d/ustc-cg/Bunny_head.obj",
+    "disk3d/odedstein/hand_lowres.obj",
+];
+
 /// The shared test data folder, or `None` after saying clearly that it is missing. In CI
 /// (`CI` set) a missing folder is a failure, not a skip.
 pub fn shared_data() -> Option<PathBuf> {

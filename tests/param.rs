@@ -206,12 +206,7 @@ fn shared_disk_meshes_flatten_without_flips() {
     let Some(dir) = common::shared_data() else {
         return;
     };
-    for rel in [
-        "disk3d/libigl/camelhead.off",
-        "disk3d/ustc-cg/Cow_dABF.obj",
-        "disk3d/ustc-cg/Bunny_head.obj",
-        "disk3d/odedstein/hand_lowres.obj",
-    ] {
+    for rel in common::SHARED_DISKS {
         let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
         let mut p = Parameterization::new(
             &mesh,

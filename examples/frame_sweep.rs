@@ -46,13 +46,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         (
             "+ extrapolation",
+            MorphOptions::default()
+                .with_tangents(false)
+                .with_reuse_factor(false),
+        ),
+        (
+            "+ tangents",
             MorphOptions::default().with_reuse_factor(false),
         ),
         (
-            "+ factor reuse",
-            MorphOptions::default().with_extrapolate(false),
+            "extrap. + reuse",
+            MorphOptions::default().with_tangents(false),
         ),
-        ("both (default)", MorphOptions::default()),
+        ("all (default)", MorphOptions::default()),
     ];
     {
         // Phases on the state of t = 0.5.

@@ -103,7 +103,7 @@ impl Blend {
     /// Newton from the previous frame's solution. The positions borrow an internal buffer
     /// reused by the next call. The statistics' `t` is NaN.
     pub fn frame_weights(&mut self, weights: &[f64]) -> Result<Frame<'_>, MorphError> {
-        let stats = self.engine.frame(weights, None)?;
+        let stats = self.engine.frame(weights, None, None)?;
         Ok(Frame {
             positions: self.engine.positions(),
             distortion: self.engine.distortion(),
@@ -118,7 +118,7 @@ impl Blend {
         weights: &[f64],
         out: &mut [[f64; 2]],
     ) -> Result<FrameStats, MorphError> {
-        self.engine.frame_into(weights, None, out)
+        self.engine.frame_into(weights, None, None, out)
     }
 }
 

@@ -51,33 +51,106 @@ pub(crate) fn shorter_turn(from: f64, to: f64) -> f64 {
     turn
 }
 
-/// A solved frame kept for extrapolating the next start.
-#[derive(Clone, Debug)]
-struct Solved {
-    t: f64,
-    u: Vec<f64>,
+/// Where a frame lies on the line of metrics through two keyframes: weight `1 - s` on `from`
+/// and `s` on `to` (a morph's `t`, or a path segment's eased weight). Frames on one line
+/// share a smooth solution `u(s)`, which the warm starts predict.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Line {
+    /// The keyframe at `s = 0`.
+    pub from: usize,
+    /// The keyframe at `s = 1`.
+    pub to: usize,
+    /// The place on the line.
+    pub s: f64,
 }
 
-/// Weights of the Lagrange polynomial through the nodes' times evaluated at `t`, and their
-/// count; `None` when two nodes share a time or the weights would amplify the nodes' values
-/// (sum of magnitudes above 8: one step of uniform quadratic extrapolation gives 7).
-fn lagrange_weights(t: f64, nodes: &[Solved]) -> Option<([f64; HISTORY], usize)> {
-    let mut w = [0.0; HISTORY];
-    for (i, a) in nodes.iter().enumerate() {
-        let mut wi = 1.0;
-        for (j, b) in nodes.iter().enumerate() {
-            if i != j {
-                let d = a.t - b.t;
-                if d == 0.0 {
-                    return None;
+/// A solved frame kept for predicting the next start.
+#[derive(Clone, Debug)]
+struct Solved {
+    /// The line's keyframes (`(usize::MAX, usize::MAX)` for a free blend).
+    line: (usize, usize),
+    s: f64,
+    u: Vec<f64>,
+    /// `du/ds` at the solution, when `has_du`.
+    du: Vec<f64>,
+    has_du: bool,
+}
+
+/// Largest sum of the magnitudes of a prediction's value weights, which bounds how much it
+/// amplifies the solutions' own errors (their gradients are below the tolerance): one uniform
+/// step beyond three solutions gives 7 for the quadratic through them, 37 for the quintic
+/// through them and their tangents; two steps beyond, 17 and 361 (then the cubic through the
+/// newest two and their tangents, 55, is taken instead).
+const MAX_AMPLIFICATION: f64 = 64.0;
+
+/// Weights of the polynomial that interpolates the nodes' values (and the derivatives of those
+/// with `with_du`) evaluated at `s`: the start is `sum(alpha_j u_j) + sum(beta_j du_j)`. Solves
+/// the (confluent Vandermonde) conditions of exactness on polynomials of degree below the
+/// number of data, in coordinates scaled by `spacing`. `None` when the nodes do not determine
+/// the polynomial or the value weights amplify (see [`MAX_AMPLIFICATION`]).
+fn predictor_weights(
+    s: f64,
+    spacing: f64,
+    nodes: &[(f64, bool)],
+) -> Option<([f64; HISTORY], [f64; HISTORY])> {
+    const M: usize = 2 * HISTORY;
+    // Columns: one per value, then one per derivative; the last column is the right side.
+    let mut columns: [(usize, bool); M] = [(0, false); M];
+    let mut m = 0;
+    for (j, _) in nodes.iter().enumerate() {
+        columns[m] = (j, false);
+        m += 1;
+    }
+    for (j, &(_, with_du)) in nodes.iter().enumerate() {
+        if with_du {
+            columns[m] = (j, true);
+            m += 1;
+        }
+    }
+    let mut a = [[0.0f64; M + 1]; M];
+    for (p, row) in a.iter_mut().enumerate().take(m) {
+        for (c, &(j, derivative)) in columns[..m].iter().enumerate() {
+            let x = (nodes[j].0 - s) / spacing;
+            row[c] = match (derivative, p) {
+                (false, _) => x.powi(p as i32),
+                (true, 0) => 0.0,
+                (true, _) => p as f64 * x.powi(p as i32 - 1),
+            };
+        }
+        // The polynomial x^p at the prediction's place, x = 0.
+        row[M] = if p == 0 { 1.0 } else { 0.0 };
+    }
+    // Gaussian elimination with partial pivoting on the m x m system.
+    for col in 0..m {
+        let pivot = (col..m).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
+        if a[pivot][col].abs() < 1e-12 {
+            return None;
+        }
+        a.swap(col, pivot);
+        // Columns m..M are zero in every row, so whole rows can be combined.
+        let pivot_row = a[col];
+        for (r, row) in a.iter_mut().enumerate().take(m) {
+            if r != col {
+                let f = row[col] / pivot_row[col];
+                for (x, p) in row.iter_mut().zip(&pivot_row) {
+                    *x -= f * p;
                 }
-                wi *= (t - b.t) / d;
             }
         }
-        w[i] = wi;
     }
-    let size: f64 = w.iter().map(|x| x.abs()).sum();
-    (size.is_finite() && size <= 8.0).then_some((w, nodes.len()))
+    let (mut alpha, mut beta) = ([0.0; HISTORY], [0.0; HISTORY]);
+    for (c, &(j, derivative)) in columns[..m].iter().enumerate() {
+        let w = a[c][M] / a[c][c];
+        if derivative {
+            // d/dx = spacing d/ds.
+            beta[j] = w * spacing;
+        } else {
+            alpha[j] = w;
+        }
+    }
+    let size: f64 = alpha.iter().map(|x| x.abs()).sum();
+    let finite = alpha.iter().chain(&beta).all(|x| x.is_finite());
+    (finite && size <= MAX_AMPLIFICATION).then_some((alpha, beta))
 }
 
 /// Checks that every keyframe has the first one's triangles and is valid; on failure, the
@@ -109,9 +182,15 @@ pub(crate) struct Engine {
     base: Vec<f64>,
     positions: Vec<[f64; 2]>,
     distortion: Vec<f64>,
-    /// The last solved frames, newest last; the last `solved` of them are valid.
+    /// The last solved frames, newest last; the last `solved` of them are valid, and no two
+    /// of them on one line share `s`.
     history: [Solved; HISTORY],
     solved: usize,
+    /// The line of the newest solution while the VM still holds its evaluation, so that the
+    /// next frame on that line can take its tangent first.
+    pending_tangent: Option<(usize, usize)>,
+    /// The line's rate of change of squared lengths (one per edge slot).
+    rate: Vec<f64>,
     /// The start `u` of the frame being solved.
     start: Vec<f64>,
 }
@@ -183,10 +262,11 @@ impl Engine {
             .collect::<Result<Vec<_>, _>>()?;
         let n_unknowns = vm.u().len();
         let n_vertices = keyframes[0].positions.len();
+        let n_slots = squared[0].len();
         Ok(Engine {
             rest: RestShape::new(&keyframes[0].positions, &faces),
             distortion: vec![1.0; faces.len()],
-            metric: vec![0.0; squared[0].len()],
+            metric: vec![0.0; n_slots],
             base: vec![0.0; keyframes.len()],
             anchors: keyframes.iter().map(|k| k.positions[p0]).collect(),
             angles,
@@ -196,10 +276,15 @@ impl Engine {
             options,
             positions: vec![[0.0; 2]; n_vertices],
             history: [(); HISTORY].map(|_| Solved {
-                t: 0.0,
+                line: (usize::MAX, usize::MAX),
+                s: 0.0,
                 u: vec![0.0; n_unknowns],
+                du: vec![0.0; n_unknowns],
+                has_du: false,
             }),
             solved: 0,
+            pending_tangent: None,
+            rate: vec![0.0; n_slots],
             start: vec![0.0; n_unknowns],
             vm,
         })
@@ -240,21 +325,23 @@ impl Engine {
         &mut self,
         weights: &[f64],
         time: Option<f64>,
+        line: Option<Line>,
     ) -> Result<FrameStats, MorphError> {
         let mut out = std::mem::take(&mut self.positions);
-        let result = self.frame_into(weights, time, &mut out);
+        let result = self.frame_into(weights, time, line, &mut out);
         self.positions = out;
         result
     }
 
     /// Solves the frame with `weights` (one per keyframe, summing to 1) into `out`. `time` is
-    /// the frame's place on a one-parameter family (a morph's or path's `t`), which lets warm
-    /// starts extrapolate; `None` for a free blend. Allocates nothing unless it fails; on
-    /// error `out` is left untouched.
+    /// the frame's time as reported (a morph's or path's `t`; `None` for a free blend), `line`
+    /// its place on the line through two keyframes that its weights lie on (which lets warm
+    /// starts predict). Allocates nothing unless it fails; on error `out` is left untouched.
     pub(crate) fn frame_into(
         &mut self,
         weights: &[f64],
         time: Option<f64>,
+        line: Option<Line>,
         out: &mut [[f64; 2]],
     ) -> Result<FrameStats, MorphError> {
         let started = std::time::Instant::now();
@@ -272,6 +359,8 @@ impl Engine {
         if weights.iter().any(|&w| w < 0.0) {
             self.check_extrapolation(weights, time)?;
         }
+        // The previous frame's tangent, while the VM still holds its solution's evaluation.
+        let (tangent_cg, tangent_factorizations) = self.take_tangent(line);
         self.metric.fill(0.0);
         for (w, sq) in weights.iter().zip(&self.squared) {
             if *w != 0.0 {
@@ -288,14 +377,19 @@ impl Engine {
         self.vm
             .set_metric(&self.metric)
             .map_err(|e| solver(e, weights))?;
-        let extrapolated = self.choose_start(time);
-        let mut result = self.vm.newton(&self.options.newton);
+        let extrapolated = self.choose_start(line);
+        // This frame's tangent will be taken with the factor Newton leaves.
+        let newton = self
+            .options
+            .newton
+            .with_tangent_follows(line.is_some() && self.predicts_with_tangents());
+        let mut result = self.vm.newton(&newton);
         if result.is_err() && extrapolated {
             // An extrapolated start is a guess: fall back to the last solution before failing.
             self.vm
                 .set_u(&self.history[HISTORY - 1].u)
                 .expect("history has one value per unknown");
-            result = self.vm.newton(&self.options.newton);
+            result = self.vm.newton(&newton);
         }
         let report = result.map_err(|e| {
             let worst = self.vm.failure_triangles().to_vec();
@@ -329,13 +423,13 @@ impl Engine {
         self.vm
             .embed(anchor, [c, s], out)
             .map_err(|e| solver(e, weights))?;
-        self.remember(time);
+        self.remember(line);
         let max_conformal_distortion = self.rest.distortion_into(out, &mut self.distortion);
         Ok(FrameStats {
             t: time.unwrap_or(f64::NAN),
             newton_iterations: report.iterations,
-            factorizations: report.factorizations,
-            cg_iterations: report.cg_iterations,
+            factorizations: report.factorizations + tangent_factorizations,
+            cg_iterations: report.cg_iterations + tangent_cg,
             gradient_norm: report.gradient_norm,
             flipped_triangles: self.vm.count_flipped(out),
             max_conformal_distortion,
@@ -432,8 +526,48 @@ impl Engine {
         })
     }
 
-    /// Sets the VM's start `u` for a frame at `time`; true when it was extrapolated.
-    fn choose_start(&mut self, time: Option<f64>) -> bool {
+    /// Whether starts are predicted with tangents.
+    fn predicts_with_tangents(&self) -> bool {
+        self.options.warm_start && self.options.extrapolate && self.options.tangents
+    }
+
+    /// When the newest solution's evaluation is still in the VM and `line` is its line (and
+    /// tangents are on), computes its tangent `du/ds` into the history: the frame after it
+    /// then starts from a Hermite prediction. Returns the conjugate-gradient iterations and
+    /// factorisations that took. A failed tangent only leaves the prediction without it.
+    fn take_tangent(&mut self, line: Option<Line>) -> (u32, u32) {
+        let pending = self.pending_tangent.take();
+        let Some(line) = line else { return (0, 0) };
+        if !self.predicts_with_tangents()
+            || pending != Some((line.from, line.to))
+            || self.solved == 0
+        {
+            return (0, 0);
+        }
+        let (from, to) = (&self.squared[line.from], &self.squared[line.to]);
+        for ((r, a), b) in self.rate.iter_mut().zip(from).zip(to) {
+            *r = b - a;
+        }
+        let newest = &mut self.history[HISTORY - 1];
+        match self.vm.tangent(&self.rate) {
+            Ok(report) => {
+                newest.du.copy_from_slice(self.vm.tangent_values());
+                newest.has_du = newest.du.iter().all(|d| d.is_finite());
+                (report.cg_iterations, u32::from(report.factorized))
+            }
+            Err(_) => (0, 0),
+        }
+    }
+
+    /// Sets the VM's start `u` for a frame at `line`; true when it was predicted from more
+    /// than the last solution.
+    ///
+    /// The prediction interpolates the up to three newest solutions on the same line, and
+    /// their tangents where known (a Hermite polynomial: quintic with three solutions and
+    /// three tangents), evaluated at the new place when that is within twice the spacing of
+    /// the two newest; it drops the oldest solution when the weights would amplify their
+    /// differences, and falls back to the last solution.
+    fn choose_start(&mut self, line: Option<Line>) -> bool {
         if !self.options.warm_start {
             self.vm.reset_u();
             return false;
@@ -441,34 +575,53 @@ impl Engine {
         if self.solved == 0 {
             return false;
         }
-        let last = &self.history[HISTORY - 1];
-        let weights = match time {
-            Some(t) if self.options.extrapolate && self.solved >= 2 => {
-                let prev = &self.history[HISTORY - 2];
-                let near = (t - last.t).abs() <= 2.0 * (last.t - prev.t).abs();
-                let nodes = &self.history[HISTORY - self.solved..];
-                let cubic = lagrange_weights(t, nodes);
-                let linear = lagrange_weights(t, &nodes[nodes.len() - 2..]);
-                match (near, cubic, linear) {
-                    (false, ..) => None,
-                    (true, Some(w), _) => Some(w),
-                    (true, None, Some(w)) => Some(w),
-                    (true, None, None) => None,
+        let last = HISTORY - 1;
+        let mut prediction = None;
+        if let (Some(line), true) = (line, self.options.extrapolate) {
+            // The newest solutions on this line, newest first.
+            let mut nodes = [0usize; HISTORY];
+            let mut count = 0;
+            for i in (HISTORY - self.solved..HISTORY).rev() {
+                if self.history[i].line == (line.from, line.to) {
+                    nodes[count] = i;
+                    count += 1;
                 }
             }
-            _ => None,
-        };
-        let Some((weights, count)) = weights else {
+            if count >= 2 {
+                let (a, b) = (&self.history[nodes[0]], &self.history[nodes[1]]);
+                let spacing = (a.s - b.s).abs();
+                if (line.s - a.s).abs() <= 2.0 * spacing {
+                    let attempts = [(count, true), (2, true), (count, false), (2, false)];
+                    for (used, with_du) in attempts {
+                        let mut data = [(0.0, false); HISTORY];
+                        for (d, &i) in data.iter_mut().zip(&nodes[..used]) {
+                            let h = &self.history[i];
+                            *d = (h.s, with_du && h.has_du && self.options.tangents);
+                        }
+                        if let Some(w) = predictor_weights(line.s, spacing, &data[..used]) {
+                            prediction = Some((nodes, used, w));
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        let Some((nodes, used, (alpha, beta))) = prediction else {
             self.vm
-                .set_u(&last.u)
+                .set_u(&self.history[last].u)
                 .expect("history has one value per unknown");
             return false;
         };
-        let nodes = &self.history[HISTORY - count..];
         self.start.fill(0.0);
-        for (node, w) in nodes.iter().zip(&weights[..count]) {
+        for (j, &i) in nodes[..used].iter().enumerate() {
+            let node = &self.history[i];
             for (s, u) in self.start.iter_mut().zip(&node.u) {
-                *s += w * u;
+                *s += alpha[j] * u;
+            }
+            if beta[j] != 0.0 {
+                for (s, d) in self.start.iter_mut().zip(&node.du) {
+                    *s += beta[j] * d;
+                }
             }
         }
         self.vm
@@ -477,24 +630,40 @@ impl Engine {
         true
     }
 
-    /// Records the VM's solution as the newest solved frame. Allocates nothing. A frame
-    /// without a time (a free blend) leaves only itself to start from.
-    fn remember(&mut self, time: Option<f64>) {
-        let Some(t) = time else {
-            self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
-            self.history[HISTORY - 1].t = 0.0;
+    /// Records the VM's solution as the newest solved frame, replacing a solution at the same
+    /// place of the same line, and marks its tangent as pending. Allocates nothing. A frame
+    /// off any line (a free blend) leaves only itself to start from.
+    fn remember(&mut self, line: Option<Line>) {
+        let last = HISTORY - 1;
+        let Some(line) = line else {
+            let newest = &mut self.history[last];
+            newest.u.copy_from_slice(self.vm.u());
+            newest.line = (usize::MAX, usize::MAX);
+            newest.has_du = false;
             self.solved = 1;
             return;
         };
-        if self.solved > 0 && self.history[HISTORY - 1].t == t {
-            // The same frame again: do not let a repeat collapse the spacing.
-            self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
-            return;
+        let key = (line.from, line.to);
+        let same = (HISTORY - self.solved..HISTORY)
+            .find(|&i| self.history[i].line == key && self.history[i].s == line.s);
+        match same {
+            // Move the old solution there to the newest place, keeping the others' order.
+            Some(i) => self.history[i..].rotate_left(1),
+            None => {
+                self.history.rotate_left(1);
+                self.solved = (self.solved + 1).min(HISTORY);
+                self.history[last].has_du = false;
+            }
         }
-        self.history.rotate_left(1);
-        self.history[HISTORY - 1].t = t;
-        self.history[HISTORY - 1].u.copy_from_slice(self.vm.u());
-        self.solved = (self.solved + 1).min(HISTORY);
+        let newest = &mut self.history[last];
+        newest.line = key;
+        newest.s = line.s;
+        newest.u.copy_from_slice(self.vm.u());
+        // A solution of the same metric again keeps its tangent: both solve it to the
+        // tolerance.
+        if !newest.has_du {
+            self.pending_tangent = Some(key);
+        }
     }
 }
 
@@ -509,6 +678,55 @@ fn euclidean(q: [f64; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A quintic and its derivative.
+    fn quintic(x: f64) -> (f64, f64) {
+        let c = [0.3, -1.1, 0.7, 2.0, -0.4, 0.9];
+        let value = c.iter().rev().fold(0.0, |acc, k| acc * x + k);
+        let slope = (1..6).rev().fold(0.0, |acc, p| acc * x + p as f64 * c[p]);
+        (value, slope)
+    }
+
+    #[test]
+    fn predictions_are_exact_on_polynomials_of_their_degree() {
+        let nodes = [0.9, 0.8, 0.7];
+        let predict = |s: f64, data: &[(f64, bool)], spacing: f64| {
+            let (alpha, beta) = predictor_weights(s, spacing, data).expect("weights");
+            data.iter()
+                .enumerate()
+                .map(|(j, &(x, _))| alpha[j] * quintic(x).0 + beta[j] * quintic(x).1)
+                .sum::<f64>()
+        };
+        // Three solutions and their tangents: the quintic itself, one step beyond.
+        let all: Vec<(f64, bool)> = nodes.iter().map(|&x| (x, true)).collect();
+        let got = predict(1.0, &all, 0.1);
+        assert!((got - quintic(1.0).0).abs() < 1e-11, "{got}");
+        // Between and on the nodes too.
+        for s in [0.85, 0.8, 0.75] {
+            assert!((predict(s, &all, 0.1) - quintic(s).0).abs() < 1e-12, "{s}");
+        }
+        // Values only: exact for the quadratic part's degree, here checked on a quadratic.
+        let (alpha, beta) =
+            predictor_weights(1.0, 0.1, &[(0.9, false), (0.8, false), (0.7, false)])
+                .expect("weights");
+        assert_eq!(beta, [0.0; HISTORY]);
+        let q = |x: f64| 1.0 - 2.0 * x + 3.0 * x * x;
+        let got: f64 = nodes.iter().zip(&alpha).map(|(&x, a)| a * q(x)).sum();
+        assert!((got - q(1.0)).abs() < 1e-12);
+        assert!((alpha[0] - 3.0).abs() < 1e-12 && (alpha[1] + 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn predictions_refuse_coincident_nodes_and_far_extrapolation() {
+        assert!(predictor_weights(1.0, 0.1, &[(0.9, false), (0.9, false)]).is_none());
+        let all = [(0.9, true), (0.8, true), (0.7, true)];
+        // One step beyond: amplification 37; three steps beyond: far more.
+        assert!(predictor_weights(1.0, 0.1, &all).is_some());
+        assert!(predictor_weights(1.2, 0.1, &all).is_none());
+        // The cubic through the newest two takes over two steps beyond (amplification 55).
+        assert!(predictor_weights(1.1, 0.1, &all).is_none());
+        assert!(predictor_weights(1.1, 0.1, &all[..2]).is_some());
+    }
 
     #[test]
     fn heron_test_agrees_with_the_triangle_inequality() {

@@ -2,7 +2,7 @@
 
 use bdmorph_vm::{NewtonOptions, Program, TriangleReport, VmError};
 
-use crate::keyframes::{Engine, Unwrap};
+use crate::keyframes::{Engine, Line, Unwrap};
 
 use crate::mesh::{MeshError, PlanarMesh};
 
@@ -14,10 +14,17 @@ pub struct MorphOptions {
     pub newton: NewtonOptions,
     /// Start each frame's Newton solve from the previous frame's solution (default true).
     pub warm_start: bool,
-    /// With warm starts, extrapolate the start in `t` through the last three solved frames
-    /// (quadratically; linearly through two when three would amplify them) when the new `t`
-    /// is within twice the last spacing (default true).
+    /// With warm starts, predict the start from the last three solved frames on the same
+    /// line of metrics (a morph's `t`, a path segment's weight) when the new place is within
+    /// twice the last spacing (default true): by the polynomial through their solutions, and
+    /// through their tangents too when [`Self::tangents`] is on.
     pub extrapolate: bool,
+    /// With predicted starts, take each solved frame's tangent `du/dt` (a closed-form pass
+    /// over the triangles and a solve with the current factor, done when the next frame on
+    /// the same line is asked for) so that the prediction is a Hermite polynomial: quintic
+    /// through three solutions and their tangents (default true). Its work is counted in the
+    /// next frame's statistics.
+    pub tangents: bool,
 }
 
 impl Default for MorphOptions {
@@ -26,6 +33,7 @@ impl Default for MorphOptions {
             newton: NewtonOptions::default(),
             warm_start: true,
             extrapolate: true,
+            tangents: true,
         }
     }
 }
@@ -49,6 +57,11 @@ impl MorphOptions {
     /// Turns the extrapolation of warm starts on or off.
     pub fn with_extrapolate(mut self, extrapolate: bool) -> Self {
         self.extrapolate = extrapolate;
+        self
+    }
+    /// Turns the tangents of predicted starts on or off (see [`Self::tangents`]).
+    pub fn with_tangents(mut self, tangents: bool) -> Self {
+        self.tangents = tangents;
         self
     }
     /// Allows or forbids reusing an earlier numeric factor in Newton's method (see
@@ -375,7 +388,7 @@ impl Morph {
     pub fn frame(&mut self, t: f64) -> Result<Frame<'_>, MorphError> {
         let stats = self
             .engine
-            .frame(&[1.0 - t, t], Some(t))
+            .frame(&[1.0 - t, t], Some(t), Some(on_line(t)))
             .map_err(|e| in_time(e, t))?;
         Ok(Frame {
             positions: self.engine.positions(),
@@ -388,8 +401,17 @@ impl Morph {
     /// error `out` is left untouched.
     pub fn frame_into(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<FrameStats, MorphError> {
         self.engine
-            .frame_into(&[1.0 - t, t], Some(t), out)
+            .frame_into(&[1.0 - t, t], Some(t), Some(on_line(t)), out)
             .map_err(|e| in_time(e, t))
+    }
+}
+
+/// A morph's frames lie on the line from the source (keyframe 0) to the target, at `t`.
+fn on_line(t: f64) -> Line {
+    Line {
+        from: 0,
+        to: 1,
+        s: t,
     }
 }
 

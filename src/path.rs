@@ -3,7 +3,7 @@
 use bdmorph_vm::Program;
 
 use crate::blend::{check_keyframes, compile_keyframes};
-use crate::keyframes::{Engine, Unwrap};
+use crate::keyframes::{Engine, Line, Unwrap};
 use crate::mesh::PlanarMesh;
 use crate::morph::{Frame, FrameStats, MorphError, MorphOptions};
 
@@ -292,8 +292,8 @@ impl Path {
     /// Computes the frame at global time `t` in [0, 1]. The positions borrow an internal
     /// buffer reused by the next call.
     pub fn frame(&mut self, t: f64) -> Result<Frame<'_>, MorphError> {
-        self.set_weights(t)?;
-        let stats = self.engine.frame(&self.weights, Some(t))?;
+        let line = self.set_weights(t)?;
+        let stats = self.engine.frame(&self.weights, Some(t), Some(line))?;
         Ok(Frame {
             positions: self.engine.positions(),
             distortion: self.engine.distortion(),
@@ -304,16 +304,22 @@ impl Path {
     /// Computes the frame at `t` into `out` (one position per vertex). Allocates nothing; on
     /// error `out` is left untouched.
     pub fn frame_into(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<FrameStats, MorphError> {
-        self.set_weights(t)?;
-        self.engine.frame_into(&self.weights, Some(t), out)
+        let line = self.set_weights(t)?;
+        self.engine
+            .frame_into(&self.weights, Some(t), Some(line), out)
     }
 
-    fn set_weights(&mut self, t: f64) -> Result<(), MorphError> {
+    /// Sets the weights of global time `t`; returns the frame's place on its segment's line.
+    fn set_weights(&mut self, t: f64) -> Result<Line, MorphError> {
         let (k, w) = self.segment_at(t)?;
         self.weights.fill(0.0);
         self.weights[k] = 1.0 - w;
         self.weights[k + 1] = w;
-        Ok(())
+        Ok(Line {
+            from: k,
+            to: k + 1,
+            s: w,
+        })
     }
 }
 

@@ -186,6 +186,40 @@ fn paths_pass_exactly_through_their_keyframes() {
 }
 
 #[test]
+fn predicted_starts_do_not_change_path_frames() {
+    // Eased segments, forward and back across the keyframe times: each frame's start is
+    // predicted on its segment's line (with tangents), and must end where a cold start does.
+    let keys = poses();
+    let mut keys4 = keys.clone();
+    keys4.push(keys[0].clone());
+    let options = PathOptions::default().with_easings(vec![
+        Easing::EaseInOut,
+        Easing::cubic_bezier(0.2, 0.0, 0.3, 1.0).unwrap(),
+        Easing::Linear,
+    ]);
+    let mut warm = Path::with_options(&keys4, options.clone()).expect("path");
+    let cold_morph = MorphOptions::default()
+        .with_warm_start(false)
+        .with_reuse_factor(false);
+    let mut cold = Path::with_options(&keys4, options.with_morph(cold_morph)).expect("path");
+    let mut times: Vec<f64> = (0..=20).map(|i| f64::from(i) / 20.0).collect();
+    times.extend((0..20).rev().map(|i| f64::from(i) / 20.0 + 0.013));
+    let (mut warm_its, mut cold_its) = (0, 0);
+    for t in times {
+        let w = warm.frame(t).unwrap_or_else(|e| panic!("t = {t}: {e}"));
+        assert_eq!(w.stats.flipped_triangles, 0, "t = {t}");
+        warm_its += w.stats.newton_iterations;
+        let w = w.positions.to_vec();
+        let c = cold.frame(t).expect("cold frame");
+        cold_its += c.stats.newton_iterations;
+        let d = max_distance(&w, c.positions);
+        assert!(d < 1e-9 * keys[0].diameter(), "t = {t}: {d:e}");
+    }
+    // Large steps between these poses: predictions help little, but never make it worse.
+    assert!(warm_its < cold_its, "{warm_its} against {cold_its}");
+}
+
+#[test]
 fn a_two_keyframe_linear_path_is_the_morph() {
     let keys = poses();
     let mut path = Path::new(&keys[..2]).expect("path");

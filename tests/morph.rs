@@ -131,6 +131,33 @@ fn frame_levers_change_the_work_not_the_frames() {
 }
 
 #[test]
+fn tangents_cut_newton_steps_and_leave_the_frames() {
+    // The same sweep with starts predicted from solutions alone and from solutions and
+    // tangents (Hermite): the same frames, fewer Newton steps.
+    for (name, a, b) in pairs() {
+        let without = MorphOptions::default().with_tangents(false);
+        let mut reference = Morph::new(&a, &b, without).expect("without tangents");
+        let mut hermite = Morph::new(&a, &b, MorphOptions::default()).expect("default");
+        let (mut steps_without, mut steps_with) = (0, 0);
+        for i in 0..=20 {
+            let t = f64::from(i) / 20.0;
+            let r = reference.frame(t).expect("frame");
+            steps_without += r.stats.newton_iterations;
+            let r = r.positions.to_vec();
+            let h = hermite.frame(t).expect("frame");
+            steps_with += h.stats.newton_iterations;
+            assert!(h.stats.gradient_norm < 1e-10, "{name} t = {t}");
+            let d = max_distance(&r, h.positions);
+            assert!(d < 1e-9 * a.diameter(), "{name} t = {t}: {d:e}");
+        }
+        assert!(
+            steps_with < steps_without,
+            "{name}: {steps_with} Newton steps with tangents, {steps_without} without"
+        );
+    }
+}
+
+#[test]
 fn any_order_of_times_gives_the_frames_of_cold_starts() {
     // Repeats, jumps, reversals and tiny steps: the extrapolation must never change a frame.
     let (_, a, b) = pairs().remove(3);

@@ -5,6 +5,7 @@ use faer::dyn_stack::MemStack;
 use faer::sparse::linalg::cholesky::LltRef;
 use faer::{Conj, MatMut, Par};
 
+use crate::tangent::tangent_extra_cg;
 use crate::Vm;
 
 /// Work vectors of the conjugate-gradient solve, one value per unknown each.
@@ -55,23 +56,73 @@ pub(crate) fn symmetric_product(
     }
 }
 
+/// How a preconditioned conjugate-gradient solve ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PcgOutcome {
+    /// Iterations run (each one preconditioner application and one product with `H`).
+    pub iterations: u32,
+    /// The residual reached the requested fraction of the right-hand side.
+    pub converged: bool,
+    /// Stopped early because the contraction observed so far predicted more iterations than
+    /// the caller's limit (see [`Vm::pcg`]); the iterate is still a descent direction.
+    pub aborted: bool,
+    /// Mean contraction of the residual per iteration (0 before the first).
+    pub rate: f64,
+}
+
+/// When [`Vm::pcg`] gives up on a factor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct AbortRule {
+    /// Further iterations beyond which refactoring is cheaper.
+    pub limit: f64,
+    /// A tangent will follow with the same factor: count its extra iterations too.
+    pub tangent_follows: bool,
+}
+
 impl Vm {
-    /// Solves `H step = -g` for the current Hessian by conjugate gradients preconditioned by
-    /// the last numeric factor (which must be ready), until the residual is below
-    /// `relative * ||g||` or after `max_iterations`; returns the iterations used. Every
-    /// iterate, the last included, is a descent direction of the energy (it lowers the
-    /// quadratic model from 0). Allocates nothing.
-    pub(crate) fn pcg_step(&mut self, relative: f64, max_iterations: u32) -> u32 {
+    /// Solves `H x = -v` for the current Hessian by conjugate gradients preconditioned by the
+    /// last numeric factor (which must be ready), until the residual is below
+    /// `relative * ||v||` or after `max_iterations`. `v` is the gradient (`x` the Newton
+    /// step) or the derivative of the gradient along the metric (`x` the tangent). Every
+    /// iterate, the last included, lowers the quadratic model `x.Hx/2 + v.x` from 0, so for
+    /// `v` the gradient it is a descent direction.
+    ///
+    /// With `abort`, the solve also stops as soon as the mean contraction of the residual per
+    /// iteration so far predicts that more than its limit of further iterations would be
+    /// needed, counting those a following tangent would need with this factor beyond a fresh
+    /// one ([`tangent_extra_cg`]) when it says so: the factor has gone too stale to pay
+    /// against a new factorisation. Allocates nothing.
+    pub(crate) fn pcg(
+        &mut self,
+        of_gradient: bool,
+        relative: f64,
+        max_iterations: u32,
+        abort: Option<AbortRule>,
+    ) -> PcgOutcome {
         let n = self.u.len();
         let h = self.program.hessian();
         let llt = LltRef::new(&self.symbolic, &self.factor);
         let CgBuffers { r, z, p, hp } = &mut self.cg;
-        let x = &mut self.step;
+        let (v, x) = if of_gradient {
+            (&self.grad, &mut self.step)
+        } else {
+            (&self.dgrad, &mut self.tangent)
+        };
         x.fill(0.0);
-        for (r, g) in r.iter_mut().zip(&self.grad) {
-            *r = -g;
+        for (r, v) in r.iter_mut().zip(v) {
+            *r = -v;
         }
-        let target = relative * dot(r, r).sqrt();
+        let start = dot(r, r).sqrt();
+        let target = relative * start;
+        let mut outcome = PcgOutcome {
+            iterations: 0,
+            converged: start == 0.0,
+            aborted: false,
+            rate: 0.0,
+        };
+        if outcome.converged {
+            return outcome;
+        }
         let precondition =
             |r: &[f64], z: &mut [f64], workspace: &mut faer::dyn_stack::MemBuffer| {
                 z.copy_from_slice(r);
@@ -86,18 +137,39 @@ impl Vm {
         p.copy_from_slice(z);
         let mut rz = dot(r, z);
         for iteration in 1..=max_iterations {
+            outcome.iterations = iteration;
             symmetric_product(&h.col_ptr, &h.row_idx, &self.hvals, p, hp);
             let php = dot(p, hp);
             if !(php > 0.0 && rz > 0.0) {
-                return iteration;
+                return outcome;
             }
             let alpha = rz / php;
             for ((x, r), (p, hp)) in x.iter_mut().zip(r.iter_mut()).zip(p.iter().zip(&*hp)) {
                 *x += alpha * p;
                 *r -= alpha * hp;
             }
-            if dot(r, r).sqrt() <= target {
-                return iteration;
+            let residual = dot(r, r).sqrt();
+            if residual <= target {
+                outcome.converged = true;
+                return outcome;
+            }
+            // Mean contraction so far.
+            let rate = (residual / start).powf(1.0 / f64::from(iteration));
+            outcome.rate = rate;
+            if let Some(rule) = abort {
+                // The iterations this contraction needs for the rest.
+                let mut more = if rate < 1.0 {
+                    (target / residual).ln() / rate.ln()
+                } else {
+                    f64::INFINITY
+                };
+                if rule.tangent_follows {
+                    more += tangent_extra_cg(rate);
+                }
+                if more > rule.limit {
+                    outcome.aborted = true;
+                    return outcome;
+                }
             }
             precondition(r, z, &mut self.workspace);
             let rz_next = dot(r, z);
@@ -107,7 +179,7 @@ impl Vm {
                 *p = z + beta * *p;
             }
         }
-        max_iterations
+        outcome
     }
 }
 
@@ -165,8 +237,9 @@ mod tests {
         vm.set_metric_lerp(&sa, &sb, 0.7).expect("metric");
         vm.reset_u();
         vm.evaluate();
-        let used = vm.pcg_step(1e-13, 200);
-        assert!(used > 1 && used < 200, "{used} iterations");
+        let used = vm.pcg(true, 1e-13, 200, None);
+        assert!(used.converged && !used.aborted);
+        assert!(used.iterations > 1 && used.iterations < 200, "{used:?}");
         let h = vm.program().hessian().clone();
         let mut hs = vec![0.0; n];
         symmetric_product(
@@ -182,7 +255,7 @@ mod tests {
             assert!((hs + g).abs() < 1e-11 * g_norm, "row {k}");
         }
         // A truncated solve is still a descent direction.
-        vm.pcg_step(1e-13, 1);
+        vm.pcg(true, 1e-13, 1, None);
         assert!(dot(vm.gradient(), &vm.step) < 0.0);
     }
 

@@ -30,6 +30,12 @@ pub enum VmError {
     /// A solve was asked for before any numeric factorisation.
     #[error("no numeric factor yet: factor a Hessian before solving with it")]
     NoFactor,
+    /// A tangent was asked for when the last evaluation is not of the current `u` and metric
+    /// (call it right after a successful [`Vm::newton`](crate::Vm::newton)).
+    #[error(
+        "no evaluation at the current u and metric: solve the frame before asking for its tangent"
+    )]
+    NotEvaluated,
     /// Newton was asked to run before a metric was set (or after setting one failed).
     #[error("no metric: call set_metric or set_metric_lerp before newton")]
     MetricNotSet,

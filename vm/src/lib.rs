@@ -48,10 +48,12 @@ pub mod lobachevsky;
 mod newton;
 mod plan;
 pub mod sparse;
+mod tangent;
 
 pub use bdmorph_isa::Program;
 pub use error::VmError;
 pub use newton::{NewtonOptions, NewtonReport};
+pub use tangent::TangentReport;
 
 /// A triangle of the current metric, as reported when a frame fails.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -101,10 +103,25 @@ pub struct Vm {
     hvals: Vec<f64>,
     step: Vec<f64>,
     cg: cg::CgBuffers,
+    /// The derivative of the gradient along a line of metrics, and the tangent it gives.
+    dgrad: Vec<f64>,
+    tangent: Vec<f64>,
+    /// Per iteration edge: the rate of change of its log length along the line.
+    dlog: Vec<f64>,
+    /// Per corner: the rate of change of its angle along the line.
+    dtheta: Vec<f64>,
+    /// The gradient, Hessian and corners are those of the current `u` and metric.
+    evaluated: bool,
     dirs: Vec<[f64; 2]>,
     metric_set: bool,
     factor_ready: bool,
-    refactor_after_cg: u32,
+    /// The factor was computed during the current (or last) Newton solve.
+    factor_current: bool,
+    /// Further conjugate-gradient iterations beyond which refactoring is cheaper.
+    refactor_beyond: f64,
+    /// Mean contraction per conjugate-gradient iteration the last time a solve started from
+    /// a factor of an earlier solve (NaN before that happened).
+    inherited_rate: f64,
     failure: Vec<TriangleReport>,
 }
 
@@ -135,7 +152,7 @@ impl Vm {
         );
         let (symbolic, workspace) = newton::analyse(&pattern, program.ordering())?;
         let factor = vec![0.0; symbolic.len_val()];
-        let refactor_after_cg = newton::refactor_after_cg(&symbolic);
+        let refactor_beyond = newton::refactor_beyond(&symbolic);
         Ok(Vm {
             pattern,
             symbolic,
@@ -155,10 +172,17 @@ impl Vm {
             hvals: vec![0.0; h.nnz()],
             step: vec![0.0; n],
             cg: cg::CgBuffers::new(n),
+            dgrad: vec![0.0; n],
+            tangent: vec![0.0; n],
+            dlog: vec![0.0; program.n_iter_edges()],
+            dtheta: vec![0.0; program.n_temps()],
+            evaluated: false,
             dirs: vec![[0.0; 2]; program.n_edges()],
             metric_set: false,
             factor_ready: false,
-            refactor_after_cg,
+            factor_current: false,
+            refactor_beyond,
+            inherited_rate: f64::NAN,
             failure: Vec::new(),
             program,
         })
@@ -199,6 +223,7 @@ impl Vm {
     }
 
     fn fill_metric(&mut self, sq: impl Fn(usize) -> f64) -> Result<(), VmError> {
+        self.evaluated = false;
         for slot in 0..self.l0.len() {
             let v = sq(slot);
             if !(v > 0.0 && v.is_finite()) {
@@ -245,6 +270,7 @@ impl Vm {
             value: f64::NAN,
             magnitude: f64::NAN,
         };
+        self.evaluated = true;
     }
 
     /// `scale = exp(u / 2)` per unknown (its last entry, for boundary vertices, stays 1).
@@ -267,6 +293,7 @@ impl Vm {
                 hvals: &mut self.hvals,
             },
         );
+        self.evaluated = true;
     }
 
     /// Log scale factors, one per unknown (interior vertex, see [`Program::unknown_vertex`]).
@@ -276,12 +303,14 @@ impl Vm {
 
     /// Sets every log scale factor to 0 (a cold start for the next Newton solve).
     pub fn reset_u(&mut self) {
+        self.evaluated = false;
         self.u.fill(0.0);
     }
 
     /// Sets the log scale factors (the next Newton solve starts from them).
     pub fn set_u(&mut self, u: &[f64]) -> Result<(), VmError> {
         self.check_len("u", self.u.len(), u.len())?;
+        self.evaluated = false;
         self.u.copy_from_slice(u);
         Ok(())
     }

@@ -13,6 +13,8 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
+use crate::cg::AbortRule;
+use crate::tangent::tangent_extra_cg;
 use crate::{Vm, VmError};
 
 /// Stopping rule and factor policy of [`Vm::newton`].
@@ -27,10 +29,14 @@ pub struct NewtonOptions {
     /// e = 2.7 on lengths); longer Newton steps are scaled down to it before the line search.
     pub step_cap: f64,
     /// Reuse the last numeric Cholesky factor (of an earlier iterate or an earlier frame) as
-    /// the preconditioner of conjugate gradients on the current Hessian, refactoring only when
-    /// they need more than a few iterations (default `true`). The tolerance is unchanged: only
-    /// the work per step differs. With `false` every step factors the current Hessian.
+    /// the preconditioner of conjugate gradients on the current Hessian, refactoring when the
+    /// contraction they show predicts more iterations than a factorisation costs (default
+    /// `true`; see [`Vm::newton`]). The tolerance is unchanged: only the work per step
+    /// differs. With `false` every step factors the current Hessian.
     pub reuse_factor: bool,
+    /// A [`Vm::tangent`] will follow the solve with the same factor (default `false`): the
+    /// choice between an earlier factor and a new one counts the tangent's solve too.
+    pub tangent_follows: bool,
 }
 
 impl Default for NewtonOptions {
@@ -40,6 +46,7 @@ impl Default for NewtonOptions {
             max_iterations: 50,
             step_cap: 2.0,
             reuse_factor: true,
+            tangent_follows: false,
         }
     }
 }
@@ -53,6 +60,11 @@ impl NewtonOptions {
     /// Sets the iteration limit.
     pub fn with_max_iterations(mut self, max_iterations: u32) -> Self {
         self.max_iterations = max_iterations;
+        self
+    }
+    /// Sets whether a tangent will follow (see [`Self::tangent_follows`]).
+    pub fn with_tangent_follows(mut self, tangent_follows: bool) -> Self {
+        self.tangent_follows = tangent_follows;
         self
     }
     /// Sets whether an earlier numeric factor may be reused (see [`Self::reuse_factor`]).
@@ -88,9 +100,10 @@ const ACCEPT_RATIO: f64 = 0.5;
 /// Conjugate-gradient iterations allowed per step (any iterate is a descent direction).
 const MAX_CG: u32 = 25;
 
-/// How many conjugate-gradient iterations a step may take before the factor is judged stale
-/// (the next step refactors): half the cost of a factorisation counted in solves, so that the
-/// iterations a stale factor costs never exceed what refactoring would, within a factor of 2.
+/// How many further conjugate-gradient iterations a step with an inherited factor may need
+/// before refactoring is cheaper: a factorisation plus one solve, counted in iterations (a
+/// solve and a product with `H`, about 1.15 solves). [`Vm::pcg`] stops a step as soon as the
+/// contraction it has seen predicts more than that.
 ///
 /// The costs are estimated from the factor's structure, not timed, so that a frame's work (and
 /// its result, to the last bit) does not depend on the machine's load. A simplicial
@@ -100,14 +113,14 @@ const MAX_CG: u32 = 25;
 /// multiply-adds do: on the benchmark disks with a nested-dissection ordering the measured
 /// factor/solve time is 4.3, 5.3 and 4.5 at 1K, 10K and 100K unknowns (criterion medians,
 /// BENCHMARKS.md) while the multiply-add ratio grows from 8 to 36, so it is taken as 4.7.
-pub(crate) fn refactor_after_cg(symbolic: &SymbolicCholesky<u32>) -> u32 {
+pub(crate) fn refactor_beyond(symbolic: &SymbolicCholesky<u32>) -> f64 {
     let (factor, solve, supernodal) = factor_and_solve_cost(symbolic);
     let ratio = if supernodal {
         4.7
     } else {
         1.2 * factor / solve.max(1.0)
     };
-    (0.5 * ratio).round().clamp(2.0, 20.0) as u32
+    ((ratio + 1.0) / 1.15).clamp(2.0, 20.0)
 }
 
 /// Estimated multiply-adds of one numeric factorisation and of one solve with it, from the
@@ -216,7 +229,17 @@ impl Vm {
     /// Each iteration evaluates the gradient and Hessian, stops when `||g||_2` is below the
     /// tolerance, and otherwise steps along `d = -H^-1 g`, with `H` the current Hessian or,
     /// when [`NewtonOptions::reuse_factor`] allows, the last factored one (any positive
-    /// definite `H` gives a descent direction). A trial step is accepted outright when it
+    /// definite `H` gives a descent direction).
+    ///
+    /// A reused factor is abandoned for a new one as soon as the conjugate gradients' mean
+    /// contraction per iteration predicts that finishing the step (plus, with
+    /// [`NewtonOptions::tangent_follows`], the tangent's extra iterations with that factor)
+    /// would cost more than a factorisation and a solve, estimated from the factor's structure
+    /// so that the choice does not depend on the machine's load. The first step of a solve
+    /// judges a factor inherited from an earlier solve by the contraction seen the last time
+    /// that happened, without spending an iteration on it.
+    ///
+    /// A trial step is accepted outright when it
     /// brings `||g||` below half the smallest norm seen so far in this solve: that can happen
     /// only finitely often before the tolerance is met, and it spares the energy evaluation,
     /// which costs more than the rest of a pass. Otherwise a reused factor is dropped and the
@@ -233,6 +256,7 @@ impl Vm {
         }
         self.u_saved.copy_from_slice(&self.u);
         self.failure.clear();
+        self.factor_current = false;
         let mut report = NewtonReport {
             iterations: 0,
             factorizations: 0,
@@ -283,23 +307,42 @@ impl Vm {
                     gradient_norm,
                 });
             }
-            let fresh = !(self.factor_ready && options.reuse_factor);
+            let first = report.iterations == 0;
+            let inherited = self.factor_ready && !self.factor_current;
+            let mut fresh = !(self.factor_ready && options.reuse_factor);
+            // Inexact Newton: solve only as accurately as this step can use (forcing term
+            // min(0.01, ||g||)), and no more accurately than the tolerance needs.
+            let forcing = gradient_norm
+                .min(0.01)
+                .max(0.1 * options.tolerance / gradient_norm)
+                .min(0.5);
+            let rule = AbortRule {
+                limit: self.refactor_beyond,
+                tangent_follows: options.tangent_follows,
+            };
+            if !fresh && first && inherited && self.inherited_rate < 1.0 {
+                // How the last inherited factor contracted predicts this one: refactor at
+                // once rather than spend an iteration finding it too stale.
+                let rate = self.inherited_rate;
+                let mut needed = forcing.ln() / rate.ln();
+                if rule.tangent_follows {
+                    needed += tangent_extra_cg(rate);
+                }
+                fresh = needed > rule.limit;
+            }
+            if !fresh {
+                let outcome = self.pcg(true, forcing, MAX_CG, Some(rule));
+                report.cg_iterations += outcome.iterations;
+                if first && inherited {
+                    self.inherited_rate = outcome.rate;
+                }
+                fresh = outcome.aborted;
+            }
             if fresh {
                 self.factorize()?;
+                self.factor_current = true;
                 report.factorizations += 1;
                 self.solve_step(n);
-            } else {
-                // Inexact Newton: solve only as accurately as this step can use (forcing term
-                // min(0.01, ||g||)), and no more accurately than the tolerance needs.
-                let forcing = gradient_norm
-                    .min(0.01)
-                    .max(0.1 * options.tolerance / gradient_norm)
-                    .min(0.5);
-                let used = self.pcg_step(forcing, MAX_CG);
-                report.cg_iterations += used;
-                if used > self.refactor_after_cg {
-                    self.factor_ready = false;
-                }
             }
             report.iterations += 1;
             let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, d)| g * d).sum();
@@ -553,7 +596,7 @@ mod tests {
         let mut vm = Vm::new(program).expect("vm");
         let n = vm.program().n_unknowns();
         assert_eq!(n, 7);
-        assert!((2..=20).contains(&vm.refactor_after_cg));
+        assert!((2.0..=20.0).contains(&vm.refactor_beyond));
         let (factor, solve, _) = factor_and_solve_cost(&vm.symbolic);
         assert!(factor > 0.0 && solve > 0.0);
 

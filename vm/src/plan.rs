@@ -145,4 +145,39 @@ impl Plan {
             hvals[col] = diag;
         }
     }
+
+    /// The derivative of the gradient along a line of metrics, from the corners of the last
+    /// pass (`temps`) and each iteration edge's rate of change of log length (`dlog`).
+    ///
+    /// In a triangle whose corner `i` has angle `θ_i` and faces the side of log length `λ_i`,
+    /// `∂θ_i/∂λ_i = cot θ_j + cot θ_k` and `∂θ_i/∂λ_j = -cot θ_k` (the angles depend only on
+    /// the ratios of the sides, so each row sums to 0); a vertex's gradient entry is
+    /// `π - Σθ/2`. Degenerate triangles (cotangents 0 on the cold path) contribute nothing,
+    /// as their angles sit at the limits 0 and π. `dtheta` receives each corner's rate.
+    pub fn metric_derivative(
+        &self,
+        temps: &[Corner],
+        dlog: &[f64],
+        dtheta: &mut [f64],
+        out: &mut [f64],
+    ) {
+        for ((d, c), &[e0, e1, e2]) in dtheta
+            .chunks_exact_mut(3)
+            .zip(temps.chunks_exact(3))
+            .zip(&self.triangles)
+        {
+            let l = [dlog[e0 as usize], dlog[e1 as usize], dlog[e2 as usize]];
+            let cot = [c[0][2], c[1][2], c[2][2]];
+            // Corner i faces side (i + 1) % 3.
+            for i in 0..3 {
+                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+                d[i] = (cot[j] + cot[k]) * l[j] - cot[k] * l[k] - cot[j] * l[i];
+            }
+        }
+        for (k, w) in self.vertex_start.windows(2).enumerate() {
+            let corners = &self.corners[w[0] as usize..w[1] as usize];
+            let sum: f64 = corners.iter().map(|&c| dtheta[c as usize]).sum();
+            out[k] = -0.5 * sum;
+        }
+    }
 }

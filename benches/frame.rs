@@ -17,13 +17,17 @@
 //! - `factorization`: the numeric Cholesky factorisation ([`Vm::factorize`]) on that state;
 //! - `solve`: one solve with that factor ([`Vm::solve`]), the unit of work of a conjugate-
 //!   gradient iteration;
+//! - `tangent`: the solution's derivative along the morph ([`Vm::tangent`]: the closed-form
+//!   derivative of the gradient and conjugate gradients with the factor of that state), which
+//!   a warm frame computes for the next one's predicted start when tangents are on;
 //! - `embed`: the layout ([`Vm::embed`]);
 //! - `distortion`: every triangle's conformal distortion from the source
 //!   ([`RestShape::distortion_into`]), which every frame computes for its statistics;
 //! - `warm_frame`: one frame of a sweep `t = 0, 0.1, ..., 1, 0.9, ..., 0` repeated, each frame
-//!   warm-started from the previous ones ([`Morph::frame_into`], default options: extrapolated
-//!   starts, reused factors); `warm_frame_plain` the same with both levers off (a factorisation
-//!   per Newton step, start = previous solution), the ratio being what they buy;
+//!   warm-started from the previous ones ([`Morph::frame_into`], default options: starts
+//!   extrapolated from the last solutions, reused factors); `warm_frame_plain`
+//!   the same with the levers off (a factorisation per Newton step, start = previous
+//!   solution), the ratio being what they buy;
 //! - `cold_frame`: the frame `t = 0.5` from `u = 0` with a factorisation per step.
 //!
 //! Every case is built on first use, so a filter (`cargo bench --bench frame -- warm_frame`)
@@ -256,6 +260,20 @@ fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
             b.iter(|| {
                 black_box(e.vm.solve().expect("factored"));
             });
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("tangent");
+    for case in cases.iter_mut() {
+        configure(&mut group, case.n);
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let (m, e) = case.both();
+            let a = e.vm.squared_lengths(&m.source.positions).expect("lengths");
+            let target = e.vm.squared_lengths(&m.target.positions).expect("lengths");
+            let rate: Vec<f64> = a.iter().zip(&target).map(|(a, b)| b - a).collect();
+            e.vm.factorize().expect("positive definite");
+            b.iter(|| black_box(e.vm.tangent(&rate).expect("evaluated")));
         });
     }
     group.finish();

@@ -4,6 +4,7 @@
 //!
 //! ```sh
 //! cargo run --release --example frame_sweep -- 100000
+//! cargo run --release --example frame_sweep -- 10000 1 all 50   # N, rounds, configuration, frames per unit of t
 //! ```
 
 use std::time::Instant;
@@ -28,12 +29,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(s) => s.parse()?,
         None => 3,
     };
+    // A fourth argument sets the number of frames from t = 0 to 1 (default 10).
+    let steps: u32 = std::env::args()
+        .nth(4)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10);
     let a = generate::disk(generate::rings_for(n), 0.25);
     let b = generate::twist(&generate::bend(&a, 0.6), 1.2);
     let program = bdmorph::compile(&a.positions, &a.faces)?;
     println!(
-        "{} vertices, {} triangles; warm frames at a t step of 0.1, swept 0 -> 1 -> 0, {rounds} \
-         rounds",
+        "{} vertices, {} triangles; warm frames at a t step of 1/{steps}, swept 0 -> 1 -> 0, \
+         {rounds} rounds",
         program.n_vertices(),
         program.n_faces()
     );
@@ -46,19 +52,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         (
             "+ extrapolation",
-            MorphOptions::default()
-                .with_tangents(false)
-                .with_reuse_factor(false),
-        ),
-        (
-            "+ tangents",
             MorphOptions::default().with_reuse_factor(false),
         ),
         (
-            "extrap. + reuse",
-            MorphOptions::default().with_tangents(false),
+            "+ tangents",
+            MorphOptions::default()
+                .with_tangents(true)
+                .with_reuse_factor(false),
         ),
-        ("all (default)", MorphOptions::default()),
+        ("both (default)", MorphOptions::default()),
+        (
+            "default + tangents",
+            MorphOptions::default().with_tangents(true),
+        ),
     ];
     {
         // Phases on the state of t = 0.5.
@@ -111,11 +117,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             grad * 1e6 / program.n_faces() as f64
         );
     }
-    let ts: Vec<f64> = (0..=10)
-        .chain((0..10).rev())
-        .map(|i| f64::from(i) / 10.0)
+    let ts: Vec<f64> = (0..=steps)
+        .chain((0..steps).rev())
+        .map(|i| f64::from(i) / f64::from(steps))
         .collect();
-    // A third argument picks one configuration by its position (e.g. for a profiler).
+    // A third argument picks one configuration by its position (e.g. for a profiler; "all"
+    // or anything else that is not a number runs them all).
     let only: Option<usize> = std::env::args().nth(3).and_then(|s| s.parse().ok());
     for (i, (name, options)) in configs.into_iter().enumerate() {
         if only.is_some_and(|o| o != i) {

@@ -22,8 +22,9 @@ pub struct MorphOptions {
     /// With predicted starts, take each solved frame's tangent `du/dt` (a closed-form pass
     /// over the triangles and a solve with the current factor, done when the next frame on
     /// the same line is asked for) so that the prediction is a Hermite polynomial: quintic
-    /// through three solutions and their tangents (default true). Its work is counted in the
-    /// next frame's statistics.
+    /// through three solutions and their tangents. Its work is counted in the next frame's
+    /// statistics. Default false: on the benchmark disks it cuts Newton steps per frame by a
+    /// fifth to a quarter but its own solve costs about as much (BENCHMARKS.md).
     pub tangents: bool,
 }
 
@@ -33,7 +34,7 @@ impl Default for MorphOptions {
             newton: NewtonOptions::default(),
             warm_start: true,
             extrapolate: true,
-            tangents: true,
+            tangents: false,
         }
     }
 }

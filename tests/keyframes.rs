@@ -197,7 +197,10 @@ fn predicted_starts_do_not_change_path_frames() {
         Easing::cubic_bezier(0.2, 0.0, 0.3, 1.0).unwrap(),
         Easing::Linear,
     ]);
-    let mut warm = Path::with_options(&keys4, options.clone()).expect("path");
+    let hermite = options
+        .clone()
+        .with_morph(MorphOptions::default().with_tangents(true));
+    let mut warm = Path::with_options(&keys4, hermite).expect("path");
     let cold_morph = MorphOptions::default()
         .with_warm_start(false)
         .with_reuse_factor(false);

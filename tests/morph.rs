@@ -137,7 +137,8 @@ fn tangents_cut_newton_steps_and_leave_the_frames() {
     for (name, a, b) in pairs() {
         let without = MorphOptions::default().with_tangents(false);
         let mut reference = Morph::new(&a, &b, without).expect("without tangents");
-        let mut hermite = Morph::new(&a, &b, MorphOptions::default()).expect("default");
+        let with = MorphOptions::default().with_tangents(true);
+        let mut hermite = Morph::new(&a, &b, with).expect("with tangents");
         let (mut steps_without, mut steps_with) = (0, 0);
         for i in 0..=20 {
             let t = f64::from(i) / 20.0;

@@ -120,8 +120,9 @@ pub struct Vm {
     /// Further conjugate-gradient iterations beyond which refactoring is cheaper.
     refactor_beyond: f64,
     /// Mean contraction per conjugate-gradient iteration the last time a solve started from
-    /// a factor of an earlier solve (NaN before that happened).
-    inherited_rate: f64,
+    /// a factor of an earlier solve, and that solve's start gradient norm (NaN before that
+    /// happened).
+    inherited_rate: (f64, f64),
     failure: Vec<TriangleReport>,
 }
 
@@ -182,7 +183,7 @@ impl Vm {
             factor_ready: false,
             factor_current: false,
             refactor_beyond,
-            inherited_rate: f64::NAN,
+            inherited_rate: (f64::NAN, f64::NAN),
             failure: Vec::new(),
             program,
         })

@@ -123,6 +123,11 @@ pub(crate) fn refactor_beyond(symbolic: &SymbolicCholesky<u32>) -> f64 {
     ((ratio + 1.0) / 1.15).clamp(2.0, 20.0)
 }
 
+/// A solve's first step trusts the contraction an inherited factor showed before (see
+/// [`Vm::newton`]) only when its start gradient is at least this fraction of the one it was
+/// measured at: a start much closer to its solution (smaller steps in `t`) probes again.
+const STALE_MEMORY: f64 = 2.0;
+
 /// Estimated multiply-adds of one numeric factorisation and of one solve with it, from the
 /// factor's structure, and whether it is supernodal.
 pub(crate) fn factor_and_solve_cost(symbolic: &SymbolicCholesky<u32>) -> (f64, f64, bool) {
@@ -237,7 +242,8 @@ impl Vm {
     /// would cost more than a factorisation and a solve, estimated from the factor's structure
     /// so that the choice does not depend on the machine's load. The first step of a solve
     /// judges a factor inherited from an earlier solve by the contraction seen the last time
-    /// that happened, without spending an iteration on it.
+    /// that happened, without spending an iteration on it, unless its start is much closer to
+    /// the solution than that one was.
     ///
     /// A trial step is accepted outright when it
     /// brings `||g||` below half the smallest norm seen so far in this solve: that can happen
@@ -320,10 +326,16 @@ impl Vm {
                 limit: self.refactor_beyond,
                 tangent_follows: options.tangent_follows,
             };
-            if !fresh && first && inherited && self.inherited_rate < 1.0 {
-                // How the last inherited factor contracted predicts this one: refactor at
-                // once rather than spend an iteration finding it too stale.
-                let rate = self.inherited_rate;
+            let (rate, measured_at) = self.inherited_rate;
+            if !fresh
+                && first
+                && inherited
+                && rate < 1.0
+                && gradient_norm * STALE_MEMORY >= measured_at
+            {
+                // How the last inherited factor contracted, at a start at least as far from
+                // its solution, predicts this one: refactor at once rather than spend an
+                // iteration finding it too stale.
                 let mut needed = forcing.ln() / rate.ln();
                 if rule.tangent_follows {
                     needed += tangent_extra_cg(rate);
@@ -334,7 +346,7 @@ impl Vm {
                 let outcome = self.pcg(true, forcing, MAX_CG, Some(rule));
                 report.cg_iterations += outcome.iterations;
                 if first && inherited {
-                    self.inherited_rate = outcome.rate;
+                    self.inherited_rate = (outcome.rate, gradient_norm);
                 }
                 fresh = outcome.aborted;
             }

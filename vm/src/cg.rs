@@ -184,12 +184,12 @@ impl Vm {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::NewtonOptions;
 
     /// A jittered 7 x 7 grid of vertices (25 interior ones), two triangles per cell.
-    fn patch(jitter: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+    pub(crate) fn patch(jitter: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
         let side = 7u32;
         let mut positions = Vec::new();
         for j in 0..side {

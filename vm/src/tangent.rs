@@ -116,43 +116,26 @@ impl Vm {
 mod tests {
     use crate::{NewtonOptions, Vm, VmError};
 
-    /// Source positions, target positions, triangles.
-    type Pair = (Vec<[f64; 2]>, Vec<[f64; 2]>, Vec<[u32; 3]>);
-
-    /// A jittered disk-like grid (7 x 7, 25 unknowns) and a sheared, bent copy.
-    fn pair() -> Pair {
-        let side = 7u32;
-        let mut a = Vec::new();
-        for j in 0..side {
-            for i in 0..side {
-                let (x, y) = (f64::from(i), f64::from(j));
-                a.push([x + 0.1 * (x * 1.7 + y).sin(), y + 0.1 * (y * 2.3 - x).cos()]);
-            }
-        }
-        let b = a
+    /// A VM on a jittered 7 x 7 grid (25 unknowns), the squared lengths of the grid and of a
+    /// sheared, bent copy, and the rate between them.
+    fn setup() -> (Vm, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (a, faces) = crate::cg::tests::patch(0.1);
+        let b: Vec<[f64; 2]> = a
             .iter()
             .map(|p| [p[0] * (1.0 + 0.08 * p[1]), p[1] + 0.04 * p[0] * p[0]])
             .collect();
-        let mut faces = Vec::new();
-        for j in 0..side - 1 {
-            for i in 0..side - 1 {
-                let v = j * side + i;
-                faces.push([v, v + 1, v + side + 1]);
-                faces.push([v, v + side + 1, v + side]);
-            }
-        }
-        (a, b, faces)
-    }
-
-    #[test]
-    fn metric_derivative_matches_central_differences_of_the_gradient() {
-        let (a, b, faces) = pair();
-        let mut vm = Vm::new(bdmorph_compiler::compile(&a, &faces).expect("compiles")).unwrap();
+        let vm = Vm::new(bdmorph_compiler::compile(&a, &faces).expect("compiles")).unwrap();
         let (la, lb) = (
             vm.squared_lengths(&a).unwrap(),
             vm.squared_lengths(&b).unwrap(),
         );
-        let rate: Vec<f64> = la.iter().zip(&lb).map(|(a, b)| b - a).collect();
+        let rate = la.iter().zip(&lb).map(|(a, b)| b - a).collect();
+        (vm, la, lb, rate)
+    }
+
+    #[test]
+    fn metric_derivative_matches_central_differences_of_the_gradient() {
+        let (mut vm, la, lb, rate) = setup();
         // At an arbitrary u (not a solution), t = 0.4.
         let u: Vec<f64> = (0..vm.u().len()).map(|k| 0.05 * (k as f64).sin()).collect();
         let gradient_at = |vm: &mut Vm, t: f64| {
@@ -177,13 +160,7 @@ mod tests {
 
     #[test]
     fn tangent_predicts_the_next_solution_to_second_order() {
-        let (a, b, faces) = pair();
-        let mut vm = Vm::new(bdmorph_compiler::compile(&a, &faces).expect("compiles")).unwrap();
-        let (la, lb) = (
-            vm.squared_lengths(&a).unwrap(),
-            vm.squared_lengths(&b).unwrap(),
-        );
-        let rate: Vec<f64> = la.iter().zip(&lb).map(|(a, b)| b - a).collect();
+        let (mut vm, la, lb, rate) = setup();
         let options = NewtonOptions::default();
         let solve = |vm: &mut Vm, t: f64| {
             vm.set_metric_lerp(&la, &lb, t).unwrap();
@@ -216,13 +193,7 @@ mod tests {
 
     #[test]
     fn tangent_needs_an_evaluation_of_the_current_state() {
-        let (a, b, faces) = pair();
-        let mut vm = Vm::new(bdmorph_compiler::compile(&a, &faces).expect("compiles")).unwrap();
-        let (la, lb) = (
-            vm.squared_lengths(&a).unwrap(),
-            vm.squared_lengths(&b).unwrap(),
-        );
-        let rate: Vec<f64> = la.iter().zip(&lb).map(|(a, b)| b - a).collect();
+        let (mut vm, la, lb, rate) = setup();
         vm.set_metric_lerp(&la, &lb, 0.5).unwrap();
         assert_eq!(vm.tangent(&rate), Err(VmError::NotEvaluated));
         vm.newton(&NewtonOptions::default()).unwrap();

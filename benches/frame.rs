@@ -14,9 +14,10 @@
 //!   gradient and Hessian walking an adjacency structure (`direct`,
 //!   [`reference::gradient_and_hessian`]), all on the same state: `t = 0.5` and the `u` that
 //!   flattens it;
-//! - `factorization`: the numeric Cholesky factorisation ([`Vm::factorize`]) on that state;
+//! - `factorization`: the numeric Cholesky factorisation ([`Vm::factorize`]) on that state,
+//!   with the factor stored in double (`f64`) and in single precision (`f32`);
 //! - `solve`: one solve with that factor ([`Vm::solve`]), the unit of work of a conjugate-
-//!   gradient iteration;
+//!   gradient iteration, in both precisions;
 //! - `tangent`: the solution's derivative along the morph ([`Vm::tangent`]: the closed-form
 //!   derivative of the gradient and conjugate gradients with the factor of that state), which
 //!   a warm frame computes for the next one's predicted start when tangents are on;
@@ -27,7 +28,9 @@
 //!   warm-started from the previous ones ([`Morph::frame_into`], default options: starts
 //!   extrapolated from the last solutions, reused factors); `warm_frame_plain`
 //!   the same with the levers off (a factorisation per Newton step, start = previous
-//!   solution), the ratio being what they buy;
+//!   solution), the ratio being what they buy; `warm_frame_f64` and `warm_frame_f32` the
+//!   default with the factor's precision forced (the default picks single precision from
+//!   [`bdmorph::SINGLE_FROM_VALUES`] stored values);
 //! - `cold_frame`: the frame `t = 0.5` from `u = 0` with a factorisation per step.
 //!
 //! Every case is built on first use, so a filter (`cargo bench --bench frame -- warm_frame`)
@@ -41,7 +44,7 @@ use std::time::Duration;
 
 use bdmorph::distortion::RestShape;
 use bdmorph::reference::{self, Unknowns};
-use bdmorph::{generate, Morph, MorphOptions, NewtonOptions, PlanarMesh, Vm};
+use bdmorph::{generate, FactorPrecision, Morph, MorphOptions, NewtonOptions, PlanarMesh, Vm};
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, SamplingMode,
@@ -241,26 +244,43 @@ fn bench_iteration_stream(c: &mut Criterion, cases: &mut [Case]) {
 }
 
 fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
+    // Both storage precisions of the factor, on the same state.
+    let precisions = [
+        ("f64", FactorPrecision::Double),
+        ("f32", FactorPrecision::Single),
+    ];
     let mut group = c.benchmark_group("factorization");
     for case in cases.iter_mut() {
         configure(&mut group, case.n);
-        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
-            let e = case.evaluated();
-            b.iter(|| e.vm.factorize().expect("positive definite"));
-        });
+        for (name, precision) in precisions {
+            group.bench_function(BenchmarkId::new(name, case.n), |b| {
+                let e = case.evaluated();
+                e.vm.set_factor_precision(precision);
+                b.iter(|| e.vm.factorize().expect("positive definite"));
+            });
+        }
+        if let Some(e) = case.evaluated.as_mut() {
+            e.vm.set_factor_precision(FactorPrecision::Auto);
+        }
     }
     group.finish();
 
     let mut group = c.benchmark_group("solve");
     for case in cases.iter_mut() {
         configure(&mut group, case.n);
-        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
-            let e = case.evaluated();
-            e.vm.factorize().expect("positive definite");
-            b.iter(|| {
-                black_box(e.vm.solve().expect("factored"));
+        for (name, precision) in precisions {
+            group.bench_function(BenchmarkId::new(name, case.n), |b| {
+                let e = case.evaluated();
+                e.vm.set_factor_precision(precision);
+                e.vm.factorize().expect("positive definite");
+                b.iter(|| {
+                    black_box(e.vm.solve().expect("factored"));
+                });
             });
-        });
+        }
+        if let Some(e) = case.evaluated.as_mut() {
+            e.vm.set_factor_precision(FactorPrecision::Auto);
+        }
     }
     group.finish();
 
@@ -325,6 +345,14 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
             MorphOptions::default()
                 .with_extrapolate(false)
                 .with_reuse_factor(false),
+        ),
+        (
+            "warm_frame_f64",
+            MorphOptions::default().with_factor_precision(FactorPrecision::Double),
+        ),
+        (
+            "warm_frame_f32",
+            MorphOptions::default().with_factor_precision(FactorPrecision::Single),
         ),
     ];
     let ts = sweep();

@@ -18,7 +18,7 @@ fn cpu_seconds(wall: Instant) -> f64 {
         .map_or_else(|| wall.elapsed().as_secs_f64(), |ns| ns * 1e-9)
 }
 
-use bdmorph::{generate, Morph, MorphOptions};
+use bdmorph::{generate, FactorPrecision, Morph, MorphOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = match std::env::args().nth(1) {
@@ -65,6 +65,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "default + tangents",
             MorphOptions::default().with_tangents(true),
         ),
+        (
+            "default, f64 factor",
+            MorphOptions::default().with_factor_precision(FactorPrecision::Double),
+        ),
+        (
+            "default, f32 factor",
+            MorphOptions::default().with_factor_precision(FactorPrecision::Single),
+        ),
     ];
     {
         // Phases on the state of t = 0.5.
@@ -107,13 +115,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let full = median(&mut || vm.evaluate());
         let grad = median(&mut || vm.evaluate_gradient());
-        let fact = median(&mut || vm.factorize().expect("definite"));
-        let solve = median(&mut || {
-            vm.solve().expect("factored");
-        });
+        let mut linear_algebra = String::new();
+        for precision in [FactorPrecision::Double, FactorPrecision::Single] {
+            vm.set_factor_precision(precision);
+            let fact = median(&mut || vm.factorize().expect("definite"));
+            let solve = median(&mut || {
+                vm.solve().expect("factored");
+            });
+            linear_algebra += &format!(
+                ", {:?}: numeric factorisation {fact:.3}, solve {solve:.3}",
+                vm.factor_precision()
+            );
+        }
         println!(
             "phases (median ms): pass with energy {full:.3}, pass without {grad:.3} ({:.1} ns \
-             per triangle), numeric factorisation {fact:.3}, solve {solve:.3}",
+             per triangle){linear_algebra}",
             grad * 1e6 / program.n_faces() as f64
         );
     }

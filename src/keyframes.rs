@@ -17,6 +17,7 @@ use crate::distortion::RestShape;
 use crate::mesh::{MeshError, PlanarMesh};
 
 use crate::morph::{FrameAt, FrameStats, MorphError, MorphOptions};
+use bdmorph_vm::FactorPrecision;
 
 /// Solved frames kept for extrapolating the next start.
 const HISTORY: usize = 3;
@@ -220,7 +221,8 @@ impl Engine {
             source,
             worst: Vec::new(),
         };
-        let vm = bdmorph_vm::Vm::new(program).map_err(solver)?;
+        let mut vm = bdmorph_vm::Vm::new(program).map_err(solver)?;
+        vm.set_factor_precision(options.factor_precision);
         let squared = keyframes
             .iter()
             .map(|k| vm.squared_lengths(&k.positions))
@@ -308,6 +310,11 @@ impl Engine {
     /// The last frame's log scale factors.
     pub(crate) fn scale_factors(&self) -> &[f64] {
         self.vm.u()
+    }
+
+    /// How the solver's numeric factor is stored now (see [`bdmorph_vm::Vm::factor_precision`]).
+    pub(crate) fn factor_precision(&self) -> FactorPrecision {
+        self.vm.factor_precision()
     }
 
     /// The last frame's positions.

@@ -53,7 +53,9 @@ pub mod render;
 
 pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
 pub use bdmorph_isa::{disassemble, LoadError, MeshKey, Program};
-pub use bdmorph_vm::{NewtonOptions, TriangleReport, Vm, VmError};
+pub use bdmorph_vm::{
+    FactorPrecision, NewtonOptions, TriangleReport, Vm, VmError, SINGLE_FROM_VALUES,
+};
 pub use blend::Blend;
 pub use io::SurfaceMesh;
 pub use mesh::{MeshError, PlanarMesh};

@@ -1,6 +1,6 @@
 //! The morph object: compile once, then frames for any `t`.
 
-use bdmorph_vm::{NewtonOptions, Program, TriangleReport, VmError};
+use bdmorph_vm::{FactorPrecision, NewtonOptions, Program, TriangleReport, VmError};
 
 use crate::keyframes::{Engine, Line, Unwrap};
 
@@ -26,6 +26,12 @@ pub struct MorphOptions {
     /// statistics. Default false: on the benchmark disks it cuts Newton steps per frame by a
     /// fifth to a quarter but its own solve costs about as much (BENCHMARKS.md).
     pub tangents: bool,
+    /// How the Hessian's numeric Cholesky factor is stored (default
+    /// [`FactorPrecision::Auto`]: single precision from a million stored values of the
+    /// factor, about 20K vertices on a disk, where halving its memory traffic makes
+    /// factorisations and solves a fifth to a third faster; conjugate gradients refine its
+    /// steps and the tolerance is unchanged). See [`bdmorph_vm::Vm::set_factor_precision`].
+    pub factor_precision: FactorPrecision,
 }
 
 impl Default for MorphOptions {
@@ -35,6 +41,7 @@ impl Default for MorphOptions {
             warm_start: true,
             extrapolate: true,
             tangents: false,
+            factor_precision: FactorPrecision::Auto,
         }
     }
 }
@@ -63,6 +70,11 @@ impl MorphOptions {
     /// Turns the tangents of predicted starts on or off (see [`Self::tangents`]).
     pub fn with_tangents(mut self, tangents: bool) -> Self {
         self.tangents = tangents;
+        self
+    }
+    /// Sets how the numeric Cholesky factor is stored (see [`Self::factor_precision`]).
+    pub fn with_factor_precision(mut self, precision: FactorPrecision) -> Self {
+        self.factor_precision = precision;
         self
     }
     /// Allows or forbids reusing an earlier numeric factor in Newton's method (see
@@ -378,6 +390,13 @@ impl Morph {
     /// The conformal distortion of each triangle in the last frame, from the source.
     pub fn distortion(&self) -> &[f64] {
         self.engine.distortion()
+    }
+
+    /// How the numeric Cholesky factor is stored: [`FactorPrecision::Double`] or
+    /// [`FactorPrecision::Single`], as [`MorphOptions::factor_precision`] resolved for this
+    /// mesh (single precision falls back to double for good if it fails on it).
+    pub fn factor_precision(&self) -> FactorPrecision {
+        self.engine.factor_precision()
     }
 
     /// Computes the frame at `t`: `t = 0` gives the source, `t = 1` the target. The metric

@@ -2,7 +2,7 @@
 
 mod common;
 
-use bdmorph::{generate, MeshError, Morph, MorphError, MorphOptions, PlanarMesh};
+use bdmorph::{generate, FactorPrecision, MeshError, Morph, MorphError, MorphOptions, PlanarMesh};
 use common::{align, max_distance};
 
 fn pairs() -> Vec<(&'static str, PlanarMesh, PlanarMesh)> {
@@ -155,6 +155,29 @@ fn tangents_cut_newton_steps_and_leave_the_frames() {
             steps_with < steps_without,
             "{name}: {steps_with} Newton steps with tangents, {steps_without} without"
         );
+    }
+}
+
+#[test]
+fn a_single_precision_factor_leaves_the_frames() {
+    // The factor stored in f32 only preconditions conjugate gradients: the frames of a sweep
+    // are those of the f64 factor, at the same tolerance, and the precision is kept.
+    for (name, a, b) in pairs() {
+        let options = |p| MorphOptions::default().with_factor_precision(p);
+        let mut double = Morph::new(&a, &b, options(FactorPrecision::Double)).expect("f64");
+        let mut single = Morph::new(&a, &b, options(FactorPrecision::Single)).expect("f32");
+        let mut refined = 0;
+        for i in (0..=10).chain((0..10).rev()) {
+            let t = f64::from(i) / 10.0;
+            let r = double.frame(t).expect("frame").positions.to_vec();
+            let s = single.frame(t).expect("frame");
+            assert!(s.stats.gradient_norm < 1e-10, "{name} t = {t}");
+            refined += s.stats.cg_iterations;
+            let d = max_distance(&r, s.positions);
+            assert!(d < 1e-9 * a.diameter(), "{name} t = {t}: {d:e}");
+        }
+        assert!(refined > 0, "{name}");
+        assert_eq!(single.factor_precision(), FactorPrecision::Single, "{name}");
     }
 }
 

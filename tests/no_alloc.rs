@@ -3,7 +3,10 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use bdmorph::{generate, Blend, Easing, Morph, MorphOptions, NewtonOptions, Path, PathOptions, Vm};
+use bdmorph::{
+    generate, Blend, Easing, FactorPrecision, Morph, MorphOptions, NewtonOptions, Path,
+    PathOptions, Vm,
+};
 
 struct Counting;
 
@@ -41,41 +44,51 @@ fn newton_iterations_and_frames_do_not_allocate() {
     let a = generate::disk(30, 0.25);
     let b = generate::twist(&generate::bend(&a, 0.5), 1.0);
 
-    // The VM alone: Newton with several iterations.
+    // The VM alone: Newton with several iterations, with the factor in either precision.
     let program = bdmorph::compile(&a.positions, &a.faces).expect("compiles");
-    let mut vm = Vm::new(program).expect("vm");
-    let (sa, sb) = (
-        vm.squared_lengths(&a.positions).expect("a"),
-        vm.squared_lengths(&b.positions).expect("b"),
-    );
     let mut out = vec![[0.0; 2]; a.positions.len()];
-    let before = allocations();
-    vm.set_metric_lerp(&sa, &sb, 0.7).expect("metric");
-    let report = vm.newton(&NewtonOptions::default()).expect("converges");
-    vm.embed([0.0, 0.0], [1.0, 0.0], &mut out).expect("embed");
-    let during = allocations() - before;
-    assert!(report.iterations >= 2, "{report:?}");
-    assert_eq!(
-        during, 0,
-        "{during} allocations in {} Newton iterations",
-        report.iterations
-    );
+    for precision in [FactorPrecision::Double, FactorPrecision::Single] {
+        let mut vm = Vm::new(program.clone()).expect("vm");
+        vm.set_factor_precision(precision);
+        let (sa, sb) = (
+            vm.squared_lengths(&a.positions).expect("a"),
+            vm.squared_lengths(&b.positions).expect("b"),
+        );
+        let before = allocations();
+        vm.set_metric_lerp(&sa, &sb, 0.7).expect("metric");
+        let report = vm.newton(&NewtonOptions::default()).expect("converges");
+        vm.embed([0.0, 0.0], [1.0, 0.0], &mut out).expect("embed");
+        let during = allocations() - before;
+        assert!(report.iterations >= 2, "{report:?}");
+        assert_eq!(vm.factor_precision(), precision);
+        assert_eq!(
+            during, 0,
+            "{during} allocations in {} Newton iterations ({precision:?})",
+            report.iterations
+        );
+    }
 
     // Whole frames through the library API.
-    let mut morph = Morph::new(&a, &b, MorphOptions::default()).expect("morph");
-    morph.frame_into(0.1, &mut out).expect("warm-up");
-    let before = allocations();
-    let mut iterations = 0;
-    for i in 2..=10 {
-        iterations += morph
-            .frame_into(f64::from(i) / 10.0, &mut out)
-            .expect("frame")
-            .newton_iterations;
-        morph.frame(1.0 - f64::from(i) / 20.0).expect("frame");
+    for precision in [FactorPrecision::Auto, FactorPrecision::Single] {
+        let options = MorphOptions::default().with_factor_precision(precision);
+        let mut morph = Morph::new(&a, &b, options).expect("morph");
+        morph.frame_into(0.1, &mut out).expect("warm-up");
+        let before = allocations();
+        let mut iterations = 0;
+        for i in 2..=10 {
+            iterations += morph
+                .frame_into(f64::from(i) / 10.0, &mut out)
+                .expect("frame")
+                .newton_iterations;
+            morph.frame(1.0 - f64::from(i) / 20.0).expect("frame");
+        }
+        let during = allocations() - before;
+        assert!(iterations > 0);
+        assert_eq!(
+            during, 0,
+            "{during} allocations over 18 frames ({precision:?})"
+        );
     }
-    let during = allocations() - before;
-    assert!(iterations > 0);
-    assert_eq!(during, 0, "{during} allocations over 18 frames");
 
     // Blends (including weights slightly outside the simplex, which are checked triangle by
     // triangle) and eased paths across segment boundaries.

@@ -1,10 +1,7 @@
 //! Conjugate gradients on the current Hessian, preconditioned by an earlier numeric Cholesky
 //! factor: the Newton step without a new factorisation.
 
-use faer::dyn_stack::MemStack;
-use faer::sparse::linalg::cholesky::LltRef;
-use faer::{Conj, MatMut, Par};
-
+use crate::factor;
 use crate::tangent::tangent_extra_cg;
 use crate::Vm;
 
@@ -99,9 +96,7 @@ impl Vm {
         max_iterations: u32,
         abort: Option<AbortRule>,
     ) -> PcgOutcome {
-        let n = self.u.len();
         let h = self.program.hessian();
-        let llt = LltRef::new(&self.symbolic, &self.factor);
         let CgBuffers { r, z, p, hp } = &mut self.cg;
         let (v, x) = if of_gradient {
             (&self.grad, &mut self.step)
@@ -123,17 +118,12 @@ impl Vm {
         if outcome.converged {
             return outcome;
         }
-        let precondition =
-            |r: &[f64], z: &mut [f64], workspace: &mut faer::dyn_stack::MemBuffer| {
-                z.copy_from_slice(r);
-                llt.solve_in_place_with_conj(
-                    Conj::No,
-                    MatMut::from_column_major_slice_mut(z, n, 1),
-                    Par::Seq,
-                    MemStack::new(workspace),
-                );
-            };
-        precondition(r, z, &mut self.workspace);
+        let (symbolic, store, workspace) = (&self.symbolic, &mut self.store, &mut self.workspace);
+        let mut precondition = |r: &[f64], z: &mut [f64]| {
+            z.copy_from_slice(r);
+            factor::apply(symbolic, store, workspace, z);
+        };
+        precondition(r, z);
         p.copy_from_slice(z);
         let mut rz = dot(r, z);
         for iteration in 1..=max_iterations {
@@ -171,7 +161,7 @@ impl Vm {
                     return outcome;
                 }
             }
-            precondition(r, z, &mut self.workspace);
+            precondition(r, z);
             let rz_next = dot(r, z);
             let beta = rz_next / rz;
             rz = rz_next;

@@ -43,6 +43,7 @@ mod embed;
 mod error;
 mod evaluate;
 mod exp;
+mod factor;
 pub mod kernel;
 pub mod lobachevsky;
 mod newton;
@@ -52,6 +53,7 @@ mod tangent;
 
 pub use bdmorph_isa::Program;
 pub use error::VmError;
+pub use factor::{FactorPrecision, SINGLE_FROM_VALUES};
 pub use newton::{NewtonOptions, NewtonReport};
 pub use tangent::TangentReport;
 
@@ -87,7 +89,7 @@ pub struct Vm {
     program: Program,
     pattern: SymbolicSparseColMat<u32>,
     symbolic: SymbolicCholesky<u32>,
-    factor: Vec<f64>,
+    store: factor::FactorStore,
     workspace: MemBuffer,
     l0: Vec<f64>,
     len: Vec<f64>,
@@ -131,7 +133,8 @@ impl std::fmt::Debug for Vm {
         f.debug_struct("Vm")
             .field("unknowns", &self.u.len())
             .field("edges", &self.l0.len())
-            .field("factor_nnz", &self.factor.len())
+            .field("factor_nnz", &self.symbolic.len_val())
+            .field("factor_precision", &self.factor_precision())
             .field("plan_bytes", &self.plan.bytes())
             .finish_non_exhaustive()
     }
@@ -152,12 +155,12 @@ impl Vm {
             h.row_idx.clone(),
         );
         let (symbolic, workspace) = newton::analyse(&pattern, program.ordering())?;
-        let factor = vec![0.0; symbolic.len_val()];
+        let store = factor::FactorStore::new(FactorPrecision::Auto, symbolic.len_val(), h.nnz(), n);
         let refactor_beyond = newton::refactor_beyond(&symbolic);
         Ok(Vm {
             pattern,
             symbolic,
-            factor,
+            store,
             workspace,
             l0: vec![0.0; program.n_edges()],
             len: vec![0.0; program.n_edges()],
@@ -343,7 +346,7 @@ impl Vm {
 
     /// Number of stored values of the Cholesky factor.
     pub fn factor_nnz(&self) -> usize {
-        self.factor.len()
+        self.symbolic.len_val()
     }
 
     /// Whether faer chose its supernodal (blocked) Cholesky factorisation for this program's

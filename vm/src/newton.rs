@@ -1,19 +1,18 @@
 //! Newton's method on the CETM energy with a cached symbolic Cholesky factorisation.
 
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::LltError;
-use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::dyn_stack::{MemBuffer, StackReq};
 use faer::linalg::matmul::matmul;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Accum, Conj, Mat, MatMut, Par, Side};
+use faer::sparse::SymbolicSparseColMat;
+use faer::{Accum, Mat, Par, Side};
 
 use crate::cg::AbortRule;
+use crate::factor::{self, FRESH_SINGLE_CG};
 use crate::tangent::tangent_extra_cg;
 use crate::{Vm, VmError};
 
@@ -123,6 +122,10 @@ pub(crate) fn refactor_beyond(symbolic: &SymbolicCholesky<u32>) -> f64 {
     ((ratio + 1.0) / 1.15).clamp(2.0, 20.0)
 }
 
+/// Relative residual [`Vm::factor_and_solve`] refines a single-precision factor's step to:
+/// what a double-precision solve of the benchmark Hessians reaches.
+const EXACT_RELATIVE: f64 = 1e-13;
+
 /// A solve's first step trusts the contraction an inherited factor showed before (see
 /// [`Vm::newton`]) only when its start gradient is at least this fraction of the one it was
 /// measured at: a start much closer to its solution (smaller steps in `t`) probes again.
@@ -203,6 +206,8 @@ pub(crate) fn analyse(
     let req = StackReq::any_of(&[
         symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
         symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        symbolic.factorize_numeric_llt_scratch::<f32>(Par::Seq, Default::default()),
+        symbolic.solve_in_place_scratch::<f32>(1, Par::Seq),
     ]);
     let workspace = MemBuffer::try_new(req).map_err(|e| VmError::Symbolic(format!("{e:?}")))?;
     if matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
@@ -353,8 +358,9 @@ impl Vm {
             if fresh {
                 self.factorize()?;
                 self.factor_current = true;
-                report.factorizations += 1;
-                self.solve_step(n);
+                let (iterations, extra) = self.fresh_step(forcing)?;
+                report.factorizations += 1 + extra;
+                report.cg_iterations += iterations;
             }
             report.iterations += 1;
             let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, d)| g * d).sum();
@@ -433,7 +439,9 @@ impl Vm {
     /// factorisation computed in [`Vm::new`]) and solves `H step = -g`, returning the Newton
     /// step, one value per unknown. This is the linear-algebra half of one Newton iteration,
     /// exposed so that it can be measured and checked on its own; `u`, the gradient and the
-    /// Hessian values are left unchanged. Allocates nothing, except on a thread other than the
+    /// Hessian values are left unchanged. With a single-precision factor
+    /// ([`Vm::factor_precision`]) the step is refined by conjugate gradients to a relative
+    /// residual of 1e-13. Allocates nothing, except on a thread other than the
     /// one that built the VM: there faer's dense kernels allocate their per-thread workspace
     /// in the first supernodal factorisation.
     ///
@@ -441,60 +449,58 @@ impl Vm {
     /// positive definite (for instance before any evaluation, when its values are all zero).
     pub fn factor_and_solve(&mut self) -> Result<&[f64], VmError> {
         self.factorize()?;
-        self.solve_step(self.u.len());
+        self.fresh_step(EXACT_RELATIVE)?;
         Ok(&self.step)
     }
 
-    /// Factors the Hessian of the last evaluation numerically into the preallocated factor.
-    /// Allocates nothing.
-    pub fn factorize(&mut self) -> Result<(), VmError> {
-        self.factor_ready = false;
-        let stack = MemStack::new(&mut self.workspace);
-        let matrix = SparseColMatRef::new(self.pattern.as_ref(), &self.hvals);
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.factor,
-                matrix,
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                stack,
-                Default::default(),
-            )
-            .map_err(|e| match e {
-                LltError::NonPositivePivot { index } => {
-                    VmError::NotPositiveDefinite { pivot: index }
-                }
-            })?;
-        self.factor_ready = true;
-        Ok(())
-    }
-
     /// Solves `H step = -g` with the last numeric factor (which may be of an earlier Hessian),
-    /// returning the step. Fails with [`VmError::NoFactor`] before any factorisation.
-    /// Allocates nothing.
+    /// returning the step: one application of the factor, the work of a conjugate-gradient
+    /// iteration's preconditioner (a single-precision factor gives the step to that
+    /// precision). Fails with [`VmError::NoFactor`] before any factorisation. Allocates
+    /// nothing.
     pub fn solve(&mut self) -> Result<&[f64], VmError> {
         if !self.factor_ready {
             return Err(VmError::NoFactor);
         }
-        self.solve_step(self.u.len());
+        self.solve_step();
         Ok(&self.step)
     }
 
-    /// `step = -H^-1 g` with the current factor, which must be ready.
-    fn solve_step(&mut self, n: usize) {
+    /// `step = -H^-1 g` with the current factor, which must be ready (one application; with a
+    /// single-precision factor, accurate to that precision).
+    fn solve_step(&mut self) {
         debug_assert!(self.factor_ready);
         for (s, g) in self.step.iter_mut().zip(&self.grad) {
             *s = -g;
         }
-        let llt = LltRef::new(&self.symbolic, &self.factor);
-        let stack = MemStack::new(&mut self.workspace);
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut self.step, n, 1),
-            Par::Seq,
-            stack,
+        factor::apply(
+            &self.symbolic,
+            &mut self.store,
+            &mut self.workspace,
+            &mut self.step,
         );
+    }
+
+    /// The Newton step with the factor just computed from the current Hessian, to relative
+    /// residual `relative`: one solve in double precision; in single precision, conjugate
+    /// gradients preconditioned by it. A single-precision factor whose iterations do not get
+    /// there within [`FRESH_SINGLE_CG`] is too coarse for this Hessian: single precision is
+    /// given up for this program and the step solved with a double-precision factor (one
+    /// more factorisation, counted). Returns the conjugate-gradient iterations and the
+    /// factorisations added.
+    pub(crate) fn fresh_step(&mut self, relative: f64) -> Result<(u32, u32), VmError> {
+        if !self.store.ready_single {
+            self.solve_step();
+            return Ok((0, 0));
+        }
+        let outcome = self.pcg(true, relative, FRESH_SINGLE_CG, None);
+        if outcome.converged {
+            return Ok((outcome.iterations, 0));
+        }
+        self.store.give_up_single();
+        self.factorize()?;
+        self.solve_step();
+        Ok((outcome.iterations, 1))
     }
 }
 

@@ -4,11 +4,12 @@
 //! ```sh
 //! cargo run --release --example large_disk -- 1000000
 //! /usr/bin/time -v target/release/examples/large_disk 1000000   # peak memory
+//! cargo run --release --example large_disk -- 1000000 f64        # the factor in double precision
 //! ```
 
 use std::time::Instant;
 
-use bdmorph::{generate, Morph, MorphOptions, PlanarMesh};
+use bdmorph::{generate, FactorPrecision, Morph, MorphOptions, PlanarMesh};
 
 fn max_error(p: &[[f64; 2]], q: &PlanarMesh) -> f64 {
     p.iter()
@@ -40,17 +41,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let compiled = start.elapsed();
     let stats = program.stats();
     let start = Instant::now();
-    let mut morph = Morph::with_program(program, &a, &b, MorphOptions::default())?;
+    // A second argument forces the factor's precision: `f64` or `f32` (default: automatic).
+    let precision = match std::env::args().nth(2).as_deref() {
+        Some("f64") => FactorPrecision::Double,
+        Some("f32") => FactorPrecision::Single,
+        _ => FactorPrecision::Auto,
+    };
+    let options = MorphOptions::default().with_factor_precision(precision);
+    let mut morph = Morph::with_program(program, &a, &b, options)?;
     let setup = start.elapsed();
     println!(
         "{} vertices, {} triangles: read both OBJ files {:.3} s, compile {:.3} s, symbolic \
-         analysis and setup {:.3} s; start-up {:.3} s",
+         analysis and setup {:.3} s; start-up {:.3} s; factor {:?}",
         stats.vertices,
         stats.faces,
         read.as_secs_f64(),
         compiled.as_secs_f64(),
         setup.as_secs_f64(),
-        (read + compiled + setup).as_secs_f64()
+        (read + compiled + setup).as_secs_f64(),
+        morph.factor_precision()
     );
     println!(
         "iteration stream {:.1} bytes/triangle, whole program {:.1} bytes/triangle in memory, \

@@ -78,7 +78,9 @@ impl FactorStore {
         store
     }
 
-    /// Resolves `precision` and allocates what it needs (keeping buffers already there).
+    /// Resolves `precision`, allocates what it needs and frees the other precision's buffers
+    /// (a double-precision fallback allocates its own when it happens). No factor is ready
+    /// afterwards.
     pub fn set_precision(
         &mut self,
         precision: FactorPrecision,
@@ -92,12 +94,19 @@ impl FactorStore {
             FactorPrecision::Single => true,
         };
         self.single_failed = false;
+        self.ready_single = false;
+        // Only the wanted precision's buffers are kept: at a million vertices the factor
+        // takes hundreds of megabytes.
         if self.want_single {
             self.single.resize(len_val, 0.0);
             self.values.resize(nnz, 0.0);
             self.rhs.resize(n, 0.0);
+            self.double = Vec::new();
         } else {
             self.double.resize(len_val, 0.0);
+            self.single = Vec::new();
+            self.values = Vec::new();
+            self.rhs = Vec::new();
         }
     }
 
@@ -146,12 +155,14 @@ pub(crate) fn apply(
 }
 
 impl Vm {
-    /// Chooses how the numeric Cholesky factor is stored from the next factorisation on
-    /// (default [`FactorPrecision::Auto`]). Allocates the buffers the choice needs; a
+    /// Chooses how the numeric Cholesky factor is stored (default
+    /// [`FactorPrecision::Auto`]). Allocates the buffers the choice needs and frees the other
+    /// precision's; the current factor is dropped, so the next Newton step factors anew. A
     /// single-precision factor that failed on this program is tried again.
     pub fn set_factor_precision(&mut self, precision: FactorPrecision) {
         let (len_val, nnz, n) = (self.symbolic.len_val(), self.hvals.len(), self.u.len());
         self.store.set_precision(precision, len_val, nnz, n);
+        self.factor_ready = false;
     }
 
     /// The precision the next factorisation uses: [`FactorPrecision::Double`] or

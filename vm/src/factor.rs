@@ -98,12 +98,12 @@ impl FactorStore {
         // Only the wanted precision's buffers are kept: at a million vertices the factor
         // takes hundreds of megabytes.
         if self.want_single {
-            self.single.resize(len_val, 0.0);
-            self.values.resize(nnz, 0.0);
-            self.rhs.resize(n, 0.0);
+            zeroed(&mut self.single, len_val);
+            zeroed(&mut self.values, nnz);
+            zeroed(&mut self.rhs, n);
             self.double = Vec::new();
         } else {
-            self.double.resize(len_val, 0.0);
+            zeroed(&mut self.double, len_val);
             self.single = Vec::new();
             self.values = Vec::new();
             self.rhs = Vec::new();
@@ -118,6 +118,15 @@ impl FactorStore {
     /// Gives single precision up for this program (until the precision is set again).
     pub fn give_up_single(&mut self) {
         self.single_failed = true;
+    }
+}
+
+/// `v` with `len` values: kept if it has them, else a fresh zeroed allocation, which the
+/// system provides as untouched pages (a `resize` would write hundreds of megabytes of
+/// zeros for a large factor before its first use).
+pub(crate) fn zeroed<T: Clone + Default>(v: &mut Vec<T>, len: usize) {
+    if v.len() != len {
+        *v = vec![T::default(); len];
     }
 }
 
@@ -196,9 +205,7 @@ impl Vm {
             self.store.give_up_single();
         }
         self.store.ready_single = false;
-        if self.store.double.len() != self.symbolic.len_val() {
-            self.store.double.resize(self.symbolic.len_val(), 0.0);
-        }
+        zeroed(&mut self.store.double, self.symbolic.len_val());
         let matrix = SparseColMatRef::new(self.pattern.as_ref(), &self.hvals);
         self.symbolic
             .factorize_numeric_llt(

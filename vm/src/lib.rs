@@ -9,7 +9,9 @@
 //! 2. [`Vm::newton`] finds the log scale factors `u` that flatten it (CETM), warm-started from
 //!    the previous frame's `u`: each iteration runs the iteration stream into the gradient and
 //!    straight into the CSC values, factors numerically (faer's supernodal/simplicial LLT into
-//!    preallocated `L` values and workspace) and solves in place;
+//!    preallocated `L` values and workspace; in single precision for large factors, see
+//!    [`FactorPrecision`]) and solves in place, or reuses an earlier factor as the
+//!    preconditioner of conjugate gradients;
 //! 3. [`Vm::embed`] lays the flat metric out, given the rigid motion (anchor position and
 //!    direction of the anchor edge).
 //!

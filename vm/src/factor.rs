@@ -17,6 +17,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky};
 use faer::sparse::SparseColMatRef;
+use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
 
 use crate::{Vm, VmError};
@@ -130,6 +131,30 @@ pub(crate) fn zeroed<T: Clone + Default>(v: &mut Vec<T>, len: usize) {
     }
 }
 
+/// The numeric Cholesky factorisation of `matrix` (its lower triangle, in the pattern
+/// `symbolic` was computed for) into `factor`, on one thread, with `workspace` as scratch.
+pub(crate) fn numeric_llt<T: ComplexField>(
+    symbolic: &SymbolicCholesky<u32>,
+    factor: &mut [T],
+    matrix: SparseColMatRef<'_, u32, T>,
+    workspace: &mut MemBuffer,
+) -> Result<(), VmError> {
+    symbolic
+        .factorize_numeric_llt(
+            factor,
+            matrix,
+            Side::Lower,
+            LltRegularization::default(),
+            Par::Seq,
+            MemStack::new(workspace),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| match e {
+            LltError::NonPositivePivot { index } => VmError::NotPositiveDefinite { pivot: index },
+        })
+}
+
 /// `x = L^-T L^-1 x` with the ready factor: in place in double precision, or through the
 /// single-precision buffer (rounded in, widened out).
 pub(crate) fn apply(
@@ -206,22 +231,12 @@ impl Vm {
         }
         self.store.ready_single = false;
         zeroed(&mut self.store.double, self.symbolic.len_val());
-        let matrix = SparseColMatRef::new(self.pattern.as_ref(), &self.hvals);
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.store.double,
-                matrix,
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut self.workspace),
-                Default::default(),
-            )
-            .map_err(|e| match e {
-                LltError::NonPositivePivot { index } => {
-                    VmError::NotPositiveDefinite { pivot: index }
-                }
-            })?;
+        numeric_llt(
+            &self.symbolic,
+            &mut self.store.double,
+            SparseColMatRef::new(self.pattern.as_ref(), &self.hvals),
+            &mut self.workspace,
+        )?;
         self.factor_ready = true;
         Ok(())
     }
@@ -239,18 +254,9 @@ impl Vm {
             return false;
         }
         let matrix = SparseColMatRef::new(self.pattern.as_ref(), &values[..]);
-        let factored = self.symbolic.factorize_numeric_llt(
-            single,
-            matrix,
-            Side::Lower,
-            LltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut self.workspace),
-            Default::default(),
-        );
         // Finite values with positive pivots keep every entry of L below the square root of
         // its diagonal's: no overflow inside (a NaN pivot fails the positivity test too).
-        factored.is_ok()
+        numeric_llt(&self.symbolic, single, matrix, &mut self.workspace).is_ok()
     }
 }
 

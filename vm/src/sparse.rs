@@ -34,7 +34,6 @@
 //! ```
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::{LltError, LltRegularization};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymmetricOrdering,
@@ -254,23 +253,12 @@ impl Cholesky {
                 got: values.len(),
             });
         }
-        let stack = MemStack::new(&mut self.workspace);
-        let matrix = SparseColMatRef::new(self.pattern.as_ref(), values);
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.factor,
-                matrix,
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                stack,
-                Default::default(),
-            )
-            .map_err(|e| match e {
-                LltError::NonPositivePivot { index } => {
-                    VmError::NotPositiveDefinite { pivot: index }
-                }
-            })?;
+        crate::factor::numeric_llt(
+            &self.symbolic,
+            &mut self.factor,
+            SparseColMatRef::new(self.pattern.as_ref(), values),
+            &mut self.workspace,
+        )?;
         self.ready = true;
         Ok(())
     }

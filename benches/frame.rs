@@ -243,39 +243,28 @@ fn bench_iteration_stream(c: &mut Criterion, cases: &mut [Case]) {
     group.finish();
 }
 
-fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
-    // Both storage precisions of the factor, on the same state.
-    let precisions = [
-        ("f64", FactorPrecision::Double),
-        ("f32", FactorPrecision::Single),
-    ];
-    let mut group = c.benchmark_group("factorization");
-    for case in cases.iter_mut() {
-        configure(&mut group, case.n);
-        for (name, precision) in precisions {
-            group.bench_function(BenchmarkId::new(name, case.n), |b| {
-                let e = case.evaluated();
-                e.vm.set_factor_precision(precision);
-                b.iter(|| e.vm.factorize().expect("positive definite"));
-            });
-        }
-        if let Some(e) = case.evaluated.as_mut() {
-            e.vm.set_factor_precision(FactorPrecision::Auto);
-        }
-    }
-    group.finish();
+/// Both storage precisions of the factor.
+const PRECISIONS: [(&str, FactorPrecision); 2] = [
+    ("f64", FactorPrecision::Double),
+    ("f32", FactorPrecision::Single),
+];
 
-    let mut group = c.benchmark_group("solve");
+/// A group with one benchmark per size and factor precision (`f64/N`, `f32/N`), each on the
+/// evaluated state with the precision set; the VM is set back to the automatic choice.
+fn bench_per_precision(
+    c: &mut Criterion,
+    cases: &mut [Case],
+    name: &str,
+    mut run: impl FnMut(&mut criterion::Bencher<'_>, &mut Vm),
+) {
+    let mut group = c.benchmark_group(name);
     for case in cases.iter_mut() {
         configure(&mut group, case.n);
-        for (name, precision) in precisions {
-            group.bench_function(BenchmarkId::new(name, case.n), |b| {
+        for (label, precision) in PRECISIONS {
+            group.bench_function(BenchmarkId::new(label, case.n), |b| {
                 let e = case.evaluated();
                 e.vm.set_factor_precision(precision);
-                e.vm.factorize().expect("positive definite");
-                b.iter(|| {
-                    black_box(e.vm.solve().expect("factored"));
-                });
+                run(b, &mut e.vm);
             });
         }
         if let Some(e) = case.evaluated.as_mut() {
@@ -283,6 +272,18 @@ fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
         }
     }
     group.finish();
+}
+
+fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
+    bench_per_precision(c, cases, "factorization", |b, vm| {
+        b.iter(|| vm.factorize().expect("positive definite"));
+    });
+    bench_per_precision(c, cases, "solve", |b, vm| {
+        vm.factorize().expect("positive definite");
+        b.iter(|| {
+            black_box(vm.solve().expect("factored"));
+        });
+    });
 
     let mut group = c.benchmark_group("tangent");
     for case in cases.iter_mut() {

@@ -180,7 +180,12 @@ pub(crate) mod tests {
 
     /// A jittered 7 x 7 grid of vertices (25 interior ones), two triangles per cell.
     pub(crate) fn patch(jitter: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
-        let side = 7u32;
+        patch_of(7, jitter)
+    }
+
+    /// A jittered grid of `side` x `side` vertices (interior vertices moved by up to
+    /// `jitter`), two triangles per cell.
+    pub(crate) fn patch_of(side: u32, jitter: f64) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
         let mut positions = Vec::new();
         for j in 0..side {
             for i in 0..side {

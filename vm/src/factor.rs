@@ -20,6 +20,7 @@ use faer::sparse::SparseColMatRef;
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
 
+use crate::triangular::SupernodalSolve;
 use crate::{Vm, VmError};
 
 /// Stored values of the factor from which [`FactorPrecision::Auto`] keeps it in single
@@ -68,6 +69,9 @@ pub(crate) struct FactorStore {
     single_failed: bool,
     /// The ready factor (if any) is the single-precision one.
     pub ready_single: bool,
+    /// The flattened supernodal structure for the triangular solves (`None` for a
+    /// simplicial factor, which faer's own solve takes).
+    pub solver: Option<SupernodalSolve>,
 }
 
 impl FactorStore {
@@ -155,8 +159,10 @@ pub(crate) fn numeric_llt<T: ComplexField>(
         })
 }
 
-/// `x = L^-T L^-1 x` with the ready factor: in place in double precision, or through the
-/// single-precision buffer (rounded in, widened out).
+/// `x = L^-T L^-1 x` with the ready factor. A supernodal factor is applied by
+/// [`SupernodalSolve`] (double-precision arithmetic on either precision's values); a
+/// simplicial one by faer, in place in double precision or through the single-precision
+/// buffer (rounded in, widened out).
 pub(crate) fn apply(
     symbolic: &SymbolicCholesky<u32>,
     store: &mut FactorStore,
@@ -164,6 +170,14 @@ pub(crate) fn apply(
     x: &mut [f64],
 ) {
     let n = x.len();
+    if let Some(solver) = &mut store.solver {
+        if store.ready_single {
+            solver.solve(&store.single, x);
+        } else {
+            solver.solve(&store.double, x);
+        }
+        return;
+    }
     if store.ready_single {
         let FactorStore { single, rhs, .. } = store;
         for (r, v) in rhs.iter_mut().zip(&*x) {
@@ -223,6 +237,9 @@ impl Vm {
         self.factor_ready = false;
         if self.store.single() {
             if self.factorize_single() {
+                if let Some(solver) = &mut self.store.solver {
+                    solver.prepare(&self.store.single);
+                }
                 self.store.ready_single = true;
                 self.factor_ready = true;
                 return Ok(());
@@ -237,6 +254,9 @@ impl Vm {
             SparseColMatRef::new(self.pattern.as_ref(), &self.hvals),
             &mut self.workspace,
         )?;
+        if let Some(solver) = &mut self.store.solver {
+            solver.prepare(&self.store.double);
+        }
         self.factor_ready = true;
         Ok(())
     }

@@ -52,6 +52,7 @@ mod newton;
 mod plan;
 pub mod sparse;
 mod tangent;
+mod triangular;
 
 pub use bdmorph_isa::Program;
 pub use error::VmError;
@@ -157,7 +158,9 @@ impl Vm {
             h.row_idx.clone(),
         );
         let (symbolic, workspace) = newton::analyse(&pattern, program.ordering())?;
-        let store = factor::FactorStore::new(FactorPrecision::Auto, symbolic.len_val(), h.nnz(), n);
+        let mut store =
+            factor::FactorStore::new(FactorPrecision::Auto, symbolic.len_val(), h.nnz(), n);
+        store.solver = triangular::SupernodalSolve::new(&symbolic);
         let refactor_beyond = newton::refactor_beyond(&symbolic);
         Ok(Vm {
             pattern,

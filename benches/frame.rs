@@ -17,7 +17,8 @@
 //! - `factorization`: the numeric Cholesky factorisation ([`Vm::factorize`]) on that state,
 //!   with the factor stored in double (`f64`) and in single precision (`f32`);
 //! - `solve`: one solve with that factor ([`Vm::solve`]), the unit of work of a conjugate-
-//!   gradient iteration, in both precisions;
+//!   gradient iteration, in both precisions; `solve_faer`, its baseline: the same solve by
+//!   faer's general supernodal routine ([`Vm::solve_with_faer`]);
 //! - `tangent`: the solution's derivative along the morph ([`Vm::tangent`]: the closed-form
 //!   derivative of the gradient and conjugate gradients with the factor of that state), which
 //!   a warm frame computes for the next one's predicted start when tangents are on;
@@ -282,6 +283,13 @@ fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
         vm.factorize().expect("positive definite");
         b.iter(|| {
             black_box(vm.solve().expect("factored"));
+        });
+    });
+    // The baseline of `solve`: the same solve by faer's general supernodal routine.
+    bench_per_precision(c, cases, "solve_faer", |b, vm| {
+        vm.factorize().expect("positive definite");
+        b.iter(|| {
+            black_box(vm.solve_with_faer().expect("factored"));
         });
     });
 

@@ -121,7 +121,7 @@ impl Vm {
         let (symbolic, store, workspace) = (&self.symbolic, &mut self.store, &mut self.workspace);
         let mut precondition = |r: &[f64], z: &mut [f64]| {
             z.copy_from_slice(r);
-            factor::apply(symbolic, store, workspace, z);
+            factor::apply(symbolic, store, workspace, z, false);
         };
         precondition(r, z);
         p.copy_from_slice(z);

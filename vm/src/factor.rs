@@ -160,17 +160,18 @@ pub(crate) fn numeric_llt<T: ComplexField>(
 }
 
 /// `x = L^-T L^-1 x` with the ready factor. A supernodal factor is applied by
-/// [`SupernodalSolve`] (double-precision arithmetic on either precision's values); a
-/// simplicial one by faer, in place in double precision or through the single-precision
-/// buffer (rounded in, widened out).
+/// [`SupernodalSolve`] (double-precision arithmetic on either precision's values) unless
+/// `with_faer`; a simplicial one (or any with `with_faer`) by faer, in place in double
+/// precision or through the single-precision buffer (rounded in, widened out).
 pub(crate) fn apply(
     symbolic: &SymbolicCholesky<u32>,
     store: &mut FactorStore,
     workspace: &mut MemBuffer,
     x: &mut [f64],
+    with_faer: bool,
 ) {
     let n = x.len();
-    if let Some(solver) = &mut store.solver {
+    if let (Some(solver), false) = (&mut store.solver, with_faer) {
         if store.ready_single {
             solver.solve(&store.single, x);
         } else {

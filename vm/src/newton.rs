@@ -462,13 +462,25 @@ impl Vm {
         if !self.factor_ready {
             return Err(VmError::NoFactor);
         }
-        self.solve_step();
+        self.solve_step(false);
+        Ok(&self.step)
+    }
+
+    /// [`Vm::solve`] by faer's general supernodal solve (its dense triangular solve and
+    /// matrix product per supernode) instead of the VM's own loops: the same result to
+    /// rounding, kept as the baseline those loops are measured against (`benches/frame.rs`,
+    /// group `solve`). Fails with [`VmError::NoFactor`] before any factorisation.
+    pub fn solve_with_faer(&mut self) -> Result<&[f64], VmError> {
+        if !self.factor_ready {
+            return Err(VmError::NoFactor);
+        }
+        self.solve_step(true);
         Ok(&self.step)
     }
 
     /// `step = -H^-1 g` with the current factor, which must be ready (one application; with a
-    /// single-precision factor, accurate to that precision).
-    fn solve_step(&mut self) {
+    /// single-precision factor, accurate to that precision), by faer when `with_faer`.
+    fn solve_step(&mut self, with_faer: bool) {
         debug_assert!(self.factor_ready);
         for (s, g) in self.step.iter_mut().zip(&self.grad) {
             *s = -g;
@@ -478,6 +490,7 @@ impl Vm {
             &mut self.store,
             &mut self.workspace,
             &mut self.step,
+            with_faer,
         );
     }
 
@@ -490,7 +503,7 @@ impl Vm {
     /// factorisations added.
     pub(crate) fn fresh_step(&mut self, relative: f64) -> Result<(u32, u32), VmError> {
         if !self.store.ready_single {
-            self.solve_step();
+            self.solve_step(false);
             return Ok((0, 0));
         }
         let outcome = self.pcg(true, relative, FRESH_SINGLE_CG, None);
@@ -499,7 +512,7 @@ impl Vm {
         }
         self.store.give_up_single();
         self.factorize()?;
-        self.solve_step();
+        self.solve_step(false);
         Ok((outcome.iterations, 1))
     }
 }

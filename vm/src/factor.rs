@@ -115,6 +115,19 @@ impl FactorStore {
         }
     }
 
+    /// Records that the factor just computed is the single- (`single`) or double-precision
+    /// one, and prepares the supernodal solves for it.
+    fn mark_ready(&mut self, single: bool) {
+        self.ready_single = single;
+        if let Some(solver) = &mut self.solver {
+            if single {
+                solver.prepare(&self.single);
+            } else {
+                solver.prepare(&self.double);
+            }
+        }
+    }
+
     /// Whether the next factorisation tries single precision.
     pub fn single(&self) -> bool {
         self.want_single && !self.single_failed
@@ -238,16 +251,12 @@ impl Vm {
         self.factor_ready = false;
         if self.store.single() {
             if self.factorize_single() {
-                if let Some(solver) = &mut self.store.solver {
-                    solver.prepare(&self.store.single);
-                }
-                self.store.ready_single = true;
+                self.store.mark_ready(true);
                 self.factor_ready = true;
                 return Ok(());
             }
             self.store.give_up_single();
         }
-        self.store.ready_single = false;
         zeroed(&mut self.store.double, self.symbolic.len_val());
         numeric_llt(
             &self.symbolic,
@@ -255,9 +264,7 @@ impl Vm {
             SparseColMatRef::new(self.pattern.as_ref(), &self.hvals),
             &mut self.workspace,
         )?;
-        if let Some(solver) = &mut self.store.solver {
-            solver.prepare(&self.store.double);
-        }
+        self.store.mark_ready(false);
         self.factor_ready = true;
         Ok(())
     }

@@ -469,7 +469,7 @@ impl Vm {
     /// [`Vm::solve`] by faer's general supernodal solve (its dense triangular solve and
     /// matrix product per supernode) instead of the VM's own loops: the same result to
     /// rounding, kept as the baseline those loops are measured against (`benches/frame.rs`,
-    /// group `solve`). Fails with [`VmError::NoFactor`] before any factorisation.
+    /// group `solve_faer`). Fails with [`VmError::NoFactor`] before any factorisation.
     pub fn solve_with_faer(&mut self) -> Result<&[f64], VmError> {
         if !self.factor_ready {
             return Err(VmError::NoFactor);

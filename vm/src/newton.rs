@@ -322,10 +322,14 @@ impl Vm {
             let inherited = self.factor_ready && !self.factor_current;
             let mut fresh = !(self.factor_ready && options.reuse_factor);
             // Inexact Newton: solve only as accurately as this step can use (forcing term
-            // min(0.01, ||g||)), and no more accurately than the tolerance needs.
+            // min(0.01, ||g||)), and no more accurately than the tolerance needs: a linear
+            // residual of half the tolerance. That bound binds only below ||g|| = sqrt(tol / 2),
+            // where the step's quadratic remainder K ||g||^2 (K measured 0.2-0.8 on the
+            // benchmark disks) stays below the other half. It spared 2-7% of the CG iterations
+            // and a tenth of the factorisations against a tenth of the tolerance.
             let forcing = gradient_norm
                 .min(0.01)
-                .max(0.1 * options.tolerance / gradient_norm)
+                .max(0.5 * options.tolerance / gradient_norm)
                 .min(0.5);
             let rule = AbortRule {
                 limit: self.refactor_beyond,

@@ -20,6 +20,7 @@ use faer::sparse::SparseColMatRef;
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
 
+use crate::numeric::{Failure, SupernodalLlt};
 use crate::triangular::SupernodalSolve;
 use crate::{Vm, VmError};
 
@@ -72,6 +73,9 @@ pub(crate) struct FactorStore {
     /// The flattened supernodal structure for the triangular solves (`None` for a
     /// simplicial factor, which faer's own solve takes).
     pub solver: Option<SupernodalSolve>,
+    /// The numeric factorisation's plan (`None` for a simplicial factor, which faer
+    /// factors).
+    pub llt: Option<SupernodalLlt>,
 }
 
 impl FactorStore {
@@ -239,18 +243,30 @@ impl Vm {
     }
 
     /// Factors the Hessian of the last evaluation numerically into the preallocated factor,
-    /// in the precision [`Vm::factor_precision`] names. A single-precision factorisation that
-    /// fails (a Hessian value beyond `f32`'s range, or a pivot lost to rounding: the Hessian
-    /// is too ill-conditioned for it) gives single precision up for this program and factors
-    /// in double precision instead, allocating the double-precision factor on that first
+    /// in the precision [`Vm::factor_precision`] names: a supernodal factor by the VM's own
+    /// loops, a simplicial one by faer. A single-precision factorisation that fails (a
+    /// Hessian value beyond `f32`'s range, or a pivot lost to rounding: the Hessian is too
+    /// ill-conditioned for it) gives single precision up for this program and factors in
+    /// double precision instead, allocating the double-precision factor on that first
     /// fallback. Allocates nothing otherwise.
     ///
     /// Fails with [`VmError::NotPositiveDefinite`] when the Hessian is not numerically
-    /// positive definite (for instance before any evaluation, when its values are all zero).
+    /// positive definite (for instance before any evaluation, when its values are all zero,
+    /// or when one of them is not finite).
     pub fn factorize(&mut self) -> Result<(), VmError> {
+        self.factorize_with(false)
+    }
+
+    /// [`Vm::factorize`] by faer's general supernodal factorisation even where the VM has its
+    /// own: the baseline of the benchmarks and tests. Its factor is the same up to rounding.
+    pub fn factorize_with_faer(&mut self) -> Result<(), VmError> {
+        self.factorize_with(true)
+    }
+
+    fn factorize_with(&mut self, with_faer: bool) -> Result<(), VmError> {
         self.factor_ready = false;
         if self.store.single() {
-            if self.factorize_single() {
+            if self.factorize_single(with_faer) {
                 self.store.mark_ready(true);
                 self.factor_ready = true;
                 return Ok(());
@@ -258,12 +274,22 @@ impl Vm {
             self.store.give_up_single();
         }
         zeroed(&mut self.store.double, self.symbolic.len_val());
-        numeric_llt(
-            &self.symbolic,
-            &mut self.store.double,
-            SparseColMatRef::new(self.pattern.as_ref(), &self.hvals),
-            &mut self.workspace,
-        )?;
+        match (&self.store.llt, with_faer) {
+            (Some(llt), false) => {
+                llt.factorize(&self.hvals, &mut self.store.double)
+                    .map_err(|e| match e {
+                        Failure::Pivot(pivot) | Failure::NonFinite(pivot) => {
+                            VmError::NotPositiveDefinite { pivot }
+                        }
+                    })?
+            }
+            _ => numeric_llt(
+                &self.symbolic,
+                &mut self.store.double,
+                SparseColMatRef::new(self.pattern.as_ref(), &self.hvals),
+                &mut self.workspace,
+            )?,
+        }
         self.store.mark_ready(false);
         self.factor_ready = true;
         Ok(())
@@ -271,8 +297,18 @@ impl Vm {
 
     /// The single-precision factorisation; false when a value leaves `f32`'s range or a
     /// pivot is not positive.
-    fn factorize_single(&mut self) -> bool {
-        let FactorStore { single, values, .. } = &mut self.store;
+    fn factorize_single(&mut self, with_faer: bool) -> bool {
+        let FactorStore {
+            single,
+            values,
+            llt,
+            ..
+        } = &mut self.store;
+        // Finite values with positive pivots keep every entry of L below the square root of
+        // its diagonal's: no overflow inside (a NaN pivot fails the positivity test too).
+        if let (Some(llt), false) = (llt, with_faer) {
+            return llt.factorize(&self.hvals, single).is_ok();
+        }
         let mut finite = true;
         for (s, v) in values.iter_mut().zip(&self.hvals) {
             *s = *v as f32;
@@ -282,8 +318,6 @@ impl Vm {
             return false;
         }
         let matrix = SparseColMatRef::new(self.pattern.as_ref(), &values[..]);
-        // Finite values with positive pivots keep every entry of L below the square root of
-        // its diagonal's: no overflow inside (a NaN pivot fails the positivity test too).
         numeric_llt(&self.symbolic, single, matrix, &mut self.workspace).is_ok()
     }
 }

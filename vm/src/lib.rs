@@ -49,8 +49,10 @@ mod factor;
 pub mod kernel;
 pub mod lobachevsky;
 mod newton;
+mod numeric;
 mod plan;
 pub mod sparse;
+mod supernodes;
 mod tangent;
 mod triangular;
 
@@ -139,6 +141,10 @@ impl std::fmt::Debug for Vm {
             .field("factor_nnz", &self.symbolic.len_val())
             .field("factor_precision", &self.factor_precision())
             .field("plan_bytes", &self.plan.bytes())
+            .field(
+                "factorization_plan_bytes",
+                &self.store.llt.as_ref().map_or(0, |l| l.bytes()),
+            )
             .finish_non_exhaustive()
     }
 }
@@ -160,7 +166,9 @@ impl Vm {
         let (symbolic, workspace) = newton::analyse(&pattern, program.ordering())?;
         let mut store =
             factor::FactorStore::new(FactorPrecision::Auto, symbolic.len_val(), h.nnz(), n);
-        store.solver = triangular::SupernodalSolve::new(&symbolic);
+        let structure = supernodes::Supernodes::new(&symbolic).map(std::sync::Arc::new);
+        store.solver = structure.clone().map(triangular::SupernodalSolve::new);
+        store.llt = structure.and_then(|s| numeric::SupernodalLlt::new(s, &h.col_ptr, &h.row_idx));
         let refactor_beyond = newton::refactor_beyond(&symbolic);
         Ok(Vm {
             pattern,

@@ -16,110 +16,45 @@
 //! loops with AVX2 and FMA (runtime dispatch) measured no faster: they wait on the chains of
 //! the diagonal triangles and the gathers, not on arithmetic.
 
-use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
+use std::sync::Arc;
 
-/// One supernode's shape.
-#[derive(Clone, Copy, Debug)]
-struct Supernode {
-    /// Its first column (in the permuted numbering).
-    begin: u32,
-    /// Its number of columns.
-    width: u32,
-    /// Where its below-diagonal row indices start in [`SupernodalSolve::rows`].
-    rows_start: u32,
-    /// How many rows it has below its diagonal block.
-    height: u32,
-    /// Where its values (a column-major `(width + height) x width` block) start.
-    values_start: usize,
-}
+use crate::supernodes::Supernodes;
 
-/// The supernodal structure of a factor, flattened for [`SupernodalSolve::solve`], and its
-/// work buffers.
+/// The supernodal structure of a factor and the solves' work buffers.
 #[derive(Clone, Debug)]
 pub(crate) struct SupernodalSolve {
-    supernodes: Vec<Supernode>,
-    /// Below-diagonal row indices of every supernode, in the factor's (permuted) numbering.
-    rows: Vec<u32>,
-    /// The fill-reducing permutation: `perm[new] = old`.
-    perm: Vec<u32>,
+    structure: Arc<Supernodes>,
     /// The right side in the permuted numbering.
     y: Vec<f64>,
     /// One supernode's values of `y` below its diagonal block, gathered or to scatter.
     below: Vec<f64>,
-    /// Values the factor holds.
-    len_val: usize,
     /// The reciprocals of the factor's diagonal, set by [`SupernodalSolve::prepare`].
     inv_diag: Vec<f64>,
 }
 
 impl SupernodalSolve {
-    /// The flattened structure of `symbolic`, or `None` when it is not supernodal. Checks
-    /// that the supernodes tile the columns, that each block's size matches its values and
-    /// that every row index lies below its supernode and within the matrix, so the solves
-    /// index only within those bounds.
-    pub fn new(symbolic: &SymbolicCholesky<u32>) -> Option<SupernodalSolve> {
-        let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
-            return None;
-        };
-        let n = symbolic.nrows();
-        let perm = match symbolic.perm() {
-            Some(p) => p.arrays().0.to_vec(),
-            None => (0..n as u32).collect(),
-        };
-        let (begin, end) = (s.supernode_begin(), s.supernode_end());
-        let (row_ptr, val_ptr) = (s.col_ptr_for_row_idx(), s.col_ptr_for_val());
-        let mut supernodes = Vec::with_capacity(begin.len());
-        let (mut tallest, mut next) = (0, 0u32);
-        for k in 0..begin.len() {
-            let (b, e) = (begin[k], end[k]);
-            let (r0, r1) = (row_ptr[k], row_ptr[k + 1]);
-            let (v0, v1) = (val_ptr[k] as usize, val_ptr[k + 1] as usize);
-            let (width, height) = (e.checked_sub(b)?, r1.checked_sub(r0)?);
-            if b != next || width == 0 || e as usize > n {
-                return None;
-            }
-            next = e;
-            let size = (width as usize + height as usize).checked_mul(width as usize)?;
-            if v1.checked_sub(v0)? != size {
-                return None;
-            }
-            let rows = s.row_idx().get(r0 as usize..r1 as usize)?;
-            if rows.iter().any(|&r| r < e || r as usize >= n) {
-                return None;
-            }
-            tallest = tallest.max(height as usize);
-            supernodes.push(Supernode {
-                begin: b,
-                width,
-                rows_start: r0,
-                height,
-                values_start: v0,
-            });
-        }
-        let in_range = perm.len() == n && perm.iter().all(|&p| (p as usize) < n);
-        if next as usize != n
-            || !in_range
-            || val_ptr.last().map(|&v| v as usize) != Some(s.len_val())
-        {
-            return None;
-        }
-        Some(SupernodalSolve {
-            supernodes,
-            rows: s.row_idx().to_vec(),
-            perm,
+    /// Solves with factors of the checked `structure` (so they index only within its bounds).
+    pub fn new(structure: Arc<Supernodes>) -> SupernodalSolve {
+        let n = structure.n();
+        let tallest = structure.list.iter().map(|s| s.height as usize).max();
+        SupernodalSolve {
             y: vec![0.0; n],
-            below: vec![0.0; tallest],
-            len_val: s.len_val(),
+            below: vec![0.0; tallest.unwrap_or(0)],
             inv_diag: vec![0.0; n],
-        })
+            structure,
+        }
     }
 
     /// Reads the reciprocals of the diagonal of the factor `values`, which the solves with it
     /// multiply by: a division in their chain of dependent operations costs several times a
     /// multiplication. Call after every factorisation, before solving with it.
     pub fn prepare<T: Copy + Into<f64>>(&mut self, values: &[T]) {
-        assert_eq!(values.len(), self.len_val, "a factor of this structure");
-        for s in &self.supernodes {
+        assert_eq!(
+            values.len(),
+            self.structure.len_val,
+            "a factor of this structure"
+        );
+        for s in &self.structure.list {
             let (b, w) = (s.begin as usize, s.width as usize);
             let ld = w + s.height as usize;
             for (j, inv) in self.inv_diag[b..b + w].iter_mut().enumerate() {
@@ -132,14 +67,15 @@ impl SupernodalSolve {
     /// (each supernode a column-major block of `width + height` rows and `width` columns, its
     /// diagonal block's upper triangle unused), prepared by [`SupernodalSolve::prepare`].
     pub fn solve<T: Copy + Into<f64>>(&mut self, values: &[T], x: &mut [f64]) {
-        assert_eq!(values.len(), self.len_val, "a factor of this structure");
+        let st = &*self.structure;
+        assert_eq!(values.len(), st.len_val, "a factor of this structure");
         assert_eq!(x.len(), self.y.len(), "one value per unknown");
         let y = &mut self.y;
-        for (yi, &p) in y.iter_mut().zip(&self.perm) {
+        for (yi, &p) in y.iter_mut().zip(&st.perm) {
             *yi = x[p as usize];
         }
         // Forward: L z = P x.
-        for s in &self.supernodes {
+        for s in &st.list {
             let (b, w, h) = (s.begin as usize, s.width as usize, s.height as usize);
             let ld = w + h;
             let block = &values[s.values_start..s.values_start + ld * w];
@@ -174,21 +110,19 @@ impl SupernodalSolve {
                     *t += a.into() * xj;
                 }
             }
-            let rows = &self.rows[s.rows_start as usize..s.rows_start as usize + h];
-            for (&r, &t) in rows.iter().zip(&*below) {
+            for (&r, &t) in st.rows_of(s).iter().zip(&*below) {
                 y[r as usize] -= t;
             }
         }
         // Backward: L^T y = z.
-        for s in self.supernodes.iter().rev() {
+        for s in st.list.iter().rev() {
             let (b, w, h) = (s.begin as usize, s.width as usize, s.height as usize);
             let ld = w + h;
             let block = &values[s.values_start..s.values_start + ld * w];
             let inv = &self.inv_diag[b..b + w];
             if h > 0 {
-                let rows = &self.rows[s.rows_start as usize..s.rows_start as usize + h];
                 let below = &mut self.below[..h];
-                for (t, &r) in below.iter_mut().zip(rows) {
+                for (t, &r) in below.iter_mut().zip(st.rows_of(s)) {
                     *t = y[r as usize];
                 }
                 for (j, t) in y[b..b + w].iter_mut().enumerate() {
@@ -201,7 +135,7 @@ impl SupernodalSolve {
                 top[j] = (top[j] - acc) * inv[j];
             }
         }
-        for (&yi, &p) in y.iter().zip(&self.perm) {
+        for (&yi, &p) in y.iter().zip(&st.perm) {
             x[p as usize] = yi;
         }
     }
@@ -227,7 +161,7 @@ fn dot<T: Copy + Into<f64>>(a: &[T], b: &[f64]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::cg::tests::patch_of;
     use crate::{FactorPrecision, Vm};
     use faer::dyn_stack::MemStack;
@@ -236,7 +170,7 @@ mod tests {
 
     /// A VM on a jittered 34 x 34 grid (1024 unknowns, a nested-dissection ordering: a
     /// supernodal factor), factored at the bent metric of `t`.
-    fn factored(t: f64, precision: FactorPrecision) -> Vm {
+    pub(crate) fn factored(t: f64, precision: FactorPrecision) -> Vm {
         let (a, faces) = patch_of(34, 0.2);
         let b: Vec<[f64; 2]> = a
             .iter()

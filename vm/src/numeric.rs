@@ -1,0 +1,770 @@
+//! The numeric supernodal Cholesky factorisation `P A P^T = L L^T`, into faer's supernodal
+//! layout (see [`crate::supernodes`]), with register-blocked loops.
+//!
+//! faer's numeric factorisation calls its general dense kernels (Cholesky, triangular solve,
+//! matrix product) a few times per supernode; a nested-dissection ordering of a mesh makes
+//! many small supernodes (at 10K unknowns, 804 of them, most of 8 to 31 columns), on which
+//! the set-up of each call rivals its arithmetic. Here everything that does not depend on
+//! the values is worked out once, at [`SupernodalLlt::new`]:
+//!
+//! - where each of the Hessian's values lands in `L` (the assembly map);
+//! - for each supernode, the ancestors its rows below the diagonal update, and where each of
+//!   those rows lies in the ancestor's block (relative indices).
+//!
+//! A factorisation then zeroes `L`, scatters the Hessian into it and, supernode by supernode
+//! in column order (right-looking):
+//!
+//! 1. factors its diagonal block and divides the rows below by it, in blocks of
+//!    [`PANEL`] columns whose trailing updates are register tiles;
+//! 2. subtracts `B B^T` (`B` its rows below) from the ancestors, computed in register tiles of
+//!    `MR x NR` values and subtracted straight from the registers through the relative
+//!    indices (no dense update matrix).
+//!
+//! The tiles are written as fixed-size array loops, which the compiler turns into vector
+//! code; on x86-64 a copy compiled for AVX2 and FMA is chosen at run time when the processor
+//! has them.
+
+use std::sync::Arc;
+
+use crate::supernodes::{Supernode, Supernodes};
+
+/// Columns factored one by one before their trailing update is applied in tiles.
+const PANEL: usize = 8;
+/// Columns of a register tile.
+const NR: usize = 4;
+
+/// A value type of the factor: `f64` or `f32`.
+pub(crate) trait Real:
+    Copy
+    + Default
+    + PartialOrd
+    + std::ops::Mul<Output = Self>
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::SubAssign
+    + std::ops::MulAssign
+{
+    /// `v` rounded to this type.
+    fn from_f64(v: f64) -> Self;
+    /// The square root.
+    fn sqrt(self) -> Self;
+    /// `1 / self`.
+    fn recip(self) -> Self;
+    /// Whether finite.
+    fn finite(self) -> bool;
+    /// Whether greater than zero (false for NaN).
+    fn positive(self) -> bool;
+    /// `self * b + c`, fused when `FMA` (only where the processor has it: elsewhere a fused
+    /// multiply-add is a slow library call).
+    fn madd<const FMA: bool>(self, b: Self, c: Self) -> Self;
+    /// [`tile`] with [`NR`] columns, by explicit vector code where `FMA` (which callers pass
+    /// only inside [`SupernodalLlt::supernodes_avx2`]) and `R` is one or two vectors: the
+    /// compiler's own vectoriser left the double-precision tile scalar.
+    fn tile4<const R: usize, const FMA: bool>(
+        src: &[Self],
+        ld: usize,
+        i: usize,
+        j: usize,
+        k: usize,
+    ) -> [[Self; R]; NR];
+}
+
+macro_rules! real {
+    ($t:ty, $lanes:literal, $vector:ident) => {
+        impl Real for $t {
+            #[inline(always)]
+            fn from_f64(v: f64) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                <$t>::sqrt(self)
+            }
+            #[inline(always)]
+            fn recip(self) -> Self {
+                1.0 / self
+            }
+            #[inline(always)]
+            fn finite(self) -> bool {
+                self.is_finite()
+            }
+            #[inline(always)]
+            fn positive(self) -> bool {
+                self > 0.0
+            }
+            #[inline(always)]
+            fn madd<const FMA: bool>(self, b: Self, c: Self) -> Self {
+                if FMA {
+                    self.mul_add(b, c)
+                } else {
+                    self * b + c
+                }
+            }
+            #[inline(always)]
+            fn tile4<const R: usize, const FMA: bool>(
+                src: &[Self],
+                ld: usize,
+                i: usize,
+                j: usize,
+                k: usize,
+            ) -> [[Self; R]; NR] {
+                #[cfg(target_arch = "x86_64")]
+                if FMA && (R == $lanes || R == 2 * $lanes) {
+                    let mut out = [[0.0; R]; NR];
+                    if R == $lanes {
+                        // SAFETY: `FMA` is true only inside `supernodes_avx2`, which runs only
+                        // when the processor has AVX2 and FMA.
+                        let acc = unsafe { avx2::$vector::<1>(src, ld, i, j, k) };
+                        for (o, a) in out.iter_mut().zip(&acc) {
+                            o.copy_from_slice(a.as_flattened());
+                        }
+                    } else {
+                        // SAFETY: as above.
+                        let acc = unsafe { avx2::$vector::<2>(src, ld, i, j, k) };
+                        for (o, a) in out.iter_mut().zip(&acc) {
+                            o.copy_from_slice(a.as_flattened());
+                        }
+                    }
+                    return out;
+                }
+                tile::<Self, R, NR, FMA>(src, ld, i, j, k)
+            }
+        }
+    };
+}
+real!(f64, 4, tile_f64);
+real!(f32, 8, tile_f32);
+
+/// The register tiles in AVX2 and FMA vector code.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use std::arch::x86_64::{
+        _mm256_fmadd_pd, _mm256_fmadd_ps, _mm256_set1_pd, _mm256_set1_ps, _mm256_setzero_pd,
+        _mm256_setzero_ps,
+    };
+
+    use super::NR;
+
+    macro_rules! tile {
+        ($name:ident, $t:ty, $lanes:literal, $zero:ident, $splat:ident, $fma:ident) => {
+            /// `acc[q][v][l] = sum_c src[c ld + i + v lanes + l] src[c ld + j + q]`: `V`
+            /// vectors of rows by [`NR`] columns (see [`super::tile`]).
+            #[target_feature(enable = "avx2,fma")]
+            #[inline]
+            pub fn $name<const V: usize>(
+                src: &[$t],
+                ld: usize,
+                i: usize,
+                j: usize,
+                k: usize,
+            ) -> [[[$t; $lanes]; V]; NR] {
+                let mut acc = [[$zero(); V]; NR];
+                for c in 0..k {
+                    let col = &src[c * ld..];
+                    let a = &col[i..i + V * $lanes];
+                    let b = &col[j..j + NR];
+                    let mut rows = [$zero(); V];
+                    for (row, lanes) in rows.iter_mut().zip(a.chunks_exact($lanes)) {
+                        *row = bytemuck::pod_read_unaligned(bytemuck::cast_slice(lanes));
+                    }
+                    for (acc, &b) in acc.iter_mut().zip(b) {
+                        let b = $splat(b);
+                        for (acc, &row) in acc.iter_mut().zip(&rows) {
+                            *acc = $fma(row, b, *acc);
+                        }
+                    }
+                }
+                let mut out = [[[0.0; $lanes]; V]; NR];
+                for (out, acc) in out.iter_mut().zip(&acc) {
+                    for (out, &acc) in out.iter_mut().zip(acc) {
+                        *out = bytemuck::cast(acc);
+                    }
+                }
+                out
+            }
+        };
+    }
+
+    tile!(
+        tile_f64,
+        f64,
+        4,
+        _mm256_setzero_pd,
+        _mm256_set1_pd,
+        _mm256_fmadd_pd
+    );
+    tile!(
+        tile_f32,
+        f32,
+        8,
+        _mm256_setzero_ps,
+        _mm256_set1_ps,
+        _mm256_fmadd_ps
+    );
+}
+
+/// Why a numeric factorisation stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Failure {
+    /// The pivot of this column (in the factorisation's order) was not positive.
+    Pivot(usize),
+    /// A value of the matrix in this column (in the factorisation's order) is not finite in
+    /// the factor's precision.
+    NonFinite(usize),
+}
+
+/// One supernode's update of one ancestor: the source's rows below its diagonal block from
+/// `first` on, of which `first..first + count` are columns of the ancestor.
+#[derive(Clone, Copy, Debug)]
+struct Update {
+    /// The ancestor (an index into the supernodes).
+    target: u32,
+    /// First of the source's below rows in the ancestor's columns.
+    first: u32,
+    /// How many of the source's below rows are the ancestor's columns.
+    count: u32,
+    /// Where the ancestor-block rows of the source's below rows `first..` start in `rel`.
+    rel_start: usize,
+}
+
+/// A supernodal structure with everything its numeric factorisations need worked out once.
+#[derive(Clone, Debug)]
+pub(crate) struct SupernodalLlt {
+    structure: Arc<Supernodes>,
+    /// Per value of the Hessian's lower triangle: its place in the factor's values.
+    assembly: Vec<u32>,
+    /// Supernode `s`'s updates are `updates[update_start[s]..update_start[s + 1]]`.
+    update_start: Vec<u32>,
+    updates: Vec<Update>,
+    /// Rows in an ancestor's block (see [`Update::rel_start`]).
+    rel: Vec<u32>,
+    /// Whether the processor has AVX2 and FMA (checked once).
+    avx2_fma: bool,
+}
+
+impl SupernodalLlt {
+    /// The factorisation plan for matrices with the lower-triangle pattern `col_ptr`,
+    /// `row_idx` (rows increasing in each column, in the original numbering) and the checked
+    /// `structure` of their symbolic factorisation. `None` when the pattern has an entry the
+    /// structure has no place for, when an ancestor's block lacks a row that a descendant
+    /// updates, or when the factor has more values than a `u32` indexes: then faer factors.
+    pub fn new(structure: Arc<Supernodes>, col_ptr: &[u32], row_idx: &[u32]) -> Option<Self> {
+        let n = structure.n();
+        if col_ptr.len() != n + 1 || u32::try_from(structure.len_val).is_err() {
+            return None;
+        }
+        let mut inverse = vec![0u32; n];
+        for (new, &old) in structure.perm.iter().enumerate() {
+            inverse[old as usize] = new as u32;
+        }
+        let mut owner = vec![0u32; n];
+        for (k, s) in structure.list.iter().enumerate() {
+            owner[s.begin as usize..s.end()].fill(k as u32);
+        }
+        // The place of entry (row, col) of the permuted lower triangle in supernode `s`'s
+        // block, when the structure has it.
+        let local = |s: &Supernode, row: usize| -> Option<usize> {
+            if row < s.begin as usize {
+                return None;
+            }
+            if row < s.end() {
+                return Some(row - s.begin as usize);
+            }
+            let below = structure.rows_of(s).binary_search(&(row as u32)).ok()?;
+            Some(s.width as usize + below)
+        };
+        let mut assembly = Vec::with_capacity(row_idx.len());
+        for j in 0..n {
+            let (e0, e1) = (col_ptr[j] as usize, col_ptr[j + 1] as usize);
+            for &i in row_idx.get(e0..e1)? {
+                let (pi, pj) = (*inverse.get(i as usize)? as usize, inverse[j] as usize);
+                let (row, col) = (pi.max(pj), pi.min(pj));
+                let s = &structure.list[owner[col] as usize];
+                let at = s.values_start + (col - s.begin as usize) * s.ld() + local(s, row)?;
+                assembly.push(at as u32);
+            }
+        }
+        if assembly.len() != row_idx.len() {
+            return None;
+        }
+        let (mut updates, mut update_start, mut rel) = (Vec::new(), vec![0u32], Vec::new());
+        for s in &structure.list {
+            let rows = structure.rows_of(s);
+            let mut a = 0;
+            while a < rows.len() {
+                let target = owner[rows[a] as usize];
+                let t = &structure.list[target as usize];
+                let mut b = a + 1;
+                while b < rows.len() && owner[rows[b] as usize] == target {
+                    b += 1;
+                }
+                let rel_start = rel.len();
+                for &r in &rows[a..] {
+                    rel.push(local(t, r as usize)? as u32);
+                }
+                updates.push(Update {
+                    target,
+                    first: a as u32,
+                    count: (b - a) as u32,
+                    rel_start,
+                });
+                a = b;
+            }
+            update_start.push(u32::try_from(updates.len()).ok()?);
+        }
+        Some(SupernodalLlt {
+            structure,
+            assembly,
+            update_start,
+            updates,
+            rel,
+            avx2_fma: avx2_fma(),
+        })
+    }
+
+    /// Bytes of the plan beyond the structure (assembly map, updates, relative indices).
+    pub fn bytes(&self) -> usize {
+        self.assembly.len() * 4
+            + self.update_start.len() * 4
+            + self.updates.len() * std::mem::size_of::<Update>()
+            + self.rel.len() * 4
+    }
+
+    /// Factors the matrix whose lower-triangle values (in the pattern given to
+    /// [`SupernodalLlt::new`]) are `matrix` into `values`, rounded to `T`. Allocates nothing.
+    pub fn factorize<T: Real>(&self, matrix: &[f64], values: &mut [T]) -> Result<(), Failure> {
+        assert_eq!(
+            values.len(),
+            self.structure.len_val,
+            "a factor of this structure"
+        );
+        assert_eq!(
+            matrix.len(),
+            self.assembly.len(),
+            "one value per pattern entry"
+        );
+        values.fill(T::default());
+        let mut finite = true;
+        for (&v, &at) in matrix.iter().zip(&self.assembly) {
+            let v = T::from_f64(v);
+            finite &= v.finite();
+            values[at as usize] = v;
+        }
+        if !finite {
+            return Err(Failure::NonFinite(self.first_non_finite(values)));
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2_fma {
+            // SAFETY: the processor has AVX2 and FMA (`avx2_fma` was detected at run time).
+            return unsafe { self.supernodes_avx2(values) };
+        }
+        self.supernodes::<T, false>(values)
+    }
+
+    /// The first column (in the factorisation's order) of `values` holding a value that is
+    /// not finite.
+    #[cold]
+    fn first_non_finite<T: Real>(&self, values: &[T]) -> usize {
+        let st = &*self.structure;
+        st.list
+            .iter()
+            .flat_map(|s| {
+                let ld = s.ld();
+                values[s.values()]
+                    .chunks_exact(ld)
+                    .position(|c| c.iter().any(|v| !v.finite()))
+                    .map(|c| s.begin as usize + c)
+            })
+            .next()
+            .unwrap_or(0)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn supernodes_avx2<T: Real>(&self, values: &mut [T]) -> Result<(), Failure> {
+        self.supernodes::<T, true>(values)
+    }
+
+    /// The supernodes in column order: each one's panel, then its updates of its ancestors.
+    #[inline(always)]
+    fn supernodes<T: Real, const FMA: bool>(&self, values: &mut [T]) -> Result<(), Failure> {
+        let st = &*self.structure;
+        for (k, s) in st.list.iter().enumerate() {
+            let range = s.values();
+            let (done, rest) = values.split_at_mut(range.end);
+            let block = &mut done[range.start..];
+            let (w, ld) = (s.width as usize, s.ld());
+            panel::<T, FMA>(block, w, ld).map_err(|c| Failure::Pivot(s.begin as usize + c))?;
+            let block = &*block;
+            let rows = st.rows_of(s);
+            let (u0, u1) = (
+                self.update_start[k] as usize,
+                self.update_start[k + 1] as usize,
+            );
+            for u in &self.updates[u0..u1] {
+                let t = &st.list[u.target as usize];
+                let target = &mut rest[t.values_start - range.end..t.values().end - range.end];
+                let (first, count) = (u.first as usize, u.count as usize);
+                let rel = &self.rel[u.rel_start..u.rel_start + rows.len() - first];
+                let columns = |j: usize| (rows[first + j] - t.begin) as usize * t.ld();
+                update::<T, FMA>(block, ld, w + first, count, w, rel, &columns, target);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether the processor has AVX2 and FMA.
+fn avx2_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Rows of a register tile for `T`: two 256-bit vectors.
+const fn mr<T>() -> usize {
+    64 / std::mem::size_of::<T>()
+}
+
+/// `acc[q][r] = sum_c src[c ld + i + r] src[c ld + j + q]` over the `k` columns of `src`.
+#[inline(always)]
+fn tile<T: Real, const R: usize, const Q: usize, const FMA: bool>(
+    src: &[T],
+    ld: usize,
+    i: usize,
+    j: usize,
+    k: usize,
+) -> [[T; R]; Q] {
+    let mut acc = [[T::default(); R]; Q];
+    for c in 0..k {
+        let col = &src[c * ld..];
+        let a = &col[i..i + R];
+        let b = &col[j..j + Q];
+        for q in 0..Q {
+            for r in 0..R {
+                acc[q][r] = a[r].madd::<FMA>(b[q], acc[q][r]);
+            }
+        }
+    }
+    acc
+}
+
+/// Factors one supernode's block in place: `ld` rows (its diagonal block, then the rows
+/// below) by `w` columns, column-major. The diagonal block becomes its Cholesky factor and
+/// the rows below are divided by its transpose. Fails with the block column of a
+/// non-positive pivot.
+#[inline(always)]
+fn panel<T: Real, const FMA: bool>(block: &mut [T], w: usize, ld: usize) -> Result<(), usize> {
+    let mut k0 = 0;
+    while k0 < w {
+        let k1 = (k0 + PANEL).min(w);
+        // Columns k0..k1 one by one, each updating the next ones within the panel.
+        for k in k0..k1 {
+            let (left, right) = block.split_at_mut((k + 1) * ld);
+            let col = &mut left[k * ld..];
+            let d = col[k];
+            if !d.positive() {
+                return Err(k);
+            }
+            let l = d.sqrt();
+            col[k] = l;
+            let inv = l.recip();
+            for v in &mut col[k + 1..ld] {
+                *v *= inv;
+            }
+            let col = &*col;
+            for c in k + 1..k1 {
+                let f = col[c];
+                let target = &mut right[(c - k - 1) * ld + c..(c - k) * ld];
+                for (t, &v) in target.iter_mut().zip(&col[c..ld]) {
+                    *t = (T::default() - f).madd::<FMA>(v, *t);
+                }
+            }
+        }
+        if k1 == w {
+            break;
+        }
+        // The trailing columns k1..w lose the panel's contribution, in register tiles.
+        let (left, right) = block.split_at_mut(k1 * ld);
+        let src = &left[k0 * ld..];
+        let columns = |j: usize| j * ld;
+        let rel: &[u32] = &[];
+        trailing::<T, FMA>(src, ld, k1, w - k1, ld - k1, k1 - k0, rel, &columns, right);
+        k0 = k1;
+    }
+    Ok(())
+}
+
+/// `target[rel[i] + columns(j)] -= sum_c B[i, c] B[j, c]` for the lower triangle `i >= j`,
+/// `i < m`, `j < n`, where `B` is `block`'s rows `first..` of its `k` columns (leading
+/// dimension `ld`): one supernode's update of an ancestor.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn update<T: Real, const FMA: bool>(
+    block: &[T],
+    ld: usize,
+    first: usize,
+    n: usize,
+    k: usize,
+    rel: &[u32],
+    columns: &impl Fn(usize) -> usize,
+    target: &mut [T],
+) {
+    trailing::<T, FMA>(block, ld, first, n, ld - first, k, rel, columns, target);
+}
+
+/// The register-tiled lower-triangle product `target[row(i) + columns(j)] -= sum_c
+/// src[c ld + first + i] src[c ld + first + j]` for `j < n <= i < m` or `j <= i < n`, where
+/// `row(i)` is `rel[i]`, or `i + first` when `rel` is empty (a dense target).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn trailing<T: Real, const FMA: bool>(
+    src: &[T],
+    ld: usize,
+    first: usize,
+    n: usize,
+    m: usize,
+    k: usize,
+    rel: &[u32],
+    columns: &impl Fn(usize) -> usize,
+    target: &mut [T],
+) {
+    let row = |i: usize| {
+        if rel.is_empty() {
+            first + i
+        } else {
+            rel[i] as usize
+        }
+    };
+    let mut j0 = 0;
+    while j0 < n {
+        let q = (n - j0).min(NR);
+        let mut cols = [0usize; NR];
+        for (jj, c) in cols.iter_mut().enumerate().take(q) {
+            *c = columns(j0 + jj);
+        }
+        // Rows from the tile column's diagonal down, a full tile at a time; the last rows
+        // by a full tile ending at the last row (recomputing rows already subtracted, which
+        // it skips), or, when the column is shorter than a tile, by narrower ones.
+        let mut i0 = j0;
+        let r = mr::<T>();
+        while i0 + r <= m || (i0 < m && m >= r) {
+            // A full tile from i0, or the last one, ending at the last row.
+            let (start, from) = if i0 + r <= m { (i0, i0) } else { (m - r, i0) };
+            if r == 8 {
+                tile_out::<T, 8, FMA>(src, ld, first, start, from, j0, q, k, &cols, &row, target);
+            } else {
+                tile_out::<T, 16, FMA>(src, ld, first, start, from, j0, q, k, &cols, &row, target);
+            }
+            i0 = start + r;
+        }
+        if i0 + r / 2 <= m {
+            if r == 8 {
+                tile_out::<T, 4, FMA>(src, ld, first, i0, i0, j0, q, k, &cols, &row, target);
+            } else {
+                tile_out::<T, 8, FMA>(src, ld, first, i0, i0, j0, q, k, &cols, &row, target);
+            }
+            i0 += r / 2;
+        }
+        while i0 < m {
+            tile_out::<T, 1, FMA>(src, ld, first, i0, i0, j0, q, k, &cols, &row, target);
+            i0 += 1;
+        }
+        j0 += q;
+    }
+}
+
+/// One tile of [`trailing`]: rows `i0..i0 + R` by the `q <= NR` columns from `j0`,
+/// subtracted from `target`, skipping rows before `from` and entries above the diagonal.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn tile_out<T: Real, const R: usize, const FMA: bool>(
+    src: &[T],
+    ld: usize,
+    first: usize,
+    i0: usize,
+    from: usize,
+    j0: usize,
+    q: usize,
+    k: usize,
+    cols: &[usize; NR],
+    row: &impl Fn(usize) -> usize,
+    target: &mut [T],
+) {
+    let (i, j) = (first + i0, first + j0);
+    let diagonal = i0 < j0 + q || i0 < from;
+    if q == NR {
+        let acc = T::tile4::<R, FMA>(src, ld, i, j, k);
+        // Target rows increase with the source rows: spanning R - 1 they are consecutive.
+        if !diagonal && row(i0 + R - 1) - row(i0) == R - 1 {
+            let base = row(i0);
+            for (col, &c) in acc.iter().zip(cols) {
+                for (t, &v) in target[base + c..base + c + R].iter_mut().zip(col) {
+                    *t -= v;
+                }
+            }
+            return;
+        }
+        for (qq, (col, &c)) in acc.iter().zip(cols).enumerate() {
+            for (r, &v) in col.iter().enumerate() {
+                if !diagonal || (i0 + r >= j0 + qq && i0 + r >= from) {
+                    target[row(i0 + r) + c] -= v;
+                }
+            }
+        }
+    } else {
+        for (qq, &c) in cols.iter().enumerate().take(q) {
+            let acc = tile::<T, R, 1, FMA>(src, ld, i, j + qq, k);
+            for (r, &v) in acc[0].iter().enumerate() {
+                if !diagonal || (i0 + r >= j0 + qq && i0 + r >= from) {
+                    target[row(i0 + r) + c] -= v;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::triangular::tests::factored;
+    use crate::{FactorPrecision, Vm, VmError};
+
+    /// The largest difference between the lower triangles of two factors of `vm`'s structure,
+    /// relative to the largest entry of `b`.
+    fn difference<T: Copy + Into<f64>>(vm: &Vm, a: &[T], b: &[T]) -> f64 {
+        let st = vm.store.llt.as_ref().expect("supernodal").structure.clone();
+        let (mut diff, mut scale) = (0.0f64, 0.0f64);
+        let mut checked = 0;
+        for s in &st.list {
+            let ld = s.ld();
+            for c in 0..s.width as usize {
+                for r in c..ld {
+                    let at = s.values_start + c * ld + r;
+                    let (x, y): (f64, f64) = (a[at].into(), b[at].into());
+                    diff = diff.max((x - y).abs());
+                    scale = scale.max(y.abs());
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 0 && scale > 0.0);
+        diff / scale
+    }
+
+    #[test]
+    fn double_precision_factors_match_faer() {
+        for t in [0.0, 0.6] {
+            let mut vm = factored(t, FactorPrecision::Double);
+            assert!(!vm.store.ready_single);
+            let ours = vm.store.double.clone();
+            vm.factorize_with_faer().expect("definite");
+            let theirs = vm.store.double.clone();
+            let d = difference(&vm, &ours, &theirs);
+            assert!(d <= 1e-13, "t {t}: {d}");
+        }
+    }
+
+    #[test]
+    fn single_precision_factors_match_faer() {
+        let mut vm = factored(0.6, FactorPrecision::Single);
+        assert!(vm.store.ready_single);
+        let ours = vm.store.single.clone();
+        vm.factorize_with_faer().expect("definite");
+        assert!(vm.store.ready_single);
+        let theirs = vm.store.single.clone();
+        let d = difference(&vm, &ours, &theirs);
+        assert!(d <= 1e-5, "{d}");
+    }
+
+    #[test]
+    fn the_plan_covers_every_value_once() {
+        let vm = factored(0.3, FactorPrecision::Double);
+        let llt = vm.store.llt.as_ref().expect("supernodal");
+        let mut seen = vec![false; llt.structure.len_val];
+        for &at in &llt.assembly {
+            assert!(
+                !std::mem::replace(&mut seen[at as usize], true),
+                "{at} twice"
+            );
+        }
+        // Every update writes inside its ancestor's block, below the diagonal.
+        for (k, s) in llt.structure.list.iter().enumerate() {
+            let rows = llt.structure.rows_of(s);
+            let (u0, u1) = (
+                llt.update_start[k] as usize,
+                llt.update_start[k + 1] as usize,
+            );
+            let mut covered = 0;
+            for u in &llt.updates[u0..u1] {
+                assert!(u.target as usize > k);
+                let t = &llt.structure.list[u.target as usize];
+                let first = u.first as usize;
+                assert_eq!(first, covered);
+                covered += u.count as usize;
+                for (i, &r) in llt.rel[u.rel_start..u.rel_start + rows.len() - first]
+                    .iter()
+                    .enumerate()
+                {
+                    assert!((r as usize) < t.ld());
+                    if i < u.count as usize {
+                        assert_eq!(r, rows[first + i] - t.begin);
+                    }
+                }
+            }
+            assert_eq!(covered, rows.len());
+        }
+        assert!(llt.bytes() > llt.assembly.len() * 4);
+    }
+
+    #[test]
+    fn failures_name_their_pivot() {
+        for precision in [FactorPrecision::Double, FactorPrecision::Single] {
+            let mut vm = factored(0.3, precision);
+            // Make one unknown's diagonal negative: the factorisation stops at or before it.
+            let ours = {
+                vm.hvals[0] = -1.0;
+                vm.factorize()
+            };
+            let theirs = vm.factorize_with_faer();
+            match (ours, theirs) {
+                (
+                    Err(VmError::NotPositiveDefinite { pivot: a }),
+                    Err(VmError::NotPositiveDefinite { pivot: b }),
+                ) => assert_eq!(a, b),
+                other => panic!("{other:?}"),
+            }
+            assert!(!vm.factor_ready);
+        }
+        // A value that is not finite fails without a factor, in double precision too.
+        let mut vm = factored(0.3, FactorPrecision::Double);
+        let n = vm.hvals.len();
+        vm.hvals[n / 2] = f64::NAN;
+        assert!(matches!(
+            vm.factorize(),
+            Err(VmError::NotPositiveDefinite { .. })
+        ));
+        assert!(!vm.factor_ready);
+    }
+
+    #[test]
+    fn the_portable_loops_match_the_vector_ones() {
+        let vm = factored(0.6, FactorPrecision::Double);
+        let llt = vm.store.llt.as_ref().expect("supernodal");
+        let mut portable = vm.store.double.clone();
+        let mut fresh = portable.clone();
+        llt.factorize(&vm.hvals, &mut fresh).expect("definite");
+        portable.fill(0.0);
+        for (&v, &at) in vm.hvals.iter().zip(&llt.assembly) {
+            portable[at as usize] = v;
+        }
+        llt.supernodes::<f64, false>(&mut portable)
+            .expect("definite");
+        let d = difference(&vm, &portable, &fresh);
+        assert!(d <= 1e-13, "{d}");
+    }
+}

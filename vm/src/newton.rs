@@ -110,12 +110,16 @@ const MAX_CG: u32 = 25;
 /// directly (measured factor/solve time 14 and 19 at 1K and 10K unknowns, model 7 and 17). A
 /// supernodal one runs dense kernels whose speed grows with the supernodes as fast as the
 /// multiply-adds do: on the benchmark disks with a nested-dissection ordering the measured
-/// factor/solve time is 4.3, 5.3 and 4.5 at 1K, 10K and 100K unknowns (criterion medians,
-/// BENCHMARKS.md) while the multiply-add ratio grows from 8 to 36, so it is taken as 4.7.
+/// factor/solve time of the VM's own loops ([`crate::numeric`], [`crate::triangular`]) is
+/// 3.1, 3.9-4.8 and 4.1-4.3 at 1K, 10K and 100K unknowns (fastest runs) while the
+/// multiply-add ratio grows from 8 to 36. It is taken as 3.2: counting the conjugate-gradient
+/// iterations and factorisations per frame of the benchmark sweeps at 2.8, 3.2, 3.5 and 4.7
+/// and pricing them at those times, 3.2 was cheapest or tied at every size (10K: 0.73
+/// factorisations and 2.2 iterations against 0.52 and 3.9 at 4.7, about 10% less work).
 pub(crate) fn refactor_beyond(symbolic: &SymbolicCholesky<u32>) -> f64 {
     let (factor, solve, supernodal) = factor_and_solve_cost(symbolic);
     let ratio = if supernodal {
-        4.7
+        3.2
     } else {
         1.2 * factor / solve.max(1.0)
     };

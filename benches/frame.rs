@@ -16,6 +16,8 @@
 //!   flattens it;
 //! - `factorization`: the numeric Cholesky factorisation ([`Vm::factorize`]) on that state,
 //!   with the factor stored in double (`f64`) and in single precision (`f32`);
+//!   `factorization_faer`, its baseline: the same factorisation by faer's general
+//!   supernodal routine ([`Vm::factorize_with_faer`]);
 //! - `solve`: one solve with that factor ([`Vm::solve`]), the unit of work of a conjugate-
 //!   gradient iteration, in both precisions; `solve_faer`, its baseline: the same solve by
 //!   faer's general supernodal routine ([`Vm::solve_with_faer`]);
@@ -278,6 +280,10 @@ fn bench_per_precision(
 fn bench_factorization(c: &mut Criterion, cases: &mut [Case]) {
     bench_per_precision(c, cases, "factorization", |b, vm| {
         b.iter(|| vm.factorize().expect("positive definite"));
+    });
+    // The baseline of `factorization`: faer's general supernodal factorisation.
+    bench_per_precision(c, cases, "factorization_faer", |b, vm| {
+        b.iter(|| vm.factorize_with_faer().expect("positive definite"));
     });
     bench_per_precision(c, cases, "solve", |b, vm| {
         vm.factorize().expect("positive definite");

@@ -169,6 +169,9 @@ impl Vm {
         let structure = supernodes::Supernodes::new(&symbolic).map(std::sync::Arc::new);
         store.solver = structure.clone().map(triangular::SupernodalSolve::new);
         store.llt = structure.and_then(|s| numeric::SupernodalLlt::new(s, &h.col_ptr, &h.row_idx));
+        if store.llt.is_none() && matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+            newton::warm_up_dense_kernels();
+        }
         let refactor_beyond = newton::refactor_beyond(&symbolic);
         Ok(Vm {
             pattern,

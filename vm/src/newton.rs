@@ -214,16 +214,16 @@ pub(crate) fn analyse(
         symbolic.solve_in_place_scratch::<f32>(1, Par::Seq),
     ]);
     let workspace = MemBuffer::try_new(req).map_err(|e| VmError::Symbolic(format!("{e:?}")))?;
-    if matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
-        warm_up_dense_kernels();
-    }
     Ok((symbolic, workspace))
 }
 
-/// faer's dense matrix products, which the supernodal factorisation uses, allocate a
+/// faer's dense matrix products, which its supernodal factorisation uses, allocate a
 /// workspace per thread on first use (twice the L3 cache's size; its packing differs for
 /// products of at most 48 rows and of more). Two small products here make that allocation
-/// on the thread that builds the VM rather than in its first Newton iteration.
+/// on the thread that builds the factorisation rather than in its first use. Only where faer
+/// factors: the VM's own factorisation calls none of them (and these products leave the
+/// vector registers' upper halves dirty, which slows the C library's `log` 7-8× until the
+/// next AVX code clears them).
 pub(crate) fn warm_up_dense_kernels() {
     let b = Mat::<f64>::zeros(64, 64);
     for rows in [32, 64] {

@@ -17,12 +17,17 @@
 //! 1. factors its diagonal block and divides the rows below by it, in blocks of
 //!    [`PANEL`] columns whose trailing updates are register tiles;
 //! 2. subtracts `B B^T` (`B` its rows below) from the ancestors, computed in register tiles of
-//!    `MR x NR` values and subtracted straight from the registers through the relative
-//!    indices (no dense update matrix).
+//!    two vectors of rows by [`NR`] columns and subtracted straight from the registers
+//!    through the relative indices (no dense update matrix); a tile whose target rows are
+//!    consecutive is subtracted as one slice. A column's last rows are a full tile ending at
+//!    its last row, which recomputes rows already done and skips them.
 //!
-//! The tiles are written as fixed-size array loops, which the compiler turns into vector
-//! code; on x86-64 a copy compiled for AVX2 and FMA is chosen at run time when the processor
-//! has them.
+//! On x86-64 a copy compiled for AVX2 and FMA is chosen at run time when the processor has
+//! them; its tiles are explicit vector code (the compiler's vectoriser left the
+//! double-precision tile scalar, at 2.5× the time). Elsewhere the same loops run portably.
+//! On the benchmark disks (fastest of 60 runs, `examples/factorization.rs`) it takes 0.50,
+//! 0.61 and 0.82 of faer's time at 1K, 10K and 100K unknowns in double precision, 0.50, 0.60
+//! and 0.70 in single precision; the factors agree to 1e-13 of their largest entry (tests).
 
 use std::sync::Arc;
 

@@ -119,16 +119,10 @@ macro_rules! real {
                     if R == $lanes {
                         // SAFETY: `FMA` is true only inside `supernodes_avx2`, which runs only
                         // when the processor has AVX2 and FMA.
-                        let acc = unsafe { avx2::$vector::<1>(src, ld, i, j, k) };
-                        for (o, a) in out.iter_mut().zip(&acc) {
-                            o.copy_from_slice(a.as_flattened());
-                        }
+                        widen(&unsafe { avx2::$vector::<1>(src, ld, i, j, k) }, &mut out);
                     } else {
                         // SAFETY: as above.
-                        let acc = unsafe { avx2::$vector::<2>(src, ld, i, j, k) };
-                        for (o, a) in out.iter_mut().zip(&acc) {
-                            o.copy_from_slice(a.as_flattened());
-                        }
+                        widen(&unsafe { avx2::$vector::<2>(src, ld, i, j, k) }, &mut out);
                     }
                     return out;
                 }
@@ -137,6 +131,18 @@ macro_rules! real {
         }
     };
 }
+/// A vector tile's accumulators (`V` vectors of `L` lanes per column) as rows per column.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn widen<T: Copy, const L: usize, const V: usize, const R: usize>(
+    acc: &[[[T; L]; V]; NR],
+    out: &mut [[T; R]; NR],
+) {
+    for (o, a) in out.iter_mut().zip(acc) {
+        o.copy_from_slice(a.as_flattened());
+    }
+}
+
 real!(f64, 4, tile_f64);
 real!(f32, 8, tile_f32);
 
@@ -402,6 +408,7 @@ impl SupernodalLlt {
             panel::<T, FMA>(block, w, ld).map_err(|c| Failure::Pivot(s.begin as usize + c))?;
             let block = &*block;
             let rows = st.rows_of(s);
+            let h = rows.len();
             let (u0, u1) = (
                 self.update_start[k] as usize,
                 self.update_start[k + 1] as usize,
@@ -410,9 +417,20 @@ impl SupernodalLlt {
                 let t = &st.list[u.target as usize];
                 let target = &mut rest[t.values_start - range.end..t.values().end - range.end];
                 let (first, count) = (u.first as usize, u.count as usize);
-                let rel = &self.rel[u.rel_start..u.rel_start + rows.len() - first];
+                let rel = &self.rel[u.rel_start..u.rel_start + h - first];
                 let columns = |j: usize| (rows[first + j] - t.begin) as usize * t.ld();
-                update::<T, FMA>(block, ld, w + first, count, w, rel, &columns, target);
+                // B B^T for B the rows from `first` below the diagonal block.
+                trailing::<T, FMA>(
+                    block,
+                    ld,
+                    w + first,
+                    count,
+                    h - first,
+                    w,
+                    rel,
+                    &columns,
+                    target,
+                );
             }
         }
         Ok(())
@@ -503,24 +521,6 @@ fn panel<T: Real, const FMA: bool>(block: &mut [T], w: usize, ld: usize) -> Resu
         k0 = k1;
     }
     Ok(())
-}
-
-/// `target[rel[i] + columns(j)] -= sum_c B[i, c] B[j, c]` for the lower triangle `i >= j`,
-/// `i < m`, `j < n`, where `B` is `block`'s rows `first..` of its `k` columns (leading
-/// dimension `ld`): one supernode's update of an ancestor.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn update<T: Real, const FMA: bool>(
-    block: &[T],
-    ld: usize,
-    first: usize,
-    n: usize,
-    k: usize,
-    rel: &[u32],
-    columns: &impl Fn(usize) -> usize,
-    target: &mut [T],
-) {
-    trailing::<T, FMA>(block, ld, first, n, ld - first, k, rel, columns, target);
 }
 
 /// The register-tiled lower-triangle product `target[row(i) + columns(j)] -= sum_c

@@ -1,6 +1,6 @@
-//! The VM's own numeric Cholesky factorisation against faer's, on the benchmark disk of about
-//! N vertices (default 10,000) at `t = 0.5`: the fastest and the median of R factorisations
-//! (default 20) per precision, three rounds interleaved. The fastest run resists a noisy
+//! The VM's own numeric Cholesky factorisation and solve against faer's, on the benchmark disk
+//! of about N vertices (default 10,000) at `t = 0.5`: the fastest and the median of R
+//! factorisations and R solves (default 20) per precision, three rounds interleaved. The fastest run resists a noisy
 //! machine's load better than criterion's median.
 //!
 //! ```sh
@@ -48,6 +48,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "{precision:?}: own fastest {:.3} ms (median {:.3}), faer fastest {:.3} ms (median \
              {:.3}); own / faer {:.2}",
+            own.0,
+            own.1,
+            faer.0,
+            faer.1,
+            own.0 / faer.0
+        );
+        // The solves with the VM's own factor, run back to back as conjugate gradients do.
+        vm.factorize()?;
+        let (mut own, mut faer) = ((f64::MAX, 0.0), (f64::MAX, 0.0));
+        for _ in 0..3 {
+            let o = time(&mut || vm.solve().map(|_| ()))?;
+            let f = time(&mut || vm.solve_with_faer().map(|_| ()))?;
+            own = (own.0.min(o.0), o.1);
+            faer = (faer.0.min(f.0), f.1);
+        }
+        println!(
+            "{precision:?} solve: own fastest {:.3} ms (median {:.3}), faer fastest {:.3} ms \
+             (median {:.3}); own / faer {:.2}",
             own.0,
             own.1,
             faer.0,

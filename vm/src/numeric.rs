@@ -7,13 +7,19 @@
 //! the set-up of each call rivals its arithmetic. Here everything that does not depend on
 //! the values is worked out once, at [`SupernodalLlt::new`]:
 //!
-//! - where each of the Hessian's values lands in `L` (the assembly map);
+//! - where each of the Hessian's values lands in `L` (the assembly map, grouped by
+//!   supernode);
 //! - for each supernode, the ancestors its rows below the diagonal update, and where each of
-//!   those rows lies in the ancestor's block (relative indices).
+//!   those rows lies in the ancestor's block (relative indices);
+//! - for each supernode, the blocks it is the first to write (its own, or those of the
+//!   ancestors it is the first to update), and the Hessian's values in each block.
 //!
-//! A factorisation then zeroes `L`, scatters the Hessian into it and, supernode by supernode
-//! in column order (right-looking):
+//! A factorisation then goes supernode by supernode in column order (right-looking):
 //!
+//! 0. zeroes the blocks it is the first to write and scatters the Hessian's values into them
+//!    (just before they are needed, so they are still in cache when the updates come:
+//!    zeroing all of `L` first cost an extra pass through memory, 0.75-0.88 → 0.65-0.75 of
+//!    faer's time at 100K unknowns in double precision, fastest runs in the same process);
 //! 1. factors its diagonal block and divides the rows below by it, in blocks of
 //!    [`PANEL`] columns whose trailing updates are register tiles;
 //! 2. subtracts `B B^T` (`B` its rows below) from the ancestors, computed in register tiles of
@@ -25,9 +31,9 @@
 //! On x86-64 a copy compiled for AVX2 and FMA is chosen at run time when the processor has
 //! them; its tiles are explicit vector code (the compiler's vectoriser left the
 //! double-precision tile scalar, at 2.5× the time). Elsewhere the same loops run portably.
-//! On the benchmark disks (fastest of 60 runs, `examples/factorization.rs`) it takes 0.50,
-//! 0.61 and 0.82 of faer's time at 1K, 10K and 100K unknowns in double precision, 0.50, 0.60
-//! and 0.70 in single precision; the factors agree to 1e-13 of their largest entry (tests).
+//! On the benchmark disks (fastest of 60 runs, `examples/factorization.rs`, before the blocks
+//! were opened one by one) it took 0.50, 0.61 and 0.82 of faer's time at 1K, 10K and 100K
+//! unknowns in double precision, 0.50, 0.60 and 0.70 in single precision; the factors agree to 1e-13 of their largest entry (tests).
 
 use std::sync::Arc;
 
@@ -170,8 +176,10 @@ mod avx2 {
                 k: usize,
             ) -> [[[$t; $lanes]; V]; NR] {
                 let mut acc = [[$zero(); V]; NR];
-                for c in 0..k {
-                    let col = &src[c * ld..];
+                // Checked once here, so that the loop's indexing needs no checks: every
+                // column is `ld` long and holds both the rows and the columns of the tile.
+                assert!(i + V * $lanes <= ld && j + NR <= ld);
+                for col in src[..k * ld].chunks_exact(ld) {
                     let a = &col[i..i + V * $lanes];
                     let b = &col[j..j + NR];
                     let mut rows = [$zero(); V];
@@ -242,8 +250,16 @@ struct Update {
 #[derive(Clone, Debug)]
 pub(crate) struct SupernodalLlt {
     structure: Arc<Supernodes>,
-    /// Per value of the Hessian's lower triangle: its place in the factor's values.
-    assembly: Vec<u32>,
+    /// Per value of the Hessian's lower triangle, `[its index, its place in the factor's
+    /// values]`, grouped by supernode: supernode `s`'s are
+    /// `assembly[assembly_start[s]..assembly_start[s + 1]]`.
+    assembly: Vec<[u32; 2]>,
+    assembly_start: Vec<u32>,
+    /// The supernodes whose blocks are zeroed and assembled just before supernode `k` is
+    /// factored (those that `k` is the first to write): `opens[open_start[k]..open_start[k +
+    /// 1]]`.
+    opens: Vec<u32>,
+    open_start: Vec<u32>,
     /// Supernode `s`'s updates are `updates[update_start[s]..update_start[s + 1]]`.
     update_start: Vec<u32>,
     updates: Vec<Update>,
@@ -284,20 +300,31 @@ impl SupernodalLlt {
             let below = structure.rows_of(s).binary_search(&(row as u32)).ok()?;
             Some(s.width as usize + below)
         };
-        let mut assembly = Vec::with_capacity(row_idx.len());
+        // [supernode, index, place] per value, then grouped by supernode.
+        let mut placed = Vec::with_capacity(row_idx.len());
         for j in 0..n {
             let (e0, e1) = (col_ptr[j] as usize, col_ptr[j + 1] as usize);
-            for &i in row_idx.get(e0..e1)? {
+            for (e, &i) in (e0..).zip(row_idx.get(e0..e1)?) {
                 let (pi, pj) = (*inverse.get(i as usize)? as usize, inverse[j] as usize);
                 let (row, col) = (pi.max(pj), pi.min(pj));
                 let s = &structure.list[owner[col] as usize];
                 let at = s.values_start + (col - s.begin as usize) * s.ld() + local(s, row)?;
-                assembly.push(at as u32);
+                placed.push([owner[col], e as u32, at as u32]);
             }
         }
-        if assembly.len() != row_idx.len() {
+        if placed.len() != row_idx.len() || u32::try_from(placed.len()).is_err() {
             return None;
         }
+        placed.sort_unstable();
+        let supernodes = structure.list.len();
+        let mut assembly_start = vec![0u32; supernodes + 1];
+        for p in &placed {
+            assembly_start[p[0] as usize + 1] += 1;
+        }
+        for k in 0..supernodes {
+            assembly_start[k + 1] += assembly_start[k];
+        }
+        let assembly = placed.iter().map(|p| [p[1], p[2]]).collect();
         let (mut updates, mut update_start, mut rel) = (Vec::new(), vec![0u32], Vec::new());
         for s in &structure.list {
             let rows = structure.rows_of(s);
@@ -323,9 +350,36 @@ impl SupernodalLlt {
             }
             update_start.push(u32::try_from(updates.len()).ok()?);
         }
+        // Each block is zeroed and assembled when it is first written: by the first
+        // supernode that updates it, or by itself. Zeroing the whole factor at once streamed
+        // it through memory an extra time (at 100K unknowns, 25-50 MB) and left none of it in
+        // cache for the updates that followed.
+        let mut first_writer: Vec<u32> = (0..supernodes as u32).collect();
+        for k in 0..supernodes {
+            for u in &updates[update_start[k] as usize..update_start[k + 1] as usize] {
+                let t = u.target as usize;
+                first_writer[t] = first_writer[t].min(k as u32);
+            }
+        }
+        let mut open_start = vec![0u32; supernodes + 1];
+        for &w in &first_writer {
+            open_start[w as usize + 1] += 1;
+        }
+        for k in 0..supernodes {
+            open_start[k + 1] += open_start[k];
+        }
+        let mut opens = vec![0u32; supernodes];
+        let mut next = open_start.clone();
+        for (t, &w) in first_writer.iter().enumerate() {
+            opens[next[w as usize] as usize] = t as u32;
+            next[w as usize] += 1;
+        }
         Some(SupernodalLlt {
             structure,
             assembly,
+            assembly_start,
+            opens,
+            open_start,
             update_start,
             updates,
             rel,
@@ -335,7 +389,8 @@ impl SupernodalLlt {
 
     /// Bytes of the plan beyond the structure (assembly map, updates, relative indices).
     pub fn bytes(&self) -> usize {
-        self.assembly.len() * 4
+        self.assembly.len() * 8
+            + (self.assembly_start.len() + self.opens.len() + self.open_start.len()) * 4
             + self.update_start.len() * 4
             + self.updates.len() * std::mem::size_of::<Update>()
             + self.rel.len() * 4
@@ -354,28 +409,38 @@ impl SupernodalLlt {
             self.assembly.len(),
             "one value per pattern entry"
         );
-        values.fill(T::default());
-        let mut finite = true;
-        for (&v, &at) in matrix.iter().zip(&self.assembly) {
-            let v = T::from_f64(v);
-            finite &= v.finite();
-            values[at as usize] = v;
-        }
-        if !finite {
-            return Err(Failure::NonFinite(self.first_non_finite(values)));
+        if !matrix.iter().all(|&v| T::from_f64(v).finite()) {
+            return Err(Failure::NonFinite(self.first_non_finite(matrix, values)));
         }
         #[cfg(target_arch = "x86_64")]
         if self.avx2_fma {
             // SAFETY: the processor has AVX2 and FMA (`avx2_fma` was detected at run time).
-            return unsafe { self.supernodes_avx2(values) };
+            return unsafe { self.supernodes_avx2(matrix, values) };
         }
-        self.supernodes::<T, false>(values)
+        self.supernodes::<T, false>(matrix, values)
     }
 
-    /// The first column (in the factorisation's order) of `values` holding a value that is
-    /// not finite.
+    /// Zeroes supernode `t`'s block of `values` and writes `matrix`'s values into it.
+    #[inline(always)]
+    fn open<T: Real>(&self, t: usize, matrix: &[f64], values: &mut [T]) {
+        values[self.structure.list[t].values()].fill(T::default());
+        let (a0, a1) = (
+            self.assembly_start[t] as usize,
+            self.assembly_start[t + 1] as usize,
+        );
+        for &[i, at] in &self.assembly[a0..a1] {
+            values[at as usize] = T::from_f64(matrix[i as usize]);
+        }
+    }
+
+    /// The first column (in the factorisation's order) of `matrix` assembled into `values`
+    /// holding a value that is not finite in `T`.
     #[cold]
-    fn first_non_finite<T: Real>(&self, values: &[T]) -> usize {
+    fn first_non_finite<T: Real>(&self, matrix: &[f64], values: &mut [T]) -> usize {
+        for t in 0..self.structure.list.len() {
+            self.open(t, matrix, values);
+        }
+        let values = &*values;
         let st = &*self.structure;
         st.list
             .iter()
@@ -392,15 +457,24 @@ impl SupernodalLlt {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn supernodes_avx2<T: Real>(&self, values: &mut [T]) -> Result<(), Failure> {
-        self.supernodes::<T, true>(values)
+    fn supernodes_avx2<T: Real>(&self, matrix: &[f64], values: &mut [T]) -> Result<(), Failure> {
+        self.supernodes::<T, true>(matrix, values)
     }
 
-    /// The supernodes in column order: each one's panel, then its updates of its ancestors.
+    /// The supernodes in column order: the blocks it is the first to write zeroed and
+    /// assembled from `matrix`, then its panel, then its updates of its ancestors.
     #[inline(always)]
-    fn supernodes<T: Real, const FMA: bool>(&self, values: &mut [T]) -> Result<(), Failure> {
+    fn supernodes<T: Real, const FMA: bool>(
+        &self,
+        matrix: &[f64],
+        values: &mut [T],
+    ) -> Result<(), Failure> {
         let st = &*self.structure;
         for (k, s) in st.list.iter().enumerate() {
+            let (o0, o1) = (self.open_start[k] as usize, self.open_start[k + 1] as usize);
+            for &t in &self.opens[o0..o1] {
+                self.open(t as usize, matrix, values);
+            }
             let range = s.values();
             let (done, rest) = values.split_at_mut(range.end);
             let block = &mut done[range.start..];
@@ -691,11 +765,36 @@ mod tests {
         let vm = factored(0.3, FactorPrecision::Double);
         let llt = vm.store.llt.as_ref().expect("supernodal");
         let mut seen = vec![false; llt.structure.len_val];
-        for &at in &llt.assembly {
-            assert!(
-                !std::mem::replace(&mut seen[at as usize], true),
-                "{at} twice"
-            );
+        let mut indices = vec![false; vm.hvals.len()];
+        for (t, s) in llt.structure.list.iter().enumerate() {
+            let group = llt.assembly_start[t] as usize..llt.assembly_start[t + 1] as usize;
+            for &[i, at] in &llt.assembly[group] {
+                assert!(s.values().contains(&(at as usize)), "{at} outside {t}");
+                assert!(
+                    !std::mem::replace(&mut seen[at as usize], true),
+                    "{at} twice"
+                );
+                assert!(!std::mem::replace(&mut indices[i as usize], true));
+            }
+        }
+        assert!(
+            indices.iter().all(|&i| i),
+            "every value of the matrix placed"
+        );
+        // Every block is opened exactly once, before anything writes it: by itself or by
+        // the first supernode that updates it.
+        let mut opened_by = vec![usize::MAX; llt.structure.list.len()];
+        for k in 0..llt.structure.list.len() {
+            for &t in &llt.opens[llt.open_start[k] as usize..llt.open_start[k + 1] as usize] {
+                assert_eq!(opened_by[t as usize], usize::MAX, "{t} opened twice");
+                assert!(t as usize >= k);
+                opened_by[t as usize] = k;
+            }
+        }
+        for k in 0..llt.structure.list.len() {
+            for u in &llt.updates[llt.update_start[k] as usize..llt.update_start[k + 1] as usize] {
+                assert!(opened_by[u.target as usize] <= k);
+            }
         }
         // Every update writes inside its ancestor's block, below the diagonal.
         for (k, s) in llt.structure.list.iter().enumerate() {
@@ -723,7 +822,7 @@ mod tests {
             }
             assert_eq!(covered, rows.len());
         }
-        assert!(llt.bytes() > llt.assembly.len() * 4);
+        assert!(llt.bytes() > llt.assembly.len() * 8);
     }
 
     #[test]
@@ -760,15 +859,14 @@ mod tests {
     fn the_portable_loops_match_the_vector_ones() {
         let vm = factored(0.6, FactorPrecision::Double);
         let llt = vm.store.llt.as_ref().expect("supernodal");
-        let mut portable = vm.store.double.clone();
-        let mut fresh = portable.clone();
+        let mut fresh = vm.store.double.clone();
+        // NaN wherever the factorisation fails to write: every block is opened first.
+        fresh.fill(f64::NAN);
+        let mut portable = fresh.clone();
         llt.factorize(&vm.hvals, &mut fresh).expect("definite");
-        portable.fill(0.0);
-        for (&v, &at) in vm.hvals.iter().zip(&llt.assembly) {
-            portable[at as usize] = v;
-        }
-        llt.supernodes::<f64, false>(&mut portable)
+        llt.supernodes::<f64, false>(&vm.hvals, &mut portable)
             .expect("definite");
+        assert!(fresh.iter().chain(&portable).all(|v| v.is_finite()));
         let d = difference(&vm, &portable, &fresh);
         assert!(d <= 1e-13, "{d}");
     }

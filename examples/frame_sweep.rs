@@ -133,10 +133,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             grad * 1e6 / program.n_faces() as f64
         );
     }
-    let ts: Vec<f64> = (0..=steps)
-        .chain((0..steps).rev())
-        .map(|i| f64::from(i) / f64::from(steps))
-        .collect();
+    // ONE_WAY=1: each round a fresh morph solves t = 0 untimed, then t = 1/steps, ..., 1 is
+    // timed: no frame repeats a t it has solved before (the sweep back down does, which a
+    // longer history of solutions would turn into free frames).
+    let one_way = std::env::var_os("ONE_WAY").is_some();
+    let ts: Vec<f64> = if one_way {
+        (0..=steps).map(|i| f64::from(i) / f64::from(steps)).collect()
+    } else {
+        (0..=steps)
+            .chain((0..steps).rev())
+            .map(|i| f64::from(i) / f64::from(steps))
+            .collect()
+    };
     // A third argument picks one configuration by its position (e.g. for a profiler; "all"
     // or anything else that is not a number runs them all).
     let only: Option<usize> = std::env::args().nth(3).and_then(|s| s.parse().ok());
@@ -151,7 +159,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut times = Vec::new();
         let origin = Instant::now();
         let cpu_start = cpu_seconds(origin);
-        for _ in 0..rounds {
+        let mut cpu_setup = 0.0;
+        for round in 0..rounds {
+            if one_way && round > 0 {
+                let before = cpu_seconds(origin);
+                morph = Morph::with_program(program.clone(), &a, &b, options)?;
+                morph.frame_into(0.0, &mut out)?;
+                cpu_setup += cpu_seconds(origin) - before;
+            }
             for &t in &ts[1..] {
                 let start = Instant::now();
                 let stats = morph.frame_into(t, &mut out)?;
@@ -163,7 +178,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 assert_eq!(stats.flipped_triangles, 0);
             }
         }
-        let cpu = (cpu_seconds(origin) - cpu_start) / frames as f64;
+        let cpu = (cpu_seconds(origin) - cpu_start - cpu_setup) / frames as f64;
         times.sort_by(f64::total_cmp);
         let mean = times.iter().sum::<f64>() / times.len() as f64;
         println!(

@@ -138,7 +138,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // longer history of solutions would turn into free frames).
     let one_way = std::env::var_os("ONE_WAY").is_some();
     let ts: Vec<f64> = if one_way {
-        (0..=steps).map(|i| f64::from(i) / f64::from(steps)).collect()
+        (0..=steps)
+            .map(|i| f64::from(i) / f64::from(steps))
+            .collect()
     } else {
         (0..=steps)
             .chain((0..steps).rev())

@@ -391,16 +391,22 @@ impl Vm {
                 best = best.min(trial);
                 continue;
             }
-            // Not good enough: back to the base point, with its energy this time.
+            // Not good enough: back to the base point.
             self.u.copy_from_slice(&self.u_base);
-            self.evaluate();
-            report.passes += 1;
             if !fresh {
                 // The reused factor has gone stale: factor the current Hessian and retry.
+                // That needs the base point's Hessian, not its energy (whose pass costs
+                // several times more): the energy is evaluated only if the fresh step is
+                // rejected too.
+                self.evaluate_gradient();
+                report.passes += 1;
                 self.factor_ready = false;
                 report.iterations -= 1;
                 continue;
             }
+            // With its energy this time, for the line search.
+            self.evaluate();
+            report.passes += 1;
             // Armijo backtracking on the convex energy E along the fresh Newton direction,
             // whose slope g.d = -g H^-1 g is negative.
             let energy0 = self.energy;

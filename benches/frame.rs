@@ -29,7 +29,8 @@
 //!   ([`RestShape::distortion_into`]), which every frame computes for its statistics;
 //! - `warm_frame`: one frame of a sweep `t = 0, 0.1, ..., 1, 0.9, ..., 0` repeated, each frame
 //!   warm-started from the previous ones ([`Morph::frame_into`], default options: starts
-//!   extrapolated from the last solutions, reused factors); `warm_frame_plain`
+//!   extrapolated from the last solutions, reused factors; the frames just after each
+//!   turnaround revisit solved `t` and cost a pass each, see BENCHMARKS.md); `warm_frame_plain`
 //!   the same with the levers off (a factorisation per Newton step, start = previous
 //!   solution), the ratio being what they buy; `warm_frame_f64` and `warm_frame_f32` the
 //!   default with the factor's precision forced (the default picks single precision from

@@ -317,13 +317,7 @@ impl SupernodalLlt {
         }
         placed.sort_unstable();
         let supernodes = structure.list.len();
-        let mut assembly_start = vec![0u32; supernodes + 1];
-        for p in &placed {
-            assembly_start[p[0] as usize + 1] += 1;
-        }
-        for k in 0..supernodes {
-            assembly_start[k + 1] += assembly_start[k];
-        }
+        let assembly_start = group_starts(placed.iter().map(|p| p[0]), supernodes);
         let assembly = placed.iter().map(|p| [p[1], p[2]]).collect();
         let (mut updates, mut update_start, mut rel) = (Vec::new(), vec![0u32], Vec::new());
         for s in &structure.list {
@@ -361,19 +355,9 @@ impl SupernodalLlt {
                 first_writer[t] = first_writer[t].min(k as u32);
             }
         }
-        let mut open_start = vec![0u32; supernodes + 1];
-        for &w in &first_writer {
-            open_start[w as usize + 1] += 1;
-        }
-        for k in 0..supernodes {
-            open_start[k + 1] += open_start[k];
-        }
-        let mut opens = vec![0u32; supernodes];
-        let mut next = open_start.clone();
-        for (t, &w) in first_writer.iter().enumerate() {
-            opens[next[w as usize] as usize] = t as u32;
-            next[w as usize] += 1;
-        }
+        let mut opens: Vec<u32> = (0..supernodes as u32).collect();
+        opens.sort_by_key(|&t| first_writer[t as usize]);
+        let open_start = group_starts(first_writer.iter().copied(), supernodes);
         Some(SupernodalLlt {
             structure,
             assembly,
@@ -509,6 +493,19 @@ impl SupernodalLlt {
         }
         Ok(())
     }
+}
+
+/// Where each of `groups` groups starts in a list sorted by group, given every item's group:
+/// `groups + 1` offsets, the last the list's length.
+fn group_starts(keys: impl Iterator<Item = u32>, groups: usize) -> Vec<u32> {
+    let mut starts = vec![0u32; groups + 1];
+    for key in keys {
+        starts[key as usize + 1] += 1;
+    }
+    for k in 0..groups {
+        starts[k + 1] += starts[k];
+    }
+    starts
 }
 
 /// Whether the processor has AVX2 and FMA.

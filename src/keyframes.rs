@@ -13,12 +13,16 @@ use bdmorph_vm::{Program, VmError};
 
 use crate::distortion::RestShape;
 use crate::mesh::{MeshError, PlanarMesh};
+use crate::predictor::{predictor_weights, useful_nodes, NODES};
 
 use crate::morph::{FrameAt, FrameStats, MorphError, MorphOptions};
 use bdmorph_vm::FactorPrecision;
 
 /// Solved frames kept for extrapolating the next start.
-const HISTORY: usize = 3;
+const HISTORY: usize = NODES;
+
+/// Solutions a prediction with tangents interpolates (a quintic through three and theirs).
+const TANGENT_NODES: usize = 3;
 
 /// Weights must sum to 1 within this (times the sum of their magnitudes).
 const WEIGHT_SUM_TOLERANCE: f64 = 1e-9;
@@ -70,86 +74,9 @@ struct Solved {
     line: (usize, usize),
     s: f64,
     u: Vec<f64>,
-    /// `du/ds` at the solution, when `has_du`.
+    /// `du/ds` at the solution, when `has_du` (empty unless the options predict with tangents).
     du: Vec<f64>,
     has_du: bool,
-}
-
-/// Largest sum of the magnitudes of a prediction's value weights, which bounds how much it
-/// amplifies the solutions' own errors (their gradients are below the tolerance): one uniform
-/// step beyond three solutions gives 7 for the quadratic through them, 37 for the quintic
-/// through them and their tangents; two steps beyond, 17 and 361 (then the cubic through the
-/// newest two and their tangents, 55, is taken instead).
-const MAX_AMPLIFICATION: f64 = 64.0;
-
-/// Weights of the polynomial that interpolates the nodes' values (and the derivatives of those
-/// with `with_du`) evaluated at `s`: the start is `sum(alpha_j u_j) + sum(beta_j du_j)`. Solves
-/// the (confluent Vandermonde) conditions of exactness on polynomials of degree below the
-/// number of data, in coordinates scaled by `spacing`. `None` when the nodes do not determine
-/// the polynomial or the value weights amplify (see [`MAX_AMPLIFICATION`]).
-fn predictor_weights(
-    s: f64,
-    spacing: f64,
-    nodes: &[(f64, bool)],
-) -> Option<([f64; HISTORY], [f64; HISTORY])> {
-    const M: usize = 2 * HISTORY;
-    // Columns: one per value, then one per derivative; the last column is the right side.
-    let mut columns: [(usize, bool); M] = [(0, false); M];
-    let mut m = 0;
-    for (j, _) in nodes.iter().enumerate() {
-        columns[m] = (j, false);
-        m += 1;
-    }
-    for (j, &(_, with_du)) in nodes.iter().enumerate() {
-        if with_du {
-            columns[m] = (j, true);
-            m += 1;
-        }
-    }
-    let mut a = [[0.0f64; M + 1]; M];
-    for (p, row) in a.iter_mut().enumerate().take(m) {
-        for (c, &(j, derivative)) in columns[..m].iter().enumerate() {
-            let x = (nodes[j].0 - s) / spacing;
-            row[c] = match (derivative, p) {
-                (false, _) => x.powi(p as i32),
-                (true, 0) => 0.0,
-                (true, _) => p as f64 * x.powi(p as i32 - 1),
-            };
-        }
-        // The polynomial x^p at the prediction's place, x = 0.
-        row[M] = if p == 0 { 1.0 } else { 0.0 };
-    }
-    // Gaussian elimination with partial pivoting on the m x m system.
-    for col in 0..m {
-        let pivot = (col..m).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
-        if a[pivot][col].abs() < 1e-12 {
-            return None;
-        }
-        a.swap(col, pivot);
-        // Columns m..M are zero in every row, so whole rows can be combined.
-        let pivot_row = a[col];
-        for (r, row) in a.iter_mut().enumerate().take(m) {
-            if r != col {
-                let f = row[col] / pivot_row[col];
-                for (x, p) in row.iter_mut().zip(&pivot_row) {
-                    *x -= f * p;
-                }
-            }
-        }
-    }
-    let (mut alpha, mut beta) = ([0.0; HISTORY], [0.0; HISTORY]);
-    for (c, &(j, derivative)) in columns[..m].iter().enumerate() {
-        let w = a[c][M] / a[c][c];
-        if derivative {
-            // d/dx = spacing d/ds.
-            beta[j] = w * spacing;
-        } else {
-            alpha[j] = w;
-        }
-    }
-    let size: f64 = alpha.iter().map(|x| x.abs()).sum();
-    let finite = alpha.iter().chain(&beta).all(|x| x.is_finite());
-    (finite && size <= MAX_AMPLIFICATION).then_some((alpha, beta))
 }
 
 /// Checks that every keyframe has the first one's triangles and is valid; on failure, the
@@ -307,7 +234,12 @@ impl Engine {
                 line: (usize::MAX, usize::MAX),
                 s: 0.0,
                 u: vec![0.0; n_unknowns],
-                du: vec![0.0; n_unknowns],
+                // Tangents only where they are predicted with.
+                du: if options.tangents {
+                    vec![0.0; n_unknowns]
+                } else {
+                    Vec::new()
+                },
                 has_du: false,
             }),
             solved: 0,
@@ -595,11 +527,13 @@ impl Engine {
     /// Sets the VM's start `u` for a frame at `line`; true when it was predicted from more
     /// than the last solution.
     ///
-    /// The prediction interpolates the up to three newest solutions on the same line, and
-    /// their tangents where known (a Hermite polynomial: quintic with three solutions and
-    /// three tangents), evaluated at the new place when that is within twice the spacing of
-    /// the two newest; it drops the oldest solution when the weights would amplify their
-    /// differences, and falls back to the last solution.
+    /// A place on the line solved before starts from its solution (a slider moved back and
+    /// forth revisits places). Otherwise the prediction interpolates solutions on the same
+    /// line, nearest first: as many of them as keep the polynomial's terms shrinking
+    /// ([`useful_nodes`]), or, with tangents, the three nearest and their tangents (a Hermite
+    /// polynomial, quintic with three solutions and three tangents). It is evaluated at the
+    /// new place when that is within twice the spacing of the two nearest; it drops solutions
+    /// while the weights would amplify their differences, and falls back to the last solution.
     fn choose_start(&mut self, line: Option<Line>) -> bool {
         if !self.options.warm_start {
             self.vm.reset_u();
@@ -611,7 +545,8 @@ impl Engine {
         let last = HISTORY - 1;
         let mut prediction = None;
         if let (Some(line), true) = (line, self.options.extrapolate) {
-            // The newest solutions on this line, newest first.
+            // The solutions on this line, nearest to the new place first (newest first among
+            // equals).
             let mut nodes = [0usize; HISTORY];
             let mut count = 0;
             for i in (HISTORY - self.solved..HISTORY).rev() {
@@ -620,12 +555,36 @@ impl Engine {
                     count += 1;
                 }
             }
+            let distance = |i: usize| (self.history[i].s - line.s).abs();
+            nodes[..count].sort_by(|&a, &b| distance(a).total_cmp(&distance(b)));
+            if count >= 1 && distance(nodes[0]) == 0.0 {
+                // A place solved before: its solution is the start.
+                self.vm
+                    .set_u(&self.history[nodes[0]].u)
+                    .expect("history has one value per unknown");
+                return true;
+            }
             if count >= 2 {
                 let (a, b) = (&self.history[nodes[0]], &self.history[nodes[1]]);
                 let spacing = (a.s - b.s).abs();
                 if (line.s - a.s).abs() <= 2.0 * spacing {
-                    let attempts = [(count, true), (2, true), (count, false), (2, false)];
-                    for (used, with_du) in attempts {
+                    let with_du = self.options.tangents;
+                    let most = if with_du {
+                        count.min(TANGENT_NODES)
+                    } else {
+                        let mut at = [0.0; HISTORY];
+                        let mut values: [&[f64]; HISTORY] = [&[]; HISTORY];
+                        for ((a, v), &i) in at.iter_mut().zip(&mut values).zip(&nodes[..count]) {
+                            *a = self.history[i].s;
+                            *v = &self.history[i].u;
+                        }
+                        useful_nodes(&at[..count], &values[..count], line.s)
+                    };
+                    // With tangents first (if any), then values only, fewer solutions until
+                    // the weights do not amplify.
+                    let tangent_tries = [(most, true), (2, true)].into_iter().filter(|_| with_du);
+                    let value_tries = (2..=most).rev().map(|used| (used, false));
+                    for (used, with_du) in tangent_tries.chain(value_tries) {
                         let mut data = [(0.0, false); HISTORY];
                         for (d, &i) in data.iter_mut().zip(&nodes[..used]) {
                             let h = &self.history[i];
@@ -724,55 +683,6 @@ mod tests {
         assert_eq!(slots.get(3, 3), None);
         assert_eq!(slots.get(1, 7), None, "7 is not a vertex");
         assert_eq!(slots.get(9, 7), None);
-    }
-
-    /// A quintic and its derivative.
-    fn quintic(x: f64) -> (f64, f64) {
-        let c = [0.3, -1.1, 0.7, 2.0, -0.4, 0.9];
-        let value = c.iter().rev().fold(0.0, |acc, k| acc * x + k);
-        let slope = (1..6).rev().fold(0.0, |acc, p| acc * x + p as f64 * c[p]);
-        (value, slope)
-    }
-
-    #[test]
-    fn predictions_are_exact_on_polynomials_of_their_degree() {
-        let nodes = [0.9, 0.8, 0.7];
-        let predict = |s: f64, data: &[(f64, bool)], spacing: f64| {
-            let (alpha, beta) = predictor_weights(s, spacing, data).expect("weights");
-            data.iter()
-                .enumerate()
-                .map(|(j, &(x, _))| alpha[j] * quintic(x).0 + beta[j] * quintic(x).1)
-                .sum::<f64>()
-        };
-        // Three solutions and their tangents: the quintic itself, one step beyond.
-        let all: Vec<(f64, bool)> = nodes.iter().map(|&x| (x, true)).collect();
-        let got = predict(1.0, &all, 0.1);
-        assert!((got - quintic(1.0).0).abs() < 1e-11, "{got}");
-        // Between and on the nodes too.
-        for s in [0.85, 0.8, 0.75] {
-            assert!((predict(s, &all, 0.1) - quintic(s).0).abs() < 1e-12, "{s}");
-        }
-        // Values only: exact for the quadratic part's degree, here checked on a quadratic.
-        let (alpha, beta) =
-            predictor_weights(1.0, 0.1, &[(0.9, false), (0.8, false), (0.7, false)])
-                .expect("weights");
-        assert_eq!(beta, [0.0; HISTORY]);
-        let q = |x: f64| 1.0 - 2.0 * x + 3.0 * x * x;
-        let got: f64 = nodes.iter().zip(&alpha).map(|(&x, a)| a * q(x)).sum();
-        assert!((got - q(1.0)).abs() < 1e-12);
-        assert!((alpha[0] - 3.0).abs() < 1e-12 && (alpha[1] + 3.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn predictions_refuse_coincident_nodes_and_far_extrapolation() {
-        assert!(predictor_weights(1.0, 0.1, &[(0.9, false), (0.9, false)]).is_none());
-        let all = [(0.9, true), (0.8, true), (0.7, true)];
-        // One step beyond: amplification 37; three steps beyond: far more.
-        assert!(predictor_weights(1.0, 0.1, &all).is_some());
-        assert!(predictor_weights(1.2, 0.1, &all).is_none());
-        // The cubic through the newest two takes over two steps beyond (amplification 55).
-        assert!(predictor_weights(1.1, 0.1, &all).is_none());
-        assert!(predictor_weights(1.1, 0.1, &all[..2]).is_some());
     }
 
     #[test]

@@ -48,6 +48,7 @@ pub mod mesh;
 pub mod morph;
 pub mod param;
 pub mod path;
+mod predictor;
 pub mod reference;
 pub mod render;
 

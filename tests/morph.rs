@@ -390,3 +390,27 @@ fn large_distortion_leaf_pair_morphs_without_flips() {
         }
     }
 }
+
+#[test]
+fn revisited_places_start_from_their_solution() {
+    // A slider moved up and back: the places solved on the way up are still remembered
+    // (the six newest), so each revisit starts at its solution and takes no Newton step.
+    let (_, a, b) = pairs().remove(0);
+    let mut m = Morph::new(&a, &b, MorphOptions::default()).expect("setup");
+    let mut first = Vec::new();
+    for i in 0..=6 {
+        let t = f64::from(i) / 10.0;
+        first.push(m.frame(t).expect("up").positions.to_vec());
+    }
+    for i in (1..=5).rev() {
+        let t = f64::from(i) / 10.0;
+        let frame = m.frame(t).expect("back");
+        assert_eq!(frame.stats.newton_iterations, 0, "t = {t}");
+        assert_eq!(frame.stats.factorizations, 0, "t = {t}");
+        assert_eq!(frame.positions, &first[i as usize][..], "t = {t}");
+    }
+    // t = 0 was the seventh place back: forgotten, so solved again, to the same metric.
+    let again = m.frame(0.0).expect("t = 0");
+    assert!(again.stats.newton_iterations > 0);
+    assert!(max_distance(again.positions, &first[0]) < 1e-9 * a.diameter());
+}

@@ -29,8 +29,11 @@
 //!   ([`RestShape::distortion_into`]), which every frame computes for its statistics;
 //! - `warm_frame`: one frame of a sweep `t = 0, 0.1, ..., 1, 0.9, ..., 0` repeated, each frame
 //!   warm-started from the previous ones ([`Morph::frame_into`], default options: starts
-//!   extrapolated from the last solutions, reused factors; the frames just after each
-//!   turnaround revisit solved `t` and cost a pass each, see BENCHMARKS.md); `warm_frame_plain`
+//!   predicted from the last solutions, reused factors; the sweep back down revisits places
+//!   still remembered, which start from their solutions and cost a pass each, see
+//!   BENCHMARKS.md); `warm_frame_one_way`, the frames of one-way sweeps that revisit nothing:
+//!   each sweep forgets the solutions ([`Morph::forget_solutions`]) and solves `t = 0`
+//!   untimed, then `t = 0.1, ..., 1` are timed; `warm_frame_plain`
 //!   the same with the levers off (a factorisation per Newton step, start = previous
 //!   solution), the ratio being what they buy; `warm_frame_f64` and `warm_frame_f32` the
 //!   default with the factor's precision forced (the default picks single precision from
@@ -44,7 +47,7 @@
 
 use std::cell::OnceCell;
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use bdmorph::distortion::RestShape;
 use bdmorph::reference::{self, Unknowns};
@@ -353,6 +356,22 @@ fn sweep() -> Vec<f64> {
         .collect()
 }
 
+/// Prints the Newton iterations, factorisations and CG iterations per frame counted over
+/// every call of a warm-frame benchmark (`counts`: frames first).
+fn report_counts(n: usize, name: &str, counts: &[u64; 4]) {
+    if counts[0] > 0 {
+        let per = |x: u64| x as f64 / counts[0] as f64;
+        eprintln!(
+            "[bdmorph n={n}] {name}: {} frames, per frame {:.2} Newton iterations, {:.2} \
+             factorisations, {:.2} CG iterations",
+            counts[0],
+            per(counts[1]),
+            per(counts[2]),
+            per(counts[3]),
+        );
+    }
+}
+
 fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
     let configs = [
         ("warm_frame", MorphOptions::default()),
@@ -398,21 +417,48 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
                     stats
                 });
             });
-            if counts[0] > 0 {
-                let per = |x: u64| x as f64 / counts[0] as f64;
-                eprintln!(
-                    "[bdmorph n={}] {name}: {} frames, per frame {:.2} Newton iterations, {:.2} \
-                     factorisations, {:.2} CG iterations",
-                    case.n,
-                    counts[0],
-                    per(counts[1]),
-                    per(counts[2]),
-                    per(counts[3]),
-                );
-            }
+            report_counts(case.n, name, &counts);
         }
         group.finish();
     }
+
+    // One-way sweeps: no frame revisits a place, so none is free.
+    let name = "warm_frame_one_way";
+    let mut group = c.benchmark_group(name);
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        let mut state: Option<(Morph, Vec<[f64; 2]>, u32)> = None;
+        let mut counts = [0u64; 4];
+        group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
+            let (morph, out, at) = state.get_or_insert_with(|| {
+                let m = case.meshes();
+                let morph =
+                    Morph::new(&m.source, &m.target, MorphOptions::default()).expect("morph");
+                (morph, vec![[0.0; 2]; m.source.positions.len()], 0)
+            });
+            b.iter_custom(|iters| {
+                let mut timed = Duration::ZERO;
+                for _ in 0..iters {
+                    if *at == 0 {
+                        morph.forget_solutions();
+                        morph.frame_into(0.0, out).expect("frame");
+                        *at = 1;
+                    }
+                    let started = Instant::now();
+                    let stats = morph.frame_into(f64::from(*at) / 10.0, out).expect("frame");
+                    timed += started.elapsed();
+                    *at = (*at + 1) % 11;
+                    counts[0] += 1;
+                    counts[1] += u64::from(stats.newton_iterations);
+                    counts[2] += u64::from(stats.factorizations);
+                    counts[3] += u64::from(black_box(stats).cg_iterations);
+                }
+                timed
+            });
+        });
+        report_counts(case.n, name, &counts);
+    }
+    group.finish();
 
     let mut group = c.benchmark_group("cold_frame");
     for case in cases.iter() {

@@ -99,6 +99,15 @@ impl Blend {
         self.engine.scale_factors()
     }
 
+    /// Forgets the solutions kept for warm starts: later frames are predicted only from
+    /// frames solved after this call. The work a frame takes depends on the frames solved
+    /// before it (a revisited place is free, a nearby one cheap); forgetting makes a
+    /// sequence of frames cost the same however it was reached. The results agree either way
+    /// to the Newton tolerance.
+    pub fn forget_solutions(&mut self) {
+        self.engine.forget_solutions();
+    }
+
     /// Computes the frame with `weights` (one per keyframe, summing to 1). Each frame starts
     /// Newton from the previous frame's solution. The positions borrow an internal buffer
     /// reused by the next call. The statistics' `t` is NaN.

@@ -286,6 +286,13 @@ impl Engine {
     }
 
     /// Solves the frame with `weights` into the internal buffer.
+    /// Forgets every solved frame: the next frame starts from the current `u` as it is (the
+    /// last solution), and the ones after it predict only from frames solved after this.
+    pub(crate) fn forget_solutions(&mut self) {
+        self.solved = 0;
+        self.pending_tangent = None;
+    }
+
     pub(crate) fn frame(
         &mut self,
         weights: &[f64],

@@ -399,6 +399,15 @@ impl Morph {
         self.engine.factor_precision()
     }
 
+    /// Forgets the solutions kept for warm starts: later frames are predicted only from
+    /// frames solved after this call. The work a frame takes depends on the frames solved
+    /// before it (a revisited place is free, a nearby one cheap); forgetting makes a
+    /// sequence of frames cost the same however it was reached. The results agree either way
+    /// to the Newton tolerance.
+    pub fn forget_solutions(&mut self) {
+        self.engine.forget_solutions();
+    }
+
     /// Computes the frame at `t`: `t = 0` gives the source, `t = 1` the target. The metric
     /// is `(1 - t)` times the source's squared edge lengths plus `t` times the target's.
     /// Outside [0, 1] the morph extrapolates while that metric stays Euclidean, and

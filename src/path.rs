@@ -257,6 +257,15 @@ impl Path {
         })
     }
 
+    /// Forgets the solutions kept for warm starts: later frames are predicted only from
+    /// frames solved after this call. The work a frame takes depends on the frames solved
+    /// before it (a revisited place is free, a nearby one cheap); forgetting makes a
+    /// sequence of frames cost the same however it was reached. The results agree either way
+    /// to the Newton tolerance.
+    pub fn forget_solutions(&mut self) {
+        self.engine.forget_solutions();
+    }
+
     /// When each keyframe is reached, in [0, 1]: first 0, last 1.
     pub fn keyframe_times(&self) -> &[f64] {
         &self.knots

@@ -409,7 +409,12 @@ fn revisited_places_start_from_their_solution() {
         assert_eq!(frame.stats.factorizations, 0, "t = {t}");
         assert_eq!(frame.positions, &first[i as usize][..], "t = {t}");
     }
-    // t = 0 was the seventh place back: forgotten, so solved again, to the same metric.
+    // Forgotten on request: the same place takes Newton steps again, to the same solution.
+    m.forget_solutions();
+    let again = m.frame(0.3).expect("forgotten");
+    assert!(again.stats.newton_iterations > 0);
+    assert!(max_distance(again.positions, &first[3]) < 1e-9 * a.diameter());
+    // t = 0 (the seventh place back, dropped even before) is solved again, to the same metric.
     let again = m.frame(0.0).expect("t = 0");
     assert!(again.stats.newton_iterations > 0);
     assert!(max_distance(again.positions, &first[0]) < 1e-9 * a.diameter());

@@ -14,10 +14,12 @@ pub struct MorphOptions {
     pub newton: NewtonOptions,
     /// Start each frame's Newton solve from the previous frame's solution (default true).
     pub warm_start: bool,
-    /// With warm starts, predict the start from the last three solved frames on the same
-    /// line of metrics (a morph's `t`, a path segment's weight) when the new place is within
-    /// twice the last spacing (default true): by the polynomial through their solutions, and
-    /// through their tangents too when [`Self::tangents`] is on.
+    /// With warm starts, predict the start from the nearest of the (up to six) solved frames
+    /// kept on the same line of metrics (a morph's `t`, a path segment's weight) when the new
+    /// place is within twice their spacing (default true): by the polynomial through as many
+    /// of their solutions as keep its terms shrinking, or through the three nearest and their
+    /// tangents when [`Self::tangents`] is on. A place solved before starts from its solution,
+    /// with or without tangents.
     pub extrapolate: bool,
     /// With predicted starts, take each solved frame's tangent `du/dt` (a closed-form pass
     /// over the triangles and a solve with the current factor, done when the next frame on

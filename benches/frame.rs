@@ -51,7 +51,9 @@ use std::time::{Duration, Instant};
 
 use bdmorph::distortion::RestShape;
 use bdmorph::reference::{self, Unknowns};
-use bdmorph::{generate, FactorPrecision, Morph, MorphOptions, NewtonOptions, PlanarMesh, Vm};
+use bdmorph::{
+    generate, FactorPrecision, FrameStats, Morph, MorphOptions, NewtonOptions, PlanarMesh, Vm,
+};
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, SamplingMode,
@@ -356,19 +358,32 @@ fn sweep() -> Vec<f64> {
         .collect()
 }
 
-/// Prints the Newton iterations, factorisations and CG iterations per frame counted over
-/// every call of a warm-frame benchmark (`counts`: frames first).
-fn report_counts(n: usize, name: &str, counts: &[u64; 4]) {
-    if counts[0] > 0 {
-        let per = |x: u64| x as f64 / counts[0] as f64;
-        eprintln!(
-            "[bdmorph n={n}] {name}: {} frames, per frame {:.2} Newton iterations, {:.2} \
-             factorisations, {:.2} CG iterations",
-            counts[0],
-            per(counts[1]),
-            per(counts[2]),
-            per(counts[3]),
-        );
+/// Frames, Newton iterations, factorisations and CG iterations counted over every call of a
+/// warm-frame benchmark.
+#[derive(Default)]
+struct Counts([u64; 4]);
+
+impl Counts {
+    fn add(&mut self, stats: &FrameStats) {
+        self.0[0] += 1;
+        self.0[1] += u64::from(stats.newton_iterations);
+        self.0[2] += u64::from(stats.factorizations);
+        self.0[3] += u64::from(stats.cg_iterations);
+    }
+
+    /// Prints them per frame to stderr.
+    fn report(&self, n: usize, name: &str) {
+        let [frames, newton, factorizations, cg] = self.0;
+        if frames > 0 {
+            let per = |x: u64| x as f64 / frames as f64;
+            eprintln!(
+                "[bdmorph n={n}] {name}: {frames} frames, per frame {:.2} Newton iterations, \
+                 {:.2} factorisations, {:.2} CG iterations",
+                per(newton),
+                per(factorizations),
+                per(cg),
+            );
+        }
     }
 }
 
@@ -398,7 +413,7 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
             // The morph, its output buffer, the position in the sweep, and (frames, Newton
             // iterations, factorisations, CG iterations) counted over every call.
             let mut state: Option<(Morph, Vec<[f64; 2]>, usize)> = None;
-            let mut counts = [0u64; 4];
+            let mut counts = Counts::default();
             group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
                 let (morph, out, at) = state.get_or_insert_with(|| {
                     let m = case.meshes();
@@ -410,14 +425,11 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
                 b.iter(|| {
                     let stats = morph.frame_into(ts[*at], out).expect("frame");
                     *at = (*at + 1) % ts.len();
-                    counts[0] += 1;
-                    counts[1] += u64::from(stats.newton_iterations);
-                    counts[2] += u64::from(stats.factorizations);
-                    counts[3] += u64::from(stats.cg_iterations);
+                    counts.add(&stats);
                     stats
                 });
             });
-            report_counts(case.n, name, &counts);
+            counts.report(case.n, name);
         }
         group.finish();
     }
@@ -428,7 +440,7 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
     for case in cases.iter() {
         configure(&mut group, case.n);
         let mut state: Option<(Morph, Vec<[f64; 2]>, u32)> = None;
-        let mut counts = [0u64; 4];
+        let mut counts = Counts::default();
         group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
             let (morph, out, at) = state.get_or_insert_with(|| {
                 let m = case.meshes();
@@ -448,15 +460,12 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
                     let stats = morph.frame_into(f64::from(*at) / 10.0, out).expect("frame");
                     timed += started.elapsed();
                     *at = (*at + 1) % 11;
-                    counts[0] += 1;
-                    counts[1] += u64::from(stats.newton_iterations);
-                    counts[2] += u64::from(stats.factorizations);
-                    counts[3] += u64::from(black_box(stats).cg_iterations);
+                    counts.add(black_box(&stats));
                 }
                 timed
             });
         });
-        report_counts(case.n, name, &counts);
+        counts.report(case.n, name);
     }
     group.finish();
 

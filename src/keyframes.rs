@@ -285,7 +285,6 @@ impl Engine {
         &self.distortion
     }
 
-    /// Solves the frame with `weights` into the internal buffer.
     /// Forgets every solved frame: the next frame starts from the current `u` as it is (the
     /// last solution), and the ones after it predict only from frames solved after this.
     pub(crate) fn forget_solutions(&mut self) {
@@ -293,6 +292,7 @@ impl Engine {
         self.pending_tangent = None;
     }
 
+    /// Solves the frame with `weights` into the internal buffer.
     pub(crate) fn frame(
         &mut self,
         weights: &[f64],
@@ -575,8 +575,8 @@ impl Engine {
                 let (a, b) = (&self.history[nodes[0]], &self.history[nodes[1]]);
                 let spacing = (a.s - b.s).abs();
                 if (line.s - a.s).abs() <= 2.0 * spacing {
-                    let with_du = self.options.tangents;
-                    let most = if with_du {
+                    let tangents = self.options.tangents;
+                    let most = if tangents {
                         count.min(TANGENT_NODES)
                     } else {
                         let mut at = [0.0; HISTORY];
@@ -589,13 +589,13 @@ impl Engine {
                     };
                     // With tangents first (if any), then values only, fewer solutions until
                     // the weights do not amplify.
-                    let tangent_tries = [(most, true), (2, true)].into_iter().filter(|_| with_du);
+                    let tangent_tries = [(most, true), (2, true)].into_iter().filter(|_| tangents);
                     let value_tries = (2..=most).rev().map(|used| (used, false));
                     for (used, with_du) in tangent_tries.chain(value_tries) {
                         let mut data = [(0.0, false); HISTORY];
                         for (d, &i) in data.iter_mut().zip(&nodes[..used]) {
                             let h = &self.history[i];
-                            *d = (h.s, with_du && h.has_du && self.options.tangents);
+                            *d = (h.s, with_du && h.has_du);
                         }
                         if let Some(w) = predictor_weights(line.s, spacing, &data[..used]) {
                             prediction = Some((nodes, used, w));

@@ -52,6 +52,9 @@ mod predictor;
 pub mod reference;
 pub mod render;
 
+/// The sparse Cholesky engine every system factors and solves with.
+pub use bdmorph_cholesky as cholesky;
+pub use bdmorph_cholesky::CholeskyError;
 pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
 pub use bdmorph_isa::{disassemble, LoadError, MeshKey, Program};
 pub use bdmorph_vm::{

@@ -1,7 +1,7 @@
 //! The prefactored heat method.
 
-use bdmorph_vm::sparse::Cholesky;
-use bdmorph_vm::VmError;
+use bdmorph_cholesky::Cholesky;
+use bdmorph_cholesky::CholeskyError;
 
 use super::intrinsic::{Intrinsic, TriangulationError, NONE};
 use super::operators::FaceGeometry;
@@ -103,7 +103,7 @@ pub enum GeodesicError {
         /// Which system.
         system: &'static str,
         /// Why.
-        source: VmError,
+        source: CholeskyError,
     },
 }
 

@@ -1,7 +1,7 @@
 //! The linear methods: Tutte's embedding and the least-squares conformal map (LSCM), each one
 //! sparse factorisation and solve.
 
-use bdmorph_vm::sparse::Cholesky;
+use bdmorph_cholesky::Cholesky;
 
 use super::frames::Frames;
 use super::ParamError;

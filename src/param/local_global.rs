@@ -15,7 +15,7 @@
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use bdmorph_vm::sparse::Cholesky;
+use bdmorph_cholesky::Cholesky;
 
 use super::frames::Frames;
 use super::ParamError;

@@ -1,7 +1,7 @@
 //! Parameterisation: flatten a disk-topology 3D triangle mesh into the plane with little
 //! distortion, in the compile-once, run-many style of the rest of the crate: per-triangle
 //! constants (isometric local frames, areas, `Dm⁻¹`, cotangents) once, sparse patterns fixed
-//! at set-up with their symbolic factorisation reused (through [`bdmorph_vm::sparse`]), then
+//! at set-up with their symbolic factorisation reused (through the sparse Cholesky engine, [`bdmorph_cholesky`]), then
 //! cheap iterations.
 //!
 //! Methods ([`Method`]):
@@ -37,8 +37,8 @@ mod newton;
 
 use std::time::Instant;
 
+use bdmorph_cholesky::CholeskyError;
 use bdmorph_compiler::CompileError;
-use bdmorph_vm::VmError;
 
 use crate::io::SurfaceMesh;
 use energy::Energy;
@@ -158,7 +158,7 @@ pub enum ParamError {
         /// Which system.
         what: &'static str,
         /// Why.
-        source: VmError,
+        source: CholeskyError,
     },
 }
 

@@ -12,7 +12,7 @@
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use bdmorph_vm::sparse::{Cholesky, LowerPattern};
+use bdmorph_cholesky::{Cholesky, LowerPattern};
 
 use super::energy::{svd2, Energy};
 use super::frames::Frames;

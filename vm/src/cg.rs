@@ -1,7 +1,8 @@
 //! Conjugate gradients on the current Hessian, preconditioned by an earlier numeric Cholesky
 //! factor: the Newton step without a new factorisation.
 
-use crate::factor;
+use bdmorph_cholesky::Cholesky;
+
 use crate::tangent::tangent_extra_cg;
 use crate::Vm;
 
@@ -29,28 +30,13 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// `y = H x` for the symmetric matrix whose lower triangle (diagonal first in each column) is
-/// stored in `col_ptr`, `row_idx`, `values`.
-pub(crate) fn symmetric_product(
-    col_ptr: &[u32],
-    row_idx: &[u32],
-    values: &[f64],
-    x: &[f64],
-    y: &mut [f64],
-) {
-    y.fill(0.0);
-    for j in 0..x.len() {
-        let (start, end) = (col_ptr[j] as usize, col_ptr[j + 1] as usize);
-        let xj = x[j];
-        let mut acc = values[start] * xj;
-        for slot in start + 1..end {
-            let i = row_idx[slot] as usize;
-            let v = values[slot];
-            y[i] += v * xj;
-            acc += v * x[i];
-        }
-        y[j] += acc;
-    }
+/// `z = M^-1 r` for `M` the factored matrix (an earlier Hessian, or the current one in single
+/// precision).
+fn precondition(chol: &mut Cholesky, r: &[f64], z: &mut [f64]) {
+    z.copy_from_slice(r);
+    // The factor is ready (the callers' invariant) and `z` has one value per unknown.
+    let solved = chol.solve_in_place(z, 1);
+    debug_assert!(solved.is_ok(), "{solved:?}");
 }
 
 /// How a preconditioned conjugate-gradient solve ended.
@@ -96,7 +82,6 @@ impl Vm {
         max_iterations: u32,
         abort: Option<AbortRule>,
     ) -> PcgOutcome {
-        let h = self.program.hessian();
         let CgBuffers { r, z, p, hp } = &mut self.cg;
         let (v, x) = if of_gradient {
             (&self.grad, &mut self.step)
@@ -118,17 +103,13 @@ impl Vm {
         if outcome.converged {
             return outcome;
         }
-        let (symbolic, store, workspace) = (&self.symbolic, &mut self.store, &mut self.workspace);
-        let mut precondition = |r: &[f64], z: &mut [f64]| {
-            z.copy_from_slice(r);
-            factor::apply(symbolic, store, workspace, z, false);
-        };
-        precondition(r, z);
+        let (chol, hvals) = (&mut self.chol, &self.hvals);
+        precondition(chol, r, z);
         p.copy_from_slice(z);
         let mut rz = dot(r, z);
         for iteration in 1..=max_iterations {
             outcome.iterations = iteration;
-            symmetric_product(&h.col_ptr, &h.row_idx, &self.hvals, p, hp);
+            chol.pattern().symmetric_product(hvals, p, hp);
             let php = dot(p, hp);
             if !(php > 0.0 && rz > 0.0) {
                 return outcome;
@@ -161,7 +142,7 @@ impl Vm {
                     return outcome;
                 }
             }
-            precondition(r, z);
+            precondition(chol, r, z);
             let rz_next = dot(r, z);
             let beta = rz_next / rz;
             rz = rz_next;
@@ -235,15 +216,10 @@ pub(crate) mod tests {
         let used = vm.pcg(true, 1e-13, 200, None);
         assert!(used.converged && !used.aborted);
         assert!(used.iterations > 1 && used.iterations < 200, "{used:?}");
-        let h = vm.program().hessian().clone();
         let mut hs = vec![0.0; n];
-        symmetric_product(
-            &h.col_ptr,
-            &h.row_idx,
-            vm.hessian_values(),
-            &vm.step,
-            &mut hs,
-        );
+        vm.chol
+            .pattern()
+            .symmetric_product(vm.hessian_values(), &vm.step, &mut hs);
         let g_norm = dot(vm.gradient(), vm.gradient()).sqrt();
         assert!(g_norm > 1e-4, "{g_norm}");
         for (k, (hs, g)) in hs.iter().zip(vm.gradient()).enumerate() {
@@ -252,16 +228,5 @@ pub(crate) mod tests {
         // A truncated solve is still a descent direction.
         vm.pcg(true, 1e-13, 1, None);
         assert!(dot(vm.gradient(), &vm.step) < 0.0);
-    }
-
-    #[test]
-    fn symmetric_product_uses_both_triangles() {
-        // [[4, 1, 0], [1, 3, 2], [0, 2, 5]] stored as its lower triangle.
-        let col_ptr = [0, 2, 4, 5];
-        let row_idx = [0, 1, 1, 2, 2];
-        let values = [4.0, 1.0, 3.0, 2.0, 5.0];
-        let mut y = [0.0; 3];
-        symmetric_product(&col_ptr, &row_idx, &values, &[1.0, 2.0, 3.0], &mut y);
-        assert_eq!(y, [6.0, 13.0, 19.0]);
     }
 }

@@ -8,10 +8,10 @@
 //!    frame from squared edge lengths computed once per keyframe by [`Vm::squared_lengths`];
 //! 2. [`Vm::newton`] finds the log scale factors `u` that flatten it (CETM), warm-started from
 //!    the previous frame's `u`: each iteration runs the iteration stream into the gradient and
-//!    straight into the CSC values, factors numerically (faer's supernodal/simplicial LLT into
-//!    preallocated `L` values and workspace; in single precision for large factors, see
-//!    [`FactorPrecision`]) and solves in place, or reuses an earlier factor as the
-//!    preconditioner of conjugate gradients;
+//!    straight into the CSC values, factors numerically (the sparse Cholesky engine,
+//!    [`bdmorph_cholesky`]: its own supernodal kernels into preallocated `L` values; in
+//!    single precision for large factors, see [`FactorPrecision`]) and solves in place, or
+//!    reuses an earlier factor as the preconditioner of conjugate gradients;
 //! 3. [`Vm::embed`] lays the flat metric out, given the rigid motion (anchor position and
 //!    direction of the anchor edge).
 //!
@@ -49,16 +49,12 @@ mod factor;
 pub mod kernel;
 pub mod lobachevsky;
 mod newton;
-mod numeric;
 mod plan;
-pub mod sparse;
-mod supernodes;
 mod tangent;
-mod triangular;
 
+pub use bdmorph_cholesky::{FactorPrecision, SINGLE_FROM_VALUES};
 pub use bdmorph_isa::Program;
 pub use error::VmError;
-pub use factor::{FactorPrecision, SINGLE_FROM_VALUES};
 pub use newton::{NewtonOptions, NewtonReport};
 pub use tangent::TangentReport;
 
@@ -85,17 +81,13 @@ impl std::fmt::Display for TriangleReport {
     }
 }
 
-use faer::dyn_stack::MemBuffer;
-use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
-use faer::sparse::SymbolicSparseColMat;
+use bdmorph_cholesky::Cholesky;
 
 /// Executes one compiled program; owns every buffer it needs (see the crate documentation).
 pub struct Vm {
     program: Program,
-    pattern: SymbolicSparseColMat<u32>,
-    symbolic: SymbolicCholesky<u32>,
-    store: factor::FactorStore,
-    workspace: MemBuffer,
+    /// The sparse Cholesky engine, analysed once for the Hessian's pattern.
+    chol: Cholesky,
     l0: Vec<f64>,
     len: Vec<f64>,
     log_len: Vec<f64>,
@@ -138,13 +130,10 @@ impl std::fmt::Debug for Vm {
         f.debug_struct("Vm")
             .field("unknowns", &self.u.len())
             .field("edges", &self.l0.len())
-            .field("factor_nnz", &self.symbolic.len_val())
+            .field("factor_nnz", &self.chol.factor_nnz())
             .field("factor_precision", &self.factor_precision())
             .field("plan_bytes", &self.plan.bytes())
-            .field(
-                "factorization_plan_bytes",
-                &self.store.llt.as_ref().map_or(0, |l| l.bytes()),
-            )
+            .field("factorization_plan_bytes", &self.chol.plan_bytes())
             .finish_non_exhaustive()
     }
 }
@@ -156,28 +145,10 @@ impl Vm {
     pub fn new(program: Program) -> Result<Vm, VmError> {
         let n = program.n_unknowns();
         let h = program.hessian();
-        let pattern = SymbolicSparseColMat::<u32>::new_checked(
-            n,
-            n,
-            h.col_ptr.clone(),
-            None,
-            h.row_idx.clone(),
-        );
-        let (symbolic, workspace) = newton::analyse(&pattern, program.ordering())?;
-        let mut store =
-            factor::FactorStore::new(FactorPrecision::Auto, symbolic.len_val(), h.nnz(), n);
-        let structure = supernodes::Supernodes::new(&symbolic).map(std::sync::Arc::new);
-        store.solver = structure.clone().map(triangular::SupernodalSolve::new);
-        store.llt = structure.and_then(|s| numeric::SupernodalLlt::new(s, &h.col_ptr, &h.row_idx));
-        if store.llt.is_none() && matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
-            newton::warm_up_dense_kernels();
-        }
-        let refactor_beyond = newton::refactor_beyond(&symbolic);
+        let chol = newton::analyse(n, h, program.ordering())?;
+        let refactor_beyond = newton::refactor_beyond(&chol.cost());
         Ok(Vm {
-            pattern,
-            symbolic,
-            store,
-            workspace,
+            chol,
             l0: vec![0.0; program.n_edges()],
             len: vec![0.0; program.n_edges()],
             log_len: vec![0.0; program.n_edges()],
@@ -362,13 +333,13 @@ impl Vm {
 
     /// Number of stored values of the Cholesky factor.
     pub fn factor_nnz(&self) -> usize {
-        self.symbolic.len_val()
+        self.chol.factor_nnz()
     }
 
-    /// Whether faer chose its supernodal (blocked) Cholesky factorisation for this program's
-    /// Hessian, rather than the simplicial (column by column) one.
+    /// Whether the Hessian's Cholesky factor is supernodal (blocked, the engine's own
+    /// kernels), rather than simplicial (column by column, faer's).
     pub fn factor_is_supernodal(&self) -> bool {
-        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+        self.chol.is_supernodal()
     }
 
     /// Lays the current metric out in the plane: the anchor vertex at `anchor`, the anchor

@@ -1,18 +1,12 @@
 //! Newton's method on the CETM energy with a cached symbolic Cholesky factorisation.
 
-use faer::dyn_stack::{MemBuffer, StackReq};
-use faer::linalg::matmul::matmul;
-use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering,
+use bdmorph_cholesky::{
+    Cholesky, CholeskyOptions, FactorCost, FactorPrecision, LowerPattern, Ordering, Supernodal,
 };
-use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::SymbolicSparseColMat;
-use faer::{Accum, Mat, Par, Side};
+use bdmorph_isa::HessianPattern;
 
 use crate::cg::AbortRule;
-use crate::factor::{self, FRESH_SINGLE_CG};
+use crate::factor::{vm_error, FRESH_SINGLE_CG};
 use crate::tangent::tangent_extra_cg;
 use crate::{Vm, VmError};
 
@@ -110,18 +104,17 @@ const MAX_CG: u32 = 25;
 /// directly (measured factor/solve time 14 and 19 at 1K and 10K unknowns, model 7 and 17). A
 /// supernodal one runs dense kernels whose speed grows with the supernodes as fast as the
 /// multiply-adds do: on the benchmark disks with a nested-dissection ordering the measured
-/// factor/solve time of the VM's own loops ([`crate::numeric`], [`crate::triangular`]) is
+/// factor/solve time of the engine's own loops (`bdmorph_cholesky`) is
 /// 3.1, 3.9-4.8 and 4.1-4.3 at 1K, 10K and 100K unknowns (fastest runs) while the
 /// multiply-add ratio grows from 8 to 36. It is taken as 3.2: counting the conjugate-gradient
 /// iterations and factorisations per frame of the benchmark sweeps at 2.8, 3.2, 3.5 and 4.7
 /// and pricing them at those times, 3.2 was cheapest or tied at every size (10K: 0.73
 /// factorisations and 2.2 iterations against 0.52 and 3.9 at 4.7, about 10% less work).
-pub(crate) fn refactor_beyond(symbolic: &SymbolicCholesky<u32>) -> f64 {
-    let (factor, solve, supernodal) = factor_and_solve_cost(symbolic);
-    let ratio = if supernodal {
+pub(crate) fn refactor_beyond(cost: &FactorCost) -> f64 {
+    let ratio = if cost.supernodal {
         3.2
     } else {
-        1.2 * factor / solve.max(1.0)
+        1.2 * cost.factor / cost.solve.max(1.0)
     };
     ((ratio + 1.0) / 1.15).clamp(2.0, 20.0)
 }
@@ -135,102 +128,26 @@ const EXACT_RELATIVE: f64 = 1e-13;
 /// measured at: a start much closer to its solution (smaller steps in `t`) probes again.
 const STALE_MEMORY: f64 = 2.0;
 
-/// Estimated multiply-adds of one numeric factorisation and of one solve with it, from the
-/// factor's structure, and whether it is supernodal.
-pub(crate) fn factor_and_solve_cost(symbolic: &SymbolicCholesky<u32>) -> (f64, f64, bool) {
-    match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => {
-            let (mut factor, mut solve) = (0.0, 0.0);
-            for w in s.col_ptr().windows(2) {
-                let c = f64::from(w[1] - w[0]);
-                factor += 0.5 * c * (c + 1.0);
-                solve += 2.0 * c;
-            }
-            (factor, solve, false)
-        }
-        SymbolicCholeskyRaw::Supernodal(s) => {
-            let (mut factor, mut solve) = (0.0, 0.0);
-            let rows = s.col_ptr_for_row_idx();
-            for (k, (&b, &e)) in s
-                .supernode_begin()
-                .iter()
-                .zip(s.supernode_end())
-                .enumerate()
-            {
-                let w = f64::from(e - b);
-                let h = f64::from(rows[k + 1] - rows[k]);
-                factor += w * w * w / 6.0 + 0.5 * h * w * w + 0.5 * h * h * w;
-                solve += w * w + 2.0 * h * w;
-            }
-            (factor, solve, true)
-        }
-    }
-}
-
-/// faer factors supernodally (dense blocks) when its estimate of the factorisation's flops per
-/// stored value of `L` exceeds 40 times this; its default, 1, picks the column-by-column
-/// simplicial factorisation up to about 15K unknowns on disks, where the supernodal one is
-/// faster above about 3K (ratio 22): at 10K unknowns (ratio 35) 6.6 ms against 9.9 ms per
-/// factorisation and solve. Used with AMD.
-const AMD_SUPERNODAL_THRESHOLD: SupernodalThreshold = SupernodalThreshold(0.5);
-
-/// Symbolic factorisation and a workspace large enough for every numeric factorisation and
-/// solve that follows. `ordering` (`ordering[new] = old`, a permutation checked by the
-/// verifier) is the fill-reducing ordering, factored supernodally: a nested dissection's
-/// separators are dense blocks, and the compiler only attaches one where that pays. Without
-/// an ordering faer computes AMD.
+/// The Hessian's sparse Cholesky factorisation, analysed once (see
+/// [`bdmorph_cholesky::Cholesky`]): with `ordering` (`ordering[new] = old`, a permutation
+/// checked by the verifier), supernodal: a nested dissection's separators are dense blocks,
+/// and the compiler only attaches one where that pays. Without an ordering, AMD, supernodal
+/// when the engine judges it pays. Precision [`FactorPrecision::Auto`].
 pub(crate) fn analyse(
-    pattern: &SymbolicSparseColMat<u32>,
+    n: usize,
+    hessian: &HessianPattern,
     ordering: Option<&[u32]>,
-) -> Result<(SymbolicCholesky<u32>, MemBuffer), VmError> {
-    let inverse = ordering.map(|fwd| {
-        let mut inv = vec![0u32; fwd.len()];
-        for (new, &old) in fwd.iter().enumerate() {
-            inv[old as usize] = new as u32;
-        }
-        inv
-    });
-    let (ordering, threshold) = match (ordering, &inverse) {
-        (Some(fwd), Some(inv)) => (
-            SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, fwd.len())),
-            SupernodalThreshold::FORCE_SUPERNODAL,
-        ),
-        _ => (SymmetricOrdering::Amd, AMD_SUPERNODAL_THRESHOLD),
+) -> Result<Cholesky, VmError> {
+    let pattern = LowerPattern::from_csc(n, hessian.col_ptr.clone(), hessian.row_idx.clone())
+        .map_err(vm_error)?;
+    let options = CholeskyOptions::default().with_precision(FactorPrecision::Auto);
+    let options = match ordering {
+        Some(perm) => options
+            .with_ordering(Ordering::Custom(perm.to_vec()))
+            .with_supernodal(Supernodal::Always),
+        None => options,
     };
-    let symbolic = factorize_symbolic_cholesky(
-        pattern.as_ref(),
-        Side::Lower,
-        ordering,
-        CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: threshold,
-            ..Default::default()
-        },
-    )
-    .map_err(|e| VmError::Symbolic(format!("{e:?}")))?;
-    let req = StackReq::any_of(&[
-        symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-        symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
-        symbolic.factorize_numeric_llt_scratch::<f32>(Par::Seq, Default::default()),
-        symbolic.solve_in_place_scratch::<f32>(1, Par::Seq),
-    ]);
-    let workspace = MemBuffer::try_new(req).map_err(|e| VmError::Symbolic(format!("{e:?}")))?;
-    Ok((symbolic, workspace))
-}
-
-/// faer's dense matrix products, which its supernodal factorisation uses, allocate a
-/// workspace per thread on first use (twice the L3 cache's size; its packing differs for
-/// products of at most 48 rows and of more). Two small products here make that allocation
-/// on the thread that builds the factorisation rather than in its first use. Only where faer
-/// factors: the VM's own factorisation calls none of them (and these products leave the
-/// vector registers' upper halves dirty, which slows the C library's `log` 7-8× until the
-/// next AVX code clears them).
-pub(crate) fn warm_up_dense_kernels() {
-    let b = Mat::<f64>::zeros(64, 64);
-    for rows in [32, 64] {
-        let a = Mat::<f64>::zeros(rows, 64);
-        let mut c = Mat::<f64>::zeros(rows, 64);
-        matmul(&mut c, Accum::Replace, &a, &b, 1.0, Par::Seq);
-    }
+    Cholesky::with_options(&pattern, options).map_err(vm_error)
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -455,9 +372,7 @@ impl Vm {
     /// exposed so that it can be measured and checked on its own; `u`, the gradient and the
     /// Hessian values are left unchanged. With a single-precision factor
     /// ([`Vm::factor_precision`]) the step is refined by conjugate gradients to a relative
-    /// residual of 1e-13. Allocates nothing, except on a thread other than the
-    /// one that built the VM: there faer's dense kernels allocate their per-thread workspace
-    /// in the first supernodal factorisation.
+    /// residual of 1e-13. Allocates nothing.
     ///
     /// Fails with [`VmError::NotPositiveDefinite`] when the Hessian is not numerically
     /// positive definite (for instance before any evaluation, when its values are all zero).
@@ -499,13 +414,13 @@ impl Vm {
         for (s, g) in self.step.iter_mut().zip(&self.grad) {
             *s = -g;
         }
-        factor::apply(
-            &self.symbolic,
-            &mut self.store,
-            &mut self.workspace,
-            &mut self.step,
-            with_faer,
-        );
+        let solved = if with_faer {
+            self.chol.solve_with_faer(&mut self.step, 1)
+        } else {
+            self.chol.solve_in_place(&mut self.step, 1)
+        };
+        // The factor is ready (checked by the callers) and the step has one value per unknown.
+        debug_assert!(solved.is_ok(), "{solved:?}");
     }
 
     /// The Newton step with the factor just computed from the current Hessian, to relative
@@ -516,7 +431,7 @@ impl Vm {
     /// more factorisation, counted). Returns the conjugate-gradient iterations and the
     /// factorisations added.
     pub(crate) fn fresh_step(&mut self, relative: f64) -> Result<(u32, u32), VmError> {
-        if !self.store.ready_single {
+        if !self.chol.factor_is_single() {
             self.solve_step(false);
             return Ok((0, 0));
         }
@@ -524,7 +439,7 @@ impl Vm {
         if outcome.converged {
             return Ok((outcome.iterations, 0));
         }
-        self.store.give_up_single();
+        self.chol.give_up_single();
         self.factorize()?;
         self.solve_step(false);
         Ok((outcome.iterations, 1))
@@ -642,8 +557,8 @@ mod tests {
         let n = vm.program().n_unknowns();
         assert_eq!(n, 7);
         assert!((2.0..=20.0).contains(&vm.refactor_beyond));
-        let (factor, solve, _) = factor_and_solve_cost(&vm.symbolic);
-        assert!(factor > 0.0 && solve > 0.0);
+        let cost = vm.chol.cost();
+        assert!(cost.factor > 0.0 && cost.solve > 0.0);
 
         // Before any evaluation the Hessian is zero: no factorisation.
         let sq = vm.squared_lengths(&positions).expect("lengths");

@@ -65,6 +65,10 @@ pub(crate) trait Real:
     fn finite(self) -> bool;
     /// Whether greater than zero (false for NaN).
     fn positive(self) -> bool;
+    /// The machine epsilon of this type, as an `f64`.
+    fn epsilon() -> f64;
+    /// This value as an `f64`.
+    fn to_f64(self) -> f64;
     /// `self * b + c`, fused when `FMA` (only where the processor has it: elsewhere a fused
     /// multiply-add is a slow library call).
     fn madd<const FMA: bool>(self, b: Self, c: Self) -> Self;
@@ -102,6 +106,14 @@ macro_rules! real {
             #[inline(always)]
             fn positive(self) -> bool {
                 self > 0.0
+            }
+            #[inline(always)]
+            fn epsilon() -> f64 {
+                f64::from(<$t>::EPSILON)
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                f64::from(self)
             }
             #[inline(always)]
             fn madd<const FMA: bool>(self, b: Self, c: Self) -> Self {
@@ -706,66 +718,22 @@ fn tile_out<T: Real, const R: usize, const FMA: bool>(
 }
 
 #[cfg(test)]
-mod tests {
-    use crate::triangular::tests::factored;
-    use crate::{FactorPrecision, Vm, VmError};
-
-    /// The largest difference between the lower triangles of two factors of `vm`'s structure,
-    /// relative to the largest entry of `b`.
-    fn difference<T: Copy + Into<f64>>(vm: &Vm, a: &[T], b: &[T]) -> f64 {
-        let st = vm.store.llt.as_ref().expect("supernodal").structure.clone();
-        let (mut diff, mut scale) = (0.0f64, 0.0f64);
-        let mut checked = 0;
-        for s in &st.list {
-            let ld = s.ld();
-            for c in 0..s.width as usize {
-                for r in c..ld {
-                    let at = s.values_start + c * ld + r;
-                    let (x, y): (f64, f64) = (a[at].into(), b[at].into());
-                    diff = diff.max((x - y).abs());
-                    scale = scale.max(y.abs());
-                    checked += 1;
-                }
-            }
-        }
-        assert!(checked > 0 && scale > 0.0);
-        diff / scale
+impl SupernodalLlt {
+    /// [`SupernodalLlt::factorize`] by the portable loops, whatever the processor has.
+    pub fn factorize_portable(&self, matrix: &[f64], values: &mut [f64]) -> Result<(), Failure> {
+        self.supernodes::<f64, false>(matrix, values)
     }
 
-    #[test]
-    fn double_precision_factors_match_faer() {
-        for t in [0.0, 0.6] {
-            let mut vm = factored(t, FactorPrecision::Double);
-            assert!(!vm.store.ready_single);
-            let ours = vm.store.double.clone();
-            vm.factorize_with_faer().expect("definite");
-            let theirs = vm.store.double.clone();
-            let d = difference(&vm, &ours, &theirs);
-            assert!(d <= 1e-13, "t {t}: {d}");
-        }
-    }
-
-    #[test]
-    fn single_precision_factors_match_faer() {
-        let mut vm = factored(0.6, FactorPrecision::Single);
-        assert!(vm.store.ready_single);
-        let ours = vm.store.single.clone();
-        vm.factorize_with_faer().expect("definite");
-        assert!(vm.store.ready_single);
-        let theirs = vm.store.single.clone();
-        let d = difference(&vm, &ours, &theirs);
-        assert!(d <= 1e-5, "{d}");
-    }
-
-    #[test]
-    fn the_plan_covers_every_value_once() {
-        let vm = factored(0.3, FactorPrecision::Double);
-        let llt = vm.store.llt.as_ref().expect("supernodal");
-        let mut seen = vec![false; llt.structure.len_val];
-        let mut indices = vec![false; vm.hvals.len()];
-        for (t, s) in llt.structure.list.iter().enumerate() {
-            let group = llt.assembly_start[t] as usize..llt.assembly_start[t + 1] as usize;
-            for &[i, at] in &llt.assembly[group] {
+    /// Checks that the plan places each of a matrix's `nnz` values exactly once, inside its
+    /// supernode's block; opens every block once, before anything writes it; and that every
+    /// update writes inside its ancestor's block.
+    pub fn check_coverage(&self, nnz: usize) {
+        let st = &*self.structure;
+        let mut seen = vec![false; st.len_val];
+        let mut indices = vec![false; nnz];
+        for (t, s) in st.list.iter().enumerate() {
+            let group = self.assembly_start[t] as usize..self.assembly_start[t + 1] as usize;
+            for &[i, at] in &self.assembly[group] {
                 assert!(s.values().contains(&(at as usize)), "{at} outside {t}");
                 assert!(
                     !std::mem::replace(&mut seen[at as usize], true),
@@ -774,40 +742,38 @@ mod tests {
                 assert!(!std::mem::replace(&mut indices[i as usize], true));
             }
         }
-        assert!(
-            indices.iter().all(|&i| i),
-            "every value of the matrix placed"
-        );
-        // Every block is opened exactly once, before anything writes it: by itself or by
-        // the first supernode that updates it.
-        let mut opened_by = vec![usize::MAX; llt.structure.list.len()];
-        for k in 0..llt.structure.list.len() {
-            for &t in &llt.opens[llt.open_start[k] as usize..llt.open_start[k + 1] as usize] {
+        assert!(indices.iter().all(|&i| i), "every value placed");
+        let mut opened_by = vec![usize::MAX; st.list.len()];
+        for k in 0..st.list.len() {
+            for &t in &self.opens[self.open_start[k] as usize..self.open_start[k + 1] as usize] {
                 assert_eq!(opened_by[t as usize], usize::MAX, "{t} opened twice");
                 assert!(t as usize >= k);
                 opened_by[t as usize] = k;
             }
         }
-        for k in 0..llt.structure.list.len() {
-            for u in &llt.updates[llt.update_start[k] as usize..llt.update_start[k + 1] as usize] {
+        for k in 0..st.list.len() {
+            let (u0, u1) = (
+                self.update_start[k] as usize,
+                self.update_start[k + 1] as usize,
+            );
+            for u in &self.updates[u0..u1] {
                 assert!(opened_by[u.target as usize] <= k);
             }
         }
-        // Every update writes inside its ancestor's block, below the diagonal.
-        for (k, s) in llt.structure.list.iter().enumerate() {
-            let rows = llt.structure.rows_of(s);
+        for (k, s) in st.list.iter().enumerate() {
+            let rows = st.rows_of(s);
             let (u0, u1) = (
-                llt.update_start[k] as usize,
-                llt.update_start[k + 1] as usize,
+                self.update_start[k] as usize,
+                self.update_start[k + 1] as usize,
             );
             let mut covered = 0;
-            for u in &llt.updates[u0..u1] {
+            for u in &self.updates[u0..u1] {
                 assert!(u.target as usize > k);
-                let t = &llt.structure.list[u.target as usize];
+                let t = &st.list[u.target as usize];
                 let first = u.first as usize;
                 assert_eq!(first, covered);
                 covered += u.count as usize;
-                for (i, &r) in llt.rel[u.rel_start..u.rel_start + rows.len() - first]
+                for (i, &r) in self.rel[u.rel_start..u.rel_start + rows.len() - first]
                     .iter()
                     .enumerate()
                 {
@@ -819,52 +785,6 @@ mod tests {
             }
             assert_eq!(covered, rows.len());
         }
-        assert!(llt.bytes() > llt.assembly.len() * 8);
-    }
-
-    #[test]
-    fn failures_name_their_pivot() {
-        for precision in [FactorPrecision::Double, FactorPrecision::Single] {
-            let mut vm = factored(0.3, precision);
-            // Make one unknown's diagonal negative: the factorisation stops at or before it.
-            let ours = {
-                vm.hvals[0] = -1.0;
-                vm.factorize()
-            };
-            let theirs = vm.factorize_with_faer();
-            match (ours, theirs) {
-                (
-                    Err(VmError::NotPositiveDefinite { pivot: a }),
-                    Err(VmError::NotPositiveDefinite { pivot: b }),
-                ) => assert_eq!(a, b),
-                other => panic!("{other:?}"),
-            }
-            assert!(!vm.factor_ready);
-        }
-        // A value that is not finite fails without a factor, in double precision too.
-        let mut vm = factored(0.3, FactorPrecision::Double);
-        let n = vm.hvals.len();
-        vm.hvals[n / 2] = f64::NAN;
-        assert!(matches!(
-            vm.factorize(),
-            Err(VmError::NotPositiveDefinite { .. })
-        ));
-        assert!(!vm.factor_ready);
-    }
-
-    #[test]
-    fn the_portable_loops_match_the_vector_ones() {
-        let vm = factored(0.6, FactorPrecision::Double);
-        let llt = vm.store.llt.as_ref().expect("supernodal");
-        let mut fresh = vm.store.double.clone();
-        // NaN wherever the factorisation fails to write: every block is opened first.
-        fresh.fill(f64::NAN);
-        let mut portable = fresh.clone();
-        llt.factorize(&vm.hvals, &mut fresh).expect("definite");
-        llt.supernodes::<f64, false>(&vm.hvals, &mut portable)
-            .expect("definite");
-        assert!(fresh.iter().chain(&portable).all(|v| v.is_finite()));
-        let d = difference(&vm, &portable, &fresh);
-        assert!(d <= 1e-13, "{d}");
+        assert!(self.bytes() > self.assembly.len() * 8);
     }
 }

@@ -1,5 +1,5 @@
 //! The shape of a supernodal Cholesky factor, read once from faer's symbolic factorisation
-//! into flat arrays and checked, for the VM's own loops over it (the numeric factorisation in
+//! into flat arrays and checked, for the engine's own loops over it (the numeric factorisation in
 //! [`crate::numeric`], the triangular solves in [`crate::triangular`]).
 //!
 //! The values follow faer's layout: supernode `s` owns the columns `begin..begin + width` of

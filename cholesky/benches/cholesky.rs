@@ -1,0 +1,116 @@
+//! The engine against faer on mesh matrices: grid Laplacians (one unknown per vertex, as the
+//! geodesic and ARAP systems have; two per vertex, as the parameterisation's Newton Hessian
+//! has) of about 1K, 10K and 100K unknowns, ordered by AMD.
+//!
+//! Groups, each with the engine's kernels (`own`) and faer's on the same factor (`faer`):
+//!
+//! - `factorize/{own,faer}/<size>`: one numeric factorisation, supernodal;
+//! - `factorize/simplicial/<size>`: faer's column-by-column factorisation of the same matrix
+//!   (what [`Supernodal::Auto`] chose below its threshold);
+//! - `solve/{own,faer,simplicial}/<size>`: one solve with one right-hand side;
+//! - `solve4/{own,faer}/<size>`: one solve with four right-hand sides.
+//!
+//! ```sh
+//! cargo bench -p bdmorph-cholesky --bench cholesky
+//! ```
+
+use bdmorph_cholesky::fixtures;
+use bdmorph_cholesky::{Cholesky, CholeskyOptions, LowerPattern, Supernodal};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use std::hint::black_box;
+
+/// `(name, grid side, unknowns per vertex)`.
+const CASES: [(&str, u32, u32); 4] = [
+    ("1K", 32, 1),
+    ("10K", 100, 1),
+    ("10Kx2", 71, 2),
+    ("100K", 316, 1),
+];
+
+fn setup(side: u32, dofs: u32, supernodal: Supernodal) -> (Cholesky, Vec<f64>, LowerPattern) {
+    let (pattern, values) = fixtures::grid(side, dofs, 1e-3)
+        .assemble()
+        .expect("pattern");
+    let options = CholeskyOptions::default()
+        .with_supernodal(supernodal)
+        .with_columns(4);
+    let mut chol = Cholesky::with_options(&pattern, options).expect("analysed");
+    chol.factorize(&values).expect("positive definite");
+    (chol, values, pattern)
+}
+
+fn rhs(n: usize) -> Vec<f64> {
+    (0..n).map(|i| (i as f64 * 0.37).sin()).collect()
+}
+
+fn benches(c: &mut Criterion) {
+    let mut factorize = c.benchmark_group("factorize");
+    factorize.sample_size(20);
+    for (name, side, dofs) in CASES {
+        let (mut chol, values, _) = setup(side, dofs, Supernodal::Always);
+        factorize.bench_with_input(BenchmarkId::new("own", name), &(), |b, _| {
+            b.iter(|| chol.factorize(black_box(&values)).expect("definite"))
+        });
+        factorize.bench_with_input(BenchmarkId::new("faer", name), &(), |b, _| {
+            b.iter(|| {
+                chol.factorize_with_faer(black_box(&values))
+                    .expect("definite")
+            })
+        });
+        let (mut simplicial, values, _) = setup(side, dofs, Supernodal::Never);
+        factorize.bench_with_input(BenchmarkId::new("simplicial", name), &(), |b, _| {
+            b.iter(|| simplicial.factorize(black_box(&values)).expect("definite"))
+        });
+    }
+    factorize.finish();
+
+    let mut solve = c.benchmark_group("solve");
+    for (name, side, dofs) in CASES {
+        let (mut chol, _, pattern) = setup(side, dofs, Supernodal::Always);
+        let b0 = rhs(pattern.dim());
+        let mut x = b0.clone();
+        solve.bench_with_input(BenchmarkId::new("own", name), &(), |b, _| {
+            b.iter(|| {
+                x.copy_from_slice(&b0);
+                chol.solve_in_place(&mut x, 1).expect("solve")
+            })
+        });
+        solve.bench_with_input(BenchmarkId::new("faer", name), &(), |b, _| {
+            b.iter(|| {
+                x.copy_from_slice(&b0);
+                chol.solve_with_faer(&mut x, 1).expect("solve")
+            })
+        });
+        let (mut simplicial, _, _) = setup(side, dofs, Supernodal::Never);
+        solve.bench_with_input(BenchmarkId::new("simplicial", name), &(), |b, _| {
+            b.iter(|| {
+                x.copy_from_slice(&b0);
+                simplicial.solve_in_place(&mut x, 1).expect("solve")
+            })
+        });
+    }
+    solve.finish();
+
+    let mut solve4 = c.benchmark_group("solve4");
+    for (name, side, dofs) in CASES {
+        let (mut chol, _, pattern) = setup(side, dofs, Supernodal::Always);
+        let b0 = rhs(4 * pattern.dim());
+        let mut x = b0.clone();
+        solve4.bench_with_input(BenchmarkId::new("own", name), &(), |b, _| {
+            b.iter(|| {
+                x.copy_from_slice(&b0);
+                chol.solve_in_place(&mut x, 4).expect("solve")
+            })
+        });
+        solve4.bench_with_input(BenchmarkId::new("faer", name), &(), |b, _| {
+            b.iter(|| {
+                x.copy_from_slice(&b0);
+                chol.solve_with_faer(&mut x, 4).expect("solve")
+            })
+        });
+    }
+    solve4.finish();
+}
+
+criterion_group!(engine, benches);
+criterion_main!(engine);

@@ -320,9 +320,9 @@ impl Cholesky {
     /// nothing.
     ///
     /// In single precision, a factorisation that fails (a value beyond `f32`'s range, a
-    /// pivot lost to rounding: the matrix is too ill-conditioned for it) gives single
-    /// precision up for this pattern and factors in double precision instead (allocating
-    /// the double-precision factor on that first fallback). Fails with
+    /// pivot lost to rounding: the matrix is too ill-conditioned for it) factors in double
+    /// precision instead (allocating the double-precision factor on that first fallback), and
+    /// when that succeeds, gives single precision up for this pattern. Fails with
     /// [`CholeskyError::NotPositiveDefinite`] (a pivot not positive),
     /// [`CholeskyError::Singular`] (a pivot within rounding error of zero: in double
     /// precision, within `max(4 k, n) eps` of its diagonal entry for `k` the entries of its
@@ -351,13 +351,26 @@ impl Cholesky {
                 got: values.len(),
             });
         }
-        if self.precision() == FactorPrecision::Single {
-            if self.factorize_single(values, kernels).is_ok() {
-                self.mark_ready(true);
-                return Ok(());
-            }
-            self.single_failed = true;
+        let tried_single = self.precision() == FactorPrecision::Single;
+        if tried_single && self.factorize_single(values, kernels).is_ok() {
+            self.mark_ready(true);
+            return Ok(());
         }
+        let double = self.factorize_double(values, kernels);
+        if tried_single {
+            // Single precision is given up only when double precision succeeds where it
+            // failed: a matrix that is not positive definite fails in both, and the next one
+            // may suit single precision again.
+            self.single_failed = double.is_ok();
+        }
+        double?;
+        self.mark_ready(false);
+        Ok(())
+    }
+
+    /// The double-precision factorisation (allocating its buffer on a first fallback from
+    /// single precision).
+    fn factorize_double(&mut self, values: &[f64], kernels: Kernels) -> Result<(), CholeskyError> {
         let len_val = self.factor_nnz();
         zeroed(&mut self.double, len_val);
         match (&self.analysis.plan, kernels) {
@@ -371,9 +384,7 @@ impl Cholesky {
                 &mut self.workspace,
             )?,
         }
-        check_pivots(&self.analysis, values, &self.double)?;
-        self.mark_ready(false);
-        Ok(())
+        check_pivots(&self.analysis, values, &self.double)
     }
 
     /// The single-precision factorisation.

@@ -175,7 +175,8 @@ fn cases() -> Vec<Case> {
             name: "OFF index overflowing 64 bits",
             source: ("overflow.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 18446744073709551616\n"),
             target: None,
-            message: "{source}:6: a vertex index of face 0 is out of range: 18446744073709551616",
+            message: "{source}:6: a vertex index of face 0 (0-based) is out of range: \
+                      18446744073709551616",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 6, .. })),
             compile: None,
         },
@@ -199,7 +200,7 @@ fn cases() -> Vec<Case> {
             name: "infinite coordinate in an OFF file",
             source: ("inf.off", b"OFF\n3 1 0\n0 0 0\n1 -inf 0\n0 1 0\n3 0 1 2\n"),
             target: None,
-            message: "{source}:4: a coordinate of vertex 1 is not finite",
+            message: "{source}:4: a coordinate of vertex 1 (0-based) is not finite",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 4, .. })),
             compile: None,
         },

@@ -15,6 +15,9 @@ pub struct PlanarMesh {
 }
 
 /// Why a mesh (or a pair of meshes) is not valid input.
+///
+/// Faces and vertices are named by their 0-based index in the mesh's arrays (the messages say
+/// so): face 274 is the 275th `f` line of an OBJ file.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshError {
@@ -22,7 +25,7 @@ pub enum MeshError {
     #[error(transparent)]
     Read(#[from] ReadError),
     /// A 3D mesh where a planar one is needed.
-    #[error("{path}: vertex {vertex} has z = {}; a planar mesh (z = 0) is required", Short(*.z))]
+    #[error("{path}: {}", NotPlanarText(*.vertex, *.z))]
     NotPlanar {
         /// The file.
         path: String,
@@ -32,13 +35,15 @@ pub enum MeshError {
         z: f64,
     },
     /// A coordinate is NaN or infinite.
-    #[error("vertex {vertex} has a non-finite coordinate")]
+    #[error("vertex {vertex} (0-based) has a non-finite coordinate")]
     NonFinite {
         /// The vertex.
         vertex: usize,
     },
     /// A face names a vertex that does not exist.
-    #[error("face {face} refers to vertex {vertex}, but the mesh has {n_vertices} vertices")]
+    #[error(
+        "face {face} refers to vertex {vertex} (0-based), but the mesh has {n_vertices} vertices"
+    )]
     IndexOutOfRange {
         /// The face.
         face: usize,
@@ -48,7 +53,7 @@ pub enum MeshError {
         n_vertices: usize,
     },
     /// A triangle has (numerically) zero area.
-    #[error("face {face} is degenerate (area {area:e})")]
+    #[error("face {face} (0-based) is degenerate (area {area:e})")]
     Degenerate {
         /// The face.
         face: usize,
@@ -56,7 +61,7 @@ pub enum MeshError {
         area: f64,
     },
     /// A triangle is clockwise.
-    #[error("face {face} is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
+    #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
     Clockwise {
         /// The face.
         face: usize,
@@ -74,7 +79,7 @@ pub enum MeshError {
         target_count: usize,
     },
     /// Source and target have different triangles.
-    #[error("source and target differ at face {face}: {source_face:?} vs {target_face:?}; both meshes need the same triangles")]
+    #[error("source and target differ at face {face}: vertices {source_face:?} vs {target_face:?} (0-based); both meshes need the same triangles")]
     FaceMismatch {
         /// The face.
         face: usize,
@@ -87,6 +92,19 @@ pub enum MeshError {
     /// disk).
     #[error(transparent)]
     Topology(#[from] bdmorph_compiler::CompileError),
+}
+
+/// The message of [`MeshError::NotPlanar`] after the file's name.
+pub(crate) struct NotPlanarText(pub(crate) usize, pub(crate) f64);
+
+impl std::fmt::Display for NotPlanarText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (vertex, z) = (self.0, Short(self.1));
+        write!(
+            f,
+            "vertex {vertex} (0-based) has z = {z}; a planar mesh (z = 0) is required"
+        )
+    }
 }
 
 /// A number for a message: `{}` unless that would be long (`1e300` rather than 301 digits).

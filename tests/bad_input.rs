@@ -232,7 +232,7 @@ fn cases() -> Vec<Case> {
             name: "not planar",
             source: ("bent.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0.5\nf 1 2 3\n"),
             target: None,
-            message: "{source}: vertex 2 has z = 0.5; a planar mesh (z = 0) is required",
+            message: "{source}: vertex 2 (0-based) has z = 0.5; a planar mesh (z = 0) is required",
             is: |f| matches!(f, Failure::Read(MeshError::NotPlanar { vertex: 2, .. })),
             compile: None,
         },
@@ -240,7 +240,7 @@ fn cases() -> Vec<Case> {
             name: "zero-area triangle",
             source: ("flat.obj", b"v 0 0\nv 1 0\nv 2 0\nf 1 2 3\n"),
             target: None,
-            message: "face 0 is degenerate (area 0e0)",
+            message: "face 0 (0-based) is degenerate (area 0e0)",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::Degenerate { face: 0, .. })),
             compile: None,
         },
@@ -251,7 +251,7 @@ fn cases() -> Vec<Case> {
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.5 0.5\nf 1 2 5\nf 2 3 5\nf 3 5 4\nf 4 1 5\n",
             ),
             target: None,
-            message: "face 2 is clockwise (signed area -2.5e-1); triangles must be \
+            message: "face 2 (0-based) is clockwise (signed area -2.5e-1); triangles must be \
                       counter-clockwise, consistently",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::Clockwise { face: 2, .. })),
             compile: None,
@@ -260,8 +260,8 @@ fn cases() -> Vec<Case> {
             name: "inconsistent orientation: two faces along one directed edge",
             source: ("overlap.obj", b"v 0 0\nv 1 0\nv 0.5 1\nv 0.3 0.5\nf 1 2 3\nf 1 2 4\n"),
             target: Some(("overlap2.obj", b"v 0 0\nv 1 0\nv 0.5 1\nv 0.4 0.5\nf 1 2 3\nf 1 2 4\n")),
-            message: "face 0 and face 1 both run from vertex 0 to vertex 1: inconsistent \
-                      orientation",
+            message: "face 0 and face 1 both run from vertex 0 to vertex 1 (0-based): \
+                      inconsistent orientation",
             is: topology,
             compile: Some(CompileError::InconsistentOrientation {
                 a: V(0),
@@ -279,7 +279,8 @@ fn cases() -> Vec<Case> {
                 "fin2.obj",
                 b"v 0 0\nv 1 0\nv 0.5 1\nv 0.5 -1\nv 0.4 2\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
             )),
-            message: "edge (vertex 0, vertex 1) is shared by 3 faces (non-manifold)",
+            message: "the edge between vertex 0 and vertex 1 (0-based) is shared by 3 faces \
+                      (non-manifold)",
             is: topology,
             compile: Some(CompileError::NonManifoldEdge {
                 a: V(0),
@@ -297,7 +298,7 @@ fn cases() -> Vec<Case> {
                 "lonely2.obj",
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nv 3 3\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
             )),
-            message: "vertex 5 belongs to no face",
+            message: "vertex 5 (0-based) belongs to no face",
             is: topology,
             compile: Some(CompileError::UnreferencedVertex { vertex: V(5) }),
         },
@@ -311,7 +312,7 @@ fn cases() -> Vec<Case> {
                 "twice2.obj",
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\nf 2 5 1\n",
             )),
-            message: "face 0 and face 4 are the same triangle (duplicate face)",
+            message: "face 0 and face 4 (0-based) are the same triangle (duplicate face)",
             is: topology,
             compile: Some(CompileError::DuplicateFace {
                 faces: [FaceId(0), FaceId(4)],
@@ -321,7 +322,7 @@ fn cases() -> Vec<Case> {
             name: "several components",
             source: ("two.obj", b"v 0 0\nv 1 0\nv 0 1\nv 3 0\nv 4 0\nv 3 1\nf 1 2 3\nf 4 5 6\n"),
             target: Some(("two2.obj", b"v 0 0\nv 1 0\nv 0 1\nv 3 0\nv 5 0\nv 3 1\nf 1 2 3\nf 4 5 6\n")),
-            message: "the mesh is not connected: face 1 cannot be reached from face 0",
+            message: "the mesh is not connected: face 1 (0-based) cannot be reached from face 0",
             is: topology,
             compile: Some(CompileError::Disconnected { face: FaceId(1) }),
         },
@@ -359,8 +360,8 @@ fn cases() -> Vec<Case> {
                 "other.obj",
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nf 1 2 5\nf 2 3 5\nf 4 1 5\nf 3 4 5\n",
             )),
-            message: "source and target differ at face 2: [2, 3, 4] vs [3, 0, 4]; both meshes \
-                      need the same triangles",
+            message: "source and target differ at face 2: vertices [2, 3, 4] vs [3, 0, 4] \
+                      (0-based); both meshes need the same triangles",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::FaceMismatch { face: 2, .. })),
             compile: None,
         },

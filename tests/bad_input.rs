@@ -257,6 +257,44 @@ fn cases() -> Vec<Case> {
             compile: None,
         },
         Case {
+            name: "every triangle clockwise: mirrored",
+            source: (
+                "mirrored.obj",
+                b"v 0 0\nv 1 0\nv 1 -1\nv 0 -1\nv 0.5 -0.5\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
+            ),
+            target: None,
+            message: "all 4 triangles are clockwise: the mesh is mirrored, as when exported with \
+                      y pointing down; reverse each triangle's corner order (a b c -> a c b) or \
+                      negate one coordinate (y -> -y)",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::Mirrored { clockwise: 4, .. })),
+            compile: None,
+        },
+        Case {
+            name: "most triangles clockwise: mirrored, one would be left",
+            source: (
+                "mostly.obj",
+                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.5 0.5\nf 1 5 2\nf 2 5 3\nf 3 4 5\nf 4 5 1\n",
+            ),
+            target: None,
+            message: "3 of 4 triangles are clockwise: the mesh looks mirrored, as when exported \
+                      with y pointing down; reverse each triangle's corner order (a b c -> a c b) \
+                      or negate one coordinate (y -> -y), after which face 2 (0-based), \
+                      counter-clockwise now, would be clockwise",
+            is: |f| {
+                mesh_error(f, |e| {
+                    matches!(
+                        e,
+                        MeshError::Mirrored {
+                            clockwise: 3,
+                            first_counter_clockwise: Some(2),
+                            ..
+                        }
+                    )
+                })
+            },
+            compile: None,
+        },
+        Case {
             name: "inconsistent orientation: two faces along one directed edge",
             source: ("overlap.obj", b"v 0 0\nv 1 0\nv 0.5 1\nv 0.3 0.5\nf 1 2 3\nf 1 2 4\n"),
             target: Some(("overlap2.obj", b"v 0 0\nv 1 0\nv 0.5 1\nv 0.4 0.5\nf 1 2 3\nf 1 2 4\n")),

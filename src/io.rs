@@ -4,7 +4,7 @@
 //! and the 1-based line. Only triangles are accepted: polygons with more corners are refused
 //! ([`ReadError::NotATriangle`]), not triangulated. The `*_with_lines` readers also return
 //! where each vertex and face was read ([`LineMap`]), so that later errors about a face or a
-//! vertex can name its line too.
+//! vertex can name its line too (see [`crate::located`]).
 //!
 //! ```
 //! use bdmorph::io::{format_obj_2d, parse_obj};
@@ -72,8 +72,8 @@ impl SurfaceMesh {
 
 /// Where each vertex and face of a mesh file was read: the 1-based line of its `v` or `f`
 /// line in an OBJ file, of the line its record starts on in an OFF file. Kept by
-/// [`read_mesh_with_lines`] so that errors about a face or a vertex, found after reading, can
-/// point at its line.
+/// [`read_mesh_with_lines`] (and [`crate::located::MeshFile`]) so that errors about a face or
+/// a vertex, found after reading, can point at its line.
 ///
 /// ```
 /// use bdmorph::io::parse_obj_with_lines;

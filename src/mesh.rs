@@ -17,7 +17,8 @@ pub struct PlanarMesh {
 /// Why a mesh (or a pair of meshes) is not valid input.
 ///
 /// Faces and vertices are named by their 0-based index in the mesh's arrays (the messages say
-/// so): face 274 is the 275th `f` line of an OBJ file.
+/// so): face 274 is the 275th `f` line of an OBJ file. For a mesh read from a file,
+/// [`crate::located::MeshFile::locate`] adds the file and the line.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshError {
@@ -60,7 +61,8 @@ pub enum MeshError {
         /// Its signed area.
         area: f64,
     },
-    /// A triangle is clockwise, and most of the others are not (see [`MeshError::Mirrored`]).
+    /// A triangle is clockwise, and no more triangles are clockwise than counter-clockwise
+    /// (otherwise the mesh is [`MeshError::Mirrored`]).
     #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
     Clockwise {
         /// The face.

@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 
 use bdmorph::info::MeshInfo;
 use bdmorph::io::{self, SurfaceMesh};
-use bdmorph::{generate, CompileError, MeshKey, NewtonOptions, PlanarMesh, Program, Vm};
+use bdmorph::{generate, CompileError, Located, MeshKey, NewtonOptions, PlanarMesh, Program, Vm};
 use bdmorph_isa::ProgramParts;
 
 /// An error message: non-empty, one line, short enough for a terminal.
@@ -64,14 +64,22 @@ pub fn reader(text: &str, format: Format) {
     let _ = MeshInfo::of(&mesh);
     if !mesh.is_planar() {
         let err = PlanarMesh::from_surface(mesh, path).expect_err("not planar");
-        return one_line(&err.to_string());
+        one_line(&err.to_string());
+        let located = Located::new(path, &lines, &[], err);
+        assert!(located.line.is_some(), "{located}");
+        return one_line(&located.to_string());
     }
     round_trips(&mesh);
     let planar = PlanarMesh::from_surface(mesh, path).expect("planar");
     match planar.validate() {
         Ok(()) if planar.faces.len() <= 2000 => compile_and_run(&planar.positions, &planar.faces),
         Ok(()) => {}
-        Err(e) => one_line(&e.to_string()),
+        Err(e) => {
+            one_line(&e.to_string());
+            let located = Located::new(path, &lines, &planar.faces, e);
+            assert_eq!(located.line.is_some(), !located.places.is_empty());
+            one_line(&located.to_string());
+        }
     }
 }
 

@@ -365,7 +365,7 @@ impl Locate for MorphError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bdmorph_vm::TriangleReport;
+    use crate::TriangleReport;
 
     /// A square of four triangles around vertex 4, as `square.obj` would list it: five `v`
     /// lines, a blank line, four `f` lines.

@@ -4,7 +4,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::io::SurfaceMesh;
-use crate::mesh::PlanarMesh;
+use crate::located::{Located, MeshFile};
+use crate::mesh::{MeshError, PlanarMesh};
 
 /// Counts and topology of a triangle mesh, computed leniently (any mesh, not only disks).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -110,6 +111,15 @@ pub fn check_morphable(mesh: &SurfaceMesh, path: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// As [`check_morphable`], for a mesh read from a file: the error is typed and names the
+/// file, and the line of the face or vertex at fault (as `bdmorph morph` reports it).
+pub fn morphable(file: &MeshFile) -> Result<(), Located<MeshError>> {
+    let planar = file.planar()?;
+    bdmorph_compiler::compile(&planar.positions, &planar.faces)
+        .map_err(|e| file.locate(MeshError::Topology(e)))?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,6 +146,30 @@ mod tests {
         assert_eq!(info.components, 1);
         assert!(info.planar && !info.texcoords);
         assert!(check_morphable(&surface(&m), Path::new("d.obj")).is_ok());
+    }
+
+    #[test]
+    fn morphable_names_the_file_and_the_line() {
+        let text = "v 0 0\nv 1 0\nv 0 1\nv 1 1\n\nf 1 2 3\nf 2 4 3\nf 3 1 2\n";
+        let (mesh, lines) = crate::io::parse_obj_with_lines(text, Path::new("t.obj")).unwrap();
+        let file = MeshFile {
+            path: "t.obj".into(),
+            mesh,
+            lines,
+        };
+        let err = morphable(&file).unwrap_err();
+        assert_eq!(err.line, Some(8));
+        assert_eq!(
+            err.to_string(),
+            "t.obj:8: face 0 and face 2 (0-based) are the same triangle (duplicate face); \
+             face 2 is line 8, face 0 is line 6"
+        );
+        // The same as check_morphable says, but pointed at the file.
+        let plain = check_morphable(&file.mesh, &file.path).unwrap_err();
+        assert_eq!(plain, err.error.to_string());
+        let mut ok = file.clone();
+        ok.mesh.faces.pop();
+        assert!(morphable(&ok).is_ok());
     }
 
     #[test]

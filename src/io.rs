@@ -2,7 +2,9 @@
 //!
 //! The readers are hand-written and allocate nothing per token. Every error names the file
 //! and the 1-based line. Only triangles are accepted: polygons with more corners are refused
-//! ([`ReadError::NotATriangle`]), not triangulated.
+//! ([`ReadError::NotATriangle`]), not triangulated. The `*_with_lines` readers also return
+//! where each vertex and face was read ([`LineMap`]), so that later errors about a face or a
+//! vertex can name its line too (see [`crate::located`]).
 //!
 //! ```
 //! use bdmorph::io::{format_obj_2d, parse_obj};
@@ -66,6 +68,62 @@ impl SurfaceMesh {
     pub fn is_planar(&self) -> bool {
         self.positions.iter().all(|p| p[2] == 0.0)
     }
+}
+
+/// Where each vertex and face of a mesh file was read: the 1-based line of its `v` or `f`
+/// line in an OBJ file, of the line its record starts on in an OFF file. Kept by
+/// [`read_mesh_with_lines`] (and [`crate::located::MeshFile`]) so that errors about a face or
+/// a vertex, found after reading, can point at its line.
+///
+/// ```
+/// use bdmorph::io::parse_obj_with_lines;
+/// use std::path::Path;
+///
+/// let text = "# a square\nv 0 0\nv 1 0\nv 1 1\nv 0 1\n\nf 1 2 3\nf 1 3 4\n";
+/// let (mesh, lines) = parse_obj_with_lines(text, Path::new("square.obj"))?;
+/// assert_eq!(mesh.faces.len(), 2);
+/// assert_eq!(lines.face_line(1), Some(8)); // face 1 (0-based) is the second 'f' line
+/// assert_eq!(lines.vertex_line(0), Some(2));
+/// assert_eq!(lines.face_line(2), None); // no such face
+/// # Ok::<(), bdmorph::io::ReadError>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LineMap {
+    /// Per vertex, its line; 0 where unknown (a line beyond `u32::MAX`).
+    vertices: Vec<u32>,
+    /// Per face, its line; 0 where unknown.
+    faces: Vec<u32>,
+}
+
+impl LineMap {
+    /// A map from the lines of each vertex and each face (1-based; 0 for unknown), for meshes
+    /// read by other means.
+    pub fn new(vertex_lines: &[usize], face_lines: &[usize]) -> LineMap {
+        let encode = |lines: &[usize]| lines.iter().map(|&l| encode_line(l)).collect();
+        LineMap {
+            vertices: encode(vertex_lines),
+            faces: encode(face_lines),
+        }
+    }
+
+    /// The 1-based line vertex `v` (0-based) was read from, when known.
+    pub fn vertex_line(&self, v: usize) -> Option<usize> {
+        decode_line(self.vertices.get(v))
+    }
+
+    /// The 1-based line face `f` (0-based) was read from, when known.
+    pub fn face_line(&self, f: usize) -> Option<usize> {
+        decode_line(self.faces.get(f))
+    }
+}
+
+/// A line as stored in a [`LineMap`]: 0 for a line too far to store (and so unknown).
+fn encode_line(line: usize) -> u32 {
+    u32::try_from(line).unwrap_or(0)
+}
+
+fn decode_line(stored: Option<&u32>) -> Option<usize> {
+    stored.filter(|&&l| l != 0).map(|&l| l as usize)
 }
 
 /// Why a mesh file could not be read. Every message is one line and names the file (and the
@@ -159,6 +217,23 @@ pub enum ReadError {
     },
 }
 
+impl ReadError {
+    /// The 1-based line the error is on, when it is on one.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            ReadError::Parse { line, .. }
+            | ReadError::IndexOutOfRange { line, .. }
+            | ReadError::TexCoordOutOfRange { line, .. }
+            | ReadError::NotATriangle { line, .. }
+            | ReadError::Binary { line, .. } => Some(*line),
+            ReadError::Io { .. }
+            | ReadError::UnknownFormat { .. }
+            | ReadError::Empty { .. }
+            | ReadError::NoFaces { .. } => None,
+        }
+    }
+}
+
 /// "no vertices and no faces" or "N vertices but no faces".
 struct NoFacesOf(usize);
 
@@ -188,7 +263,7 @@ pub enum WriteError {
 }
 
 /// Displays a path, or `<string>` for the empty path used when parsing text without a file.
-struct Shown<'a>(&'a Path);
+pub(crate) struct Shown<'a>(pub(crate) &'a Path);
 
 impl fmt::Display for Shown<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -207,10 +282,15 @@ impl fmt::Display for Shown<'_> {
 /// characters that text does not hold (NUL, for instance) are refused as binary data
 /// ([`ReadError::Binary`]), whichever the parser.
 pub fn read_mesh(path: &Path) -> Result<SurfaceMesh, ReadError> {
+    read_mesh_with_lines(path).map(|(mesh, _)| mesh)
+}
+
+/// As [`read_mesh`], also returning the line each vertex and face was read from.
+pub fn read_mesh_with_lines(path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     let parse = match ext.to_ascii_lowercase().as_str() {
-        "obj" => parse_obj,
-        "off" => parse_off,
+        "obj" => parse_obj_with_lines,
+        "off" => parse_off_with_lines,
         _ => return Err(ReadError::UnknownFormat { path: path.into() }),
     };
     let bytes = fs::read(path).map_err(|source| ReadError::Io {
@@ -348,9 +428,16 @@ fn words(line: &str) -> SplitAsciiWhitespace<'_> {
 /// `o`, `s`, `usemtl`, `mtllib`, `l`, ...) is ignored. Polygons with more than three corners
 /// are refused ([`ReadError::NotATriangle`]), not triangulated.
 pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
+    parse_obj_with_lines(text, path).map(|(mesh, _)| mesh)
+}
+
+/// As [`parse_obj`], also returning the line of each `v` and `f` line (after a byte-order
+/// mark, if any; lines end at `\n`, so CRLF files count as they look).
+pub fn parse_obj_with_lines(text: &str, path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
     check_text(text, path)?;
     let mut positions: Vec<[f64; 3]> = Vec::new();
     let mut faces: Vec<[u32; 3]> = Vec::new();
+    let mut map = LineMap::default();
     let mut uv: Vec<[f64; 2]> = Vec::new();
     // Per face, the vt index of each corner, while every face so far has them.
     let mut uv_corners: Option<Vec<[u32; 3]>> = Some(Vec::new());
@@ -361,12 +448,16 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
         let at = At { path, line: i + 1 };
         let mut words = words(line);
         match words.next() {
-            Some("v") => positions.push(obj_vertex(words, at)?),
+            Some("v") => {
+                positions.push(obj_vertex(words, at)?);
+                map.vertices.push(encode_line(at.line));
+            }
             Some("vt") => uv.push(obj_texcoord(words, at)?),
             Some("f") => {
                 let counts = [positions.len(), uv.len()];
                 let (face, tex) = obj_face(words, counts, [&mut forward, &mut forward_uv], at)?;
                 faces.push(face);
+                map.faces.push(encode_line(at.line));
                 match (tex, uv_corners.as_mut()) {
                     (Some(t), Some(all)) => all.push(t),
                     _ => uv_corners = None,
@@ -393,11 +484,12 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
     let texcoords = uv_corners
         .filter(|_| !uv.is_empty())
         .map(|corners| TexCoords { uv, corners });
-    Ok(SurfaceMesh {
+    let mesh = SurfaceMesh {
         positions,
         faces,
         texcoords,
-    })
+    };
+    Ok((mesh, map))
 }
 
 fn obj_texcoord(words: SplitAsciiWhitespace<'_>, at: At) -> Result<[f64; 2], ReadError> {
@@ -588,6 +680,11 @@ impl<'t, 'p> Tokens<'t, 'p> {
 /// follows its last value on the same line (edge count, colours, normals) is ignored, so one
 /// line must not hold several records.
 pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
+    parse_off_with_lines(text, path).map(|(mesh, _)| mesh)
+}
+
+/// As [`parse_off`], also returning the line each vertex and face record starts on.
+pub fn parse_off_with_lines(text: &str, path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
     check_text(text, path)?;
     let (lines, words) = (lines(text), "".split_ascii_whitespace());
     let mut t = Tokens {
@@ -614,12 +711,21 @@ pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
     }
     // Capped, so that a bogus count cannot reserve absurd amounts of memory.
     let mut positions = Vec::with_capacity(nv.min(text.len() / 6));
+    let mut map = LineMap {
+        vertices: Vec::with_capacity(positions.capacity()),
+        faces: Vec::new(),
+    };
     for v in 0..nv {
         let mut p = [0.0; 3];
-        for x in &mut p {
-            let (value, at): (f64, _) = t.parse(format_args!("a coordinate of vertex {v}"))?;
+        for (i, x) in p.iter_mut().enumerate() {
+            let (value, at): (f64, _) =
+                t.parse(format_args!("a coordinate of vertex {v} (0-based)"))?;
             if !value.is_finite() {
-                return Err(at.parse(format!("a coordinate of vertex {v} is not finite")));
+                let message = format!("a coordinate of vertex {v} (0-based) is not finite");
+                return Err(at.parse(message));
+            }
+            if i == 0 {
+                map.vertices.push(encode_line(at.line));
             }
             *x = value;
         }
@@ -627,27 +733,34 @@ pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
         positions.push(p);
     }
     let mut faces = Vec::with_capacity(nf.min(text.len() / 8));
+    map.faces.reserve(faces.capacity());
     for f in 0..nf {
-        match t.parse(format_args!("the corner count of face {f}"))? {
-            (3, _) => {}
-            (k @ 0..=2, at) => return Err(at.parse(format!("face {f} has {k} corners; need 3"))),
+        let start = match t.parse(format_args!("the corner count of face {f} (0-based)"))? {
+            (3, at) => at,
+            (k @ 0..=2, at) => {
+                let message = format!("face {f} (0-based) has {k} corners; need 3");
+                return Err(at.parse(message));
+            }
             (k, at) => return Err(at.not_a_triangle(k)),
-        }
+        };
         let mut face = [0u32; 3];
         for corner in &mut face {
-            let (index, at): (i64, _) = t.parse(format_args!("a vertex index of face {f}"))?;
+            let (index, at): (i64, _) =
+                t.parse(format_args!("a vertex index of face {f} (0-based)"))?;
             let valid = usize::try_from(index).ok().filter(|&i| i < nv);
             let valid = valid.and_then(|i| u32::try_from(i).ok());
             *corner = valid.ok_or_else(|| at.out_of_range(index, nv))?;
         }
         t.skip_rest_of_line();
         faces.push(face);
+        map.faces.push(encode_line(start.line));
     }
-    Ok(SurfaceMesh {
+    let mesh = SurfaceMesh {
         positions,
         faces,
         texcoords: None,
-    })
+    };
+    Ok((mesh, map))
 }
 
 /// Writes a planar mesh as OBJ: optional `# comment` header lines, then `v x y 0` per vertex
@@ -968,6 +1081,39 @@ mod tests {
         assert_eq!(off(coff).unwrap().faces, vec![[2, 1, 0]]);
     }
 
+    /// The line map names each `v` and `f` line (OBJ) or the line each record starts on
+    /// (OFF), through a byte-order mark, CRLF, comments, other keywords and blank lines.
+    #[test]
+    fn line_maps_name_each_vertex_and_face_line() {
+        let text = "\u{feff}# header\r\nv 0 0\r\ng part\r\nv 1 0 # x\r\n\r\nf 1 2 3\r\nvt 0 0\r\n\
+                    v 0 1\r\nf 3 2 -1\r\n";
+        let (mesh, lines) = parse_obj_with_lines(text, Path::new("t.obj")).unwrap();
+        assert_eq!(mesh, obj(text).unwrap());
+        let vertices: Vec<_> = (0..4).map(|v| lines.vertex_line(v)).collect();
+        assert_eq!(vertices, [Some(2), Some(4), Some(8), None]);
+        let faces: Vec<_> = (0..3).map(|f| lines.face_line(f)).collect();
+        assert_eq!(faces, [Some(6), Some(9), None]);
+        // OFF: a record's first line, also when it continues on the next one.
+        let text = "OFF\n# counts\n3 2 0\n0 0 0\n1\n0 0\n\n0 1 0\n3 0 1 2\n3\n2 1 0\n";
+        let (mesh, lines) = parse_off_with_lines(text, Path::new("t.off")).unwrap();
+        assert_eq!(mesh, off(text).unwrap());
+        let vertices: Vec<_> = (0..3).map(|v| lines.vertex_line(v)).collect();
+        assert_eq!(vertices, [Some(4), Some(5), Some(8)]);
+        assert_eq!(
+            [lines.face_line(0), lines.face_line(1)],
+            [Some(9), Some(10)]
+        );
+        // Built by hand: 0 and lines beyond u32 are unknown.
+        let far = usize::try_from(1u64 << 32).unwrap_or(0);
+        let lines = LineMap::new(&[3, 0], &[far, 7]);
+        assert_eq!(
+            [lines.vertex_line(0), lines.vertex_line(1)],
+            [Some(3), None]
+        );
+        assert_eq!([lines.face_line(0), lines.face_line(1)], [None, Some(7)]);
+        assert_eq!(LineMap::default().face_line(0), None);
+    }
+
     #[test]
     fn off_errors_name_the_file_and_line() {
         let head = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n"; // so faces start at line 6
@@ -976,20 +1122,20 @@ mod tests {
             ("4 0 1 2 0\n", "t.off:6: face has 4 corners; only triangles are supported"),
             ("# c\n3 0 1\n3\n", "t.off:8: vertex 3 does not exist (3 vertices)"),
             ("3 0 -1 2\n", "t.off:6: vertex -1 does not exist (3 vertices)"),
-            ("2 0 1\n", "t.off:6: face 0 has 2 corners; need 3"),
-            ("3 0 1", "t.off:6: unexpected end of file: expected a vertex index of face 0"),
-            ("x 0 1 2", "t.off:6: expected the corner count of face 0, found 'x'"),
-            ("3 0 1 y", "t.off:6: expected a vertex index of face 0, found 'y'"),
-            ("3 0 1 -9223372036854775809", "t.off:6: a vertex index of face 0 is out of range: -9223372036854775809"),
+            ("2 0 1\n", "t.off:6: face 0 (0-based) has 2 corners; need 3"),
+            ("3 0 1", "t.off:6: unexpected end of file: expected a vertex index of face 0 (0-based)"),
+            ("x 0 1 2", "t.off:6: expected the corner count of face 0 (0-based), found 'x'"),
+            ("3 0 1 y", "t.off:6: expected a vertex index of face 0 (0-based), found 'y'"),
+            ("3 0 1 -9223372036854775809", "t.off:6: a vertex index of face 0 (0-based) is out of range: -9223372036854775809"),
         ];
         for (body, expected) in cases {
             assert_eq!(fails(off(&format!("{head}{body}"))), expected);
         }
         #[rustfmt::skip]
         let cases = [
-            ("OFF\n3 1 0\n0 0 0\n1 x 0\n", "t.off:4: expected a coordinate of vertex 1, found 'x'"),
-            ("OFF\n3 1 0\n0 0 0\n1 0 0", "t.off:4: unexpected end of file: expected a coordinate of vertex 2"),
-            ("OFF\n3 1 0\n0 0 0\n1 inf 0\n", "t.off:4: a coordinate of vertex 1 is not finite"),
+            ("OFF\n3 1 0\n0 0 0\n1 x 0\n", "t.off:4: expected a coordinate of vertex 1 (0-based), found 'x'"),
+            ("OFF\n3 1 0\n0 0 0\n1 0 0", "t.off:4: unexpected end of file: expected a coordinate of vertex 2 (0-based)"),
+            ("OFF\n3 1 0\n0 0 0\n1 inf 0\n", "t.off:4: a coordinate of vertex 1 (0-based) is not finite"),
             ("PLY\n3 1 0\n", "t.off:1: expected 'OFF' or the vertex count, found 'PLY'"),
             ("\n\nOFF\nthree 1 0\n", "t.off:4: expected the vertex count, found 'three'"),
             ("OFF 3", "t.off:1: unexpected end of file: expected the face count"),

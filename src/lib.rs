@@ -44,6 +44,7 @@ pub mod geodesic;
 pub mod info;
 pub mod io;
 mod keyframes;
+pub mod located;
 pub mod mesh;
 pub mod morph;
 pub mod param;
@@ -62,6 +63,7 @@ pub use bdmorph_vm::{
 };
 pub use blend::Blend;
 pub use io::SurfaceMesh;
+pub use located::{Located, MeshFile};
 pub use mesh::{MeshError, PlanarMesh};
 pub use morph::{Frame, FrameAt, FrameStats, Morph, MorphError, MorphOptions};
 pub use path::{Easing, Path, PathOptions};

@@ -15,6 +15,10 @@ pub struct PlanarMesh {
 }
 
 /// Why a mesh (or a pair of meshes) is not valid input.
+///
+/// Faces and vertices are named by their 0-based index in the mesh's arrays (the messages say
+/// so): face 274 is the 275th `f` line of an OBJ file. For a mesh read from a file,
+/// [`crate::located::MeshFile::locate`] adds the file and the line.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MeshError {
@@ -22,7 +26,7 @@ pub enum MeshError {
     #[error(transparent)]
     Read(#[from] ReadError),
     /// A 3D mesh where a planar one is needed.
-    #[error("{path}: vertex {vertex} has z = {}; a planar mesh (z = 0) is required", Short(*.z))]
+    #[error("{path}: {}", NotPlanarText(*.vertex, *.z))]
     NotPlanar {
         /// The file.
         path: String,
@@ -32,13 +36,15 @@ pub enum MeshError {
         z: f64,
     },
     /// A coordinate is NaN or infinite.
-    #[error("vertex {vertex} has a non-finite coordinate")]
+    #[error("vertex {vertex} (0-based) has a non-finite coordinate")]
     NonFinite {
         /// The vertex.
         vertex: usize,
     },
     /// A face names a vertex that does not exist.
-    #[error("face {face} refers to vertex {vertex}, but the mesh has {n_vertices} vertices")]
+    #[error(
+        "face {face} refers to vertex {vertex} (0-based), but the mesh has {n_vertices} vertices"
+    )]
     IndexOutOfRange {
         /// The face.
         face: usize,
@@ -48,20 +54,36 @@ pub enum MeshError {
         n_vertices: usize,
     },
     /// A triangle has (numerically) zero area.
-    #[error("face {face} is degenerate (area {area:e})")]
+    #[error("face {face} (0-based) is degenerate (area {area:e})")]
     Degenerate {
         /// The face.
         face: usize,
         /// Its signed area.
         area: f64,
     },
-    /// A triangle is clockwise.
-    #[error("face {face} is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
+    /// A triangle is clockwise, and no more triangles are clockwise than counter-clockwise
+    /// (otherwise the mesh is [`MeshError::Mirrored`]).
+    #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
     Clockwise {
         /// The face.
         face: usize,
         /// Its signed area.
         area: f64,
+    },
+    /// Every triangle is clockwise, or more are clockwise than counter-clockwise: the mesh is
+    /// mirrored, as when it was exported with y pointing down. Reversing each triangle's
+    /// corner order (`a b c` to `a c b`) or negating one coordinate (y to -y) fixes it; the
+    /// counter-clockwise triangles of a mostly clockwise mesh would then be the clockwise ones.
+    #[error("{}", MirroredText { clockwise: *.clockwise, faces: *.faces, counter_clockwise: *.counter_clockwise, first_counter_clockwise: *.first_counter_clockwise })]
+    Mirrored {
+        /// Clockwise triangles.
+        clockwise: usize,
+        /// Triangles in all (the others are counter-clockwise or degenerate).
+        faces: usize,
+        /// Counter-clockwise triangles.
+        counter_clockwise: usize,
+        /// The first counter-clockwise triangle (0-based), when there is one.
+        first_counter_clockwise: Option<usize>,
     },
     /// Source and target differ in size.
     #[error("source and target differ: {what} {source_count} vs {target_count}")]
@@ -74,7 +96,7 @@ pub enum MeshError {
         target_count: usize,
     },
     /// Source and target have different triangles.
-    #[error("source and target differ at face {face}: {source_face:?} vs {target_face:?}; both meshes need the same triangles")]
+    #[error("source and target differ at face {face}: vertices {source_face:?} vs {target_face:?} (0-based); both meshes need the same triangles")]
     FaceMismatch {
         /// The face.
         face: usize,
@@ -87,6 +109,63 @@ pub enum MeshError {
     /// disk).
     #[error(transparent)]
     Topology(#[from] bdmorph_compiler::CompileError),
+}
+
+/// The message of [`MeshError::NotPlanar`] after the file's name.
+pub(crate) struct NotPlanarText(pub(crate) usize, pub(crate) f64);
+
+impl std::fmt::Display for NotPlanarText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (vertex, z) = (self.0, Short(self.1));
+        write!(
+            f,
+            "vertex {vertex} (0-based) has z = {z}; a planar mesh (z = 0) is required"
+        )
+    }
+}
+
+/// The message of [`MeshError::Mirrored`].
+struct MirroredText {
+    clockwise: usize,
+    faces: usize,
+    counter_clockwise: usize,
+    first_counter_clockwise: Option<usize>,
+}
+
+impl std::fmt::Display for MirroredText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let fix = "reverse each triangle's corner order (a b c -> a c b) or negate one \
+                   coordinate (y -> -y)";
+        let (cw, n) = (self.clockwise, self.faces);
+        if cw == n {
+            let all = match n {
+                1 => "the only triangle is".to_owned(),
+                n => format!("all {n} triangles are"),
+            };
+            return write!(
+                f,
+                "{all} clockwise: the mesh is mirrored, as when exported with y pointing down; \
+                 {fix}"
+            );
+        }
+        write!(
+            f,
+            "{cw} of {n} triangles are clockwise: the mesh looks mirrored, as when exported \
+             with y pointing down; {fix}"
+        )?;
+        match (self.counter_clockwise, self.first_counter_clockwise) {
+            (0, _) | (_, None) => Ok(()),
+            (1, Some(first)) => write!(
+                f,
+                ", after which face {first} (0-based), counter-clockwise now, would be clockwise"
+            ),
+            (ccw, Some(first)) => write!(
+                f,
+                ", after which the {ccw} counter-clockwise ones, from face {first} (0-based), \
+                 would be clockwise"
+            ),
+        }
+    }
 }
 
 /// A number for a message: `{}` unless that would be long (`1e300` rather than 301 digits).
@@ -177,6 +256,11 @@ impl PlanarMesh {
     /// Checks the geometry: finite coordinates, indices in range, every triangle
     /// counter-clockwise with an area above `1e-14` times the squared diameter. (Topology is
     /// checked by the compiler.)
+    ///
+    /// A mesh with more clockwise triangles than counter-clockwise ones (all of them, say) is
+    /// refused as a whole, [`MeshError::Mirrored`]: it was most likely mirrored (exported with
+    /// y pointing down), and one fix mends it. Otherwise the first degenerate or clockwise
+    /// triangle is named.
     pub fn validate(&self) -> Result<(), MeshError> {
         if let Some(vertex) = self
             .positions
@@ -196,16 +280,30 @@ impl PlanarMesh {
             }
         }
         let eps = 1e-14 * self.diameter().powi(2);
+        let (mut clockwise, mut counter_clockwise) = (0, 0);
+        let mut first_counter_clockwise = None;
+        let mut first_error = None;
         for (face, f) in self.faces.iter().enumerate() {
             let area = self.signed_area(f);
             if area.abs() <= eps {
-                return Err(MeshError::Degenerate { face, area });
-            }
-            if area < 0.0 {
-                return Err(MeshError::Clockwise { face, area });
+                first_error.get_or_insert(MeshError::Degenerate { face, area });
+            } else if area < 0.0 {
+                clockwise += 1;
+                first_error.get_or_insert(MeshError::Clockwise { face, area });
+            } else {
+                counter_clockwise += 1;
+                first_counter_clockwise.get_or_insert(face);
             }
         }
-        Ok(())
+        if clockwise > counter_clockwise {
+            return Err(MeshError::Mirrored {
+                clockwise,
+                faces: self.faces.len(),
+                counter_clockwise,
+                first_counter_clockwise,
+            });
+        }
+        first_error.map_or(Ok(()), Err)
     }
 
     /// Checks that `target` can be morphed with `self`: same counts, same triangles, both
@@ -250,6 +348,83 @@ pub fn unique_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Four triangles around a centre, counter-clockwise.
+    fn square() -> PlanarMesh {
+        PlanarMesh {
+            positions: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5]],
+            faces: vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
+        }
+    }
+
+    #[test]
+    fn a_mesh_mostly_or_all_clockwise_is_mirrored() {
+        let mut mesh = square();
+        assert!(mesh.validate().is_ok());
+        // One clockwise triangle of four: that triangle is named.
+        mesh.faces[2].swap(0, 1);
+        let err = mesh.validate().unwrap_err();
+        assert!(matches!(err, MeshError::Clockwise { face: 2, .. }), "{err}");
+        // Two of four: no majority, still the first one.
+        mesh.faces[0].swap(0, 1);
+        assert!(matches!(
+            mesh.validate(),
+            Err(MeshError::Clockwise { face: 0, .. })
+        ));
+        // Three of four: mirrored, and the counter-clockwise one would be wrong after the fix.
+        mesh.faces[1].swap(0, 1);
+        let err = mesh.validate().unwrap_err();
+        assert!(matches!(
+            err,
+            MeshError::Mirrored {
+                clockwise: 3,
+                faces: 4,
+                counter_clockwise: 1,
+                first_counter_clockwise: Some(3)
+            }
+        ));
+        assert_eq!(
+            err.to_string(),
+            "3 of 4 triangles are clockwise: the mesh looks mirrored, as when exported with y \
+             pointing down; reverse each triangle's corner order (a b c -> a c b) or negate one \
+             coordinate (y -> -y), after which face 3 (0-based), counter-clockwise now, would be \
+             clockwise"
+        );
+        // All of them, as with y pointing down.
+        let mut flipped = square();
+        flipped.positions.iter_mut().for_each(|p| p[1] = -p[1]);
+        let err = flipped.validate().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "all 4 triangles are clockwise: the mesh is mirrored, as when exported with y \
+             pointing down; reverse each triangle's corner order (a b c -> a c b) or negate one \
+             coordinate (y -> -y)"
+        );
+        // Either fix gives a valid mesh.
+        let mut reversed = flipped.clone();
+        reversed.faces.iter_mut().for_each(|f| f.swap(1, 2));
+        assert!(reversed.validate().is_ok());
+        // A degenerate triangle does not count either way; one triangle alone.
+        flipped.positions[4] = [0.5, 0.0];
+        assert!(matches!(
+            flipped.validate(),
+            Err(MeshError::Mirrored {
+                clockwise: 3,
+                faces: 4,
+                counter_clockwise: 0,
+                first_counter_clockwise: None
+            })
+        ));
+        assert!(flipped.validate().unwrap_err().to_string().starts_with(
+            "3 of 4 triangles are clockwise: the mesh looks mirrored, as when exported"
+        ));
+        let one = PlanarMesh {
+            positions: vec![[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]],
+            faces: vec![[0, 1, 2]],
+        };
+        let err = one.validate().unwrap_err().to_string();
+        assert!(err.starts_with("the only triangle is clockwise: "), "{err}");
+    }
 
     #[test]
     fn numbers_in_messages_stay_short() {

@@ -217,7 +217,7 @@ pub enum MorphError {
     },
     /// Extrapolated too far: the blended squared edge lengths of a triangle are no longer
     /// those of a Euclidean triangle.
-    #[error("{at}: the extrapolated edge lengths of triangle {face} (vertices {} {} {}) break the triangle inequality from {limit} on", vertices[0], vertices[1], vertices[2])]
+    #[error("{at}: the extrapolated edge lengths of triangle {face} (0-based; vertices {} {} {}) break the triangle inequality from {limit} on", vertices[0], vertices[1], vertices[2])]
     MetricBreaks {
         /// The frame asked for.
         at: FrameAt,
@@ -230,13 +230,13 @@ pub enum MorphError {
         limit: FrameAt,
     },
     /// A program that does not hold one of the mesh's triangles.
-    #[error("the program was not compiled for these triangles: its edges do not contain triangle {} {} {}", face[0], face[1], face[2])]
+    #[error("the program was not compiled for these triangles: its edges do not contain the triangle of vertices {} {} {} (0-based)", face[0], face[1], face[2])]
     ProgramMismatch {
         /// The triangle.
         face: [u32; 3],
     },
     /// A keyframe after the first is not valid, or has other triangles than the first.
-    #[error("keyframe {index}: {source}")]
+    #[error("keyframe {index} (0-based): {source}")]
     Keyframe {
         /// The keyframe's index.
         index: usize,
@@ -262,7 +262,7 @@ pub enum MorphError {
         got: usize,
     },
     /// A segment duration that is not a positive number.
-    #[error("segment {segment}: duration {duration} is not a positive number")]
+    #[error("segment {segment} (0-based): duration {duration} is not a positive number")]
     BadDuration {
         /// The segment.
         segment: usize,
@@ -302,6 +302,9 @@ pub enum MorphError {
     },
 }
 
+/// How many of a failed frame's worst triangles its message shows.
+pub(crate) const WORST_SHOWN: usize = 3;
+
 /// Formats the worst triangles of a failed frame for an error message.
 struct Worst<'a>(&'a [TriangleReport]);
 
@@ -310,8 +313,8 @@ impl std::fmt::Display for Worst<'_> {
         if self.0.is_empty() {
             return Ok(());
         }
-        write!(f, "; worst triangles:")?;
-        for (i, tri) in self.0.iter().take(3).enumerate() {
+        write!(f, "; worst triangles (0-based vertices):")?;
+        for (i, tri) in self.0.iter().take(WORST_SHOWN).enumerate() {
             let sep = if i == 0 { " " } else { ", " };
             write!(f, "{sep}{tri}")?;
         }

@@ -1,13 +1,15 @@
 //! Bad input: each kind gets its own clear error, through the library and through the command
 //! line (`bdmorph morph SOURCE TARGET --t 0.5 -o OUT.obj`: a non-zero exit, one line on stderr
-//! naming the cause and the file, and OUT not written). Unusual but valid input is accepted.
+//! naming the cause, the file and, for an error about a face or a vertex, its line; and OUT
+//! not written). Unusual but valid input is accepted.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use bdmorph::io::ReadError;
 use bdmorph::VertexId as V;
-use bdmorph::{CompileError, FaceId, MeshError, Morph, MorphError, MorphOptions, PlanarMesh};
+use bdmorph::{CompileError, FaceId, Located, MeshError, MeshFile, Morph, MorphError};
+use bdmorph::{MorphOptions, PlanarMesh};
 
 /// A square split into four triangles around a centre (one interior vertex).
 const SQUARE: &str = "v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.5 0.5\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n";
@@ -32,47 +34,50 @@ fn entries(dir: &Path) -> Vec<String> {
     names
 }
 
-/// Where the library refused the pair, as the command line goes: reading, checking one mesh,
-/// or setting up the morph (pair checks and compilation).
+/// Where the library refused the pair, as the command line goes: reading a file, checking one
+/// mesh (errors located in its file), or setting up the morph (pair checks and compilation).
 #[derive(Debug)]
 enum Failure {
-    Read(MeshError),
-    Validate(PathBuf, MeshError),
-    Morph(MorphError),
+    Read(ReadError),
+    Check(Located<MeshError>),
+    Morph(MorphError, Box<[MeshFile; 2]>),
 }
 
 impl Failure {
-    /// The library's message.
+    /// The library's own message (without the file's line).
     fn message(&self) -> String {
         match self {
-            Failure::Read(e) | Failure::Validate(_, e) => e.to_string(),
-            Failure::Morph(e) => e.to_string(),
+            Failure::Read(e) => e.to_string(),
+            Failure::Check(e) => e.error.to_string(),
+            Failure::Morph(e, _) => e.to_string(),
         }
     }
 
-    /// The line the command line prints for it.
-    fn cli_line(&self, source: &Path, target: &Path) -> String {
-        let message = self.message();
-        let shown = match self {
-            Failure::Read(_) => message,
-            Failure::Validate(path, _) => format!("{}: {message}", path.display()),
-            Failure::Morph(_) => format!("{} -> {}: {message}", source.display(), target.display()),
-        };
-        format!("bdmorph: error: {shown}\n")
+    /// The typed line of the error: a read error's, or that of the face or vertex at fault in
+    /// the file the command line names (the target when the pair's faces differ).
+    fn line(self) -> Option<usize> {
+        match self {
+            Failure::Read(e) => e.line(),
+            Failure::Check(e) => e.line,
+            Failure::Morph(e, files) => match (e, *files) {
+                (MorphError::Mesh(e @ MeshError::FaceMismatch { .. }), [_, target]) => {
+                    target.locate(e).line
+                }
+                (e, [source, _]) => source.locate(e).line,
+            },
+        }
     }
 }
 
 /// The library, step by step as the command line takes it; a frame when all is well.
 fn library(source: &Path, target: &Path) -> Result<(), Failure> {
-    let s = PlanarMesh::read(source).map_err(Failure::Read)?;
-    s.validate()
-        .map_err(|e| Failure::Validate(source.into(), e))?;
-    let t = PlanarMesh::read(target).map_err(Failure::Read)?;
-    t.validate()
-        .map_err(|e| Failure::Validate(target.into(), e))?;
-    let mut morph = Morph::new(&s, &t, MorphOptions::default()).map_err(Failure::Morph)?;
-    morph.frame(0.5).map_err(Failure::Morph)?;
-    Ok(())
+    let s = MeshFile::read(source).map_err(Failure::Read)?;
+    let sm = s.planar().map_err(Failure::Check)?;
+    let t = MeshFile::read(target).map_err(Failure::Read)?;
+    let tm = t.planar().map_err(Failure::Check)?;
+    let morph = Morph::new(&sm, &tm, MorphOptions::default());
+    let frame = morph.and_then(|mut morph| morph.frame(0.5).map(|_| ()));
+    frame.map_err(|e| Failure::Morph(e, Box::new([s, t])))
 }
 
 fn cli(source: &Path, target: &Path, out: &Path) -> std::process::Output {
@@ -97,20 +102,31 @@ struct Case {
     message: &'static str,
     /// The error's type.
     is: fn(&Failure) -> bool,
+    /// The 1-based line the error carries, when it names one.
+    line: Option<usize>,
+    /// The command line's error, after `bdmorph: error: `, with `{source}` and `{target}`.
+    cli: &'static str,
     /// What `compile` says of the source's connectivity, when it is the compiler that refuses.
     compile: Option<CompileError>,
 }
 
 fn read_error(f: &Failure, is: fn(&ReadError) -> bool) -> bool {
-    matches!(f, Failure::Read(MeshError::Read(e)) if is(e))
+    matches!(f, Failure::Read(e) if is(e))
 }
 
 fn mesh_error(f: &Failure, is: fn(&MeshError) -> bool) -> bool {
-    matches!(f, Failure::Validate(_, e) | Failure::Morph(MorphError::Mesh(e)) if is(e))
+    match f {
+        Failure::Check(e) => is(&e.error),
+        Failure::Morph(MorphError::Mesh(e), _) => is(e),
+        _ => false,
+    }
 }
 
 fn topology(f: &Failure) -> bool {
-    matches!(f, Failure::Morph(MorphError::Mesh(MeshError::Topology(_))))
+    matches!(
+        f,
+        Failure::Morph(MorphError::Mesh(MeshError::Topology(_)), _)
+    )
 }
 
 fn cases() -> Vec<Case> {
@@ -121,6 +137,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}: the file is empty",
             is: |f| read_error(f, |e| matches!(e, ReadError::Empty { .. })),
+            line: None,
+            cli: "{source}: the file is empty",
             compile: None,
         },
         Case {
@@ -129,6 +147,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:3: binary data (byte 0x00), not a text mesh file",
             is: |f| read_error(f, |e| matches!(e, ReadError::Binary { line: 3, byte: 0, .. })),
+            line: Some(3),
+            cli: "{source}:3: binary data (byte 0x00), not a text mesh file",
             compile: None,
         },
         Case {
@@ -137,6 +157,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:2: binary data (byte 0x7f), not a text mesh file",
             is: |f| read_error(f, |e| matches!(e, ReadError::Binary { line: 2, .. })),
+            line: Some(2),
+            cli: "{source}:2: binary data (byte 0x7f), not a text mesh file",
             compile: None,
         },
         Case {
@@ -145,6 +167,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:4: vertex 4 does not exist (3 vertices)",
             is: |f| read_error(f, |e| matches!(e, ReadError::IndexOutOfRange { index: 4, .. })),
+            line: Some(4),
+            cli: "{source}:4: vertex 4 does not exist (3 vertices)",
             compile: None,
         },
         Case {
@@ -153,6 +177,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:3: vertex -3 does not exist (2 vertices)",
             is: |f| read_error(f, |e| matches!(e, ReadError::IndexOutOfRange { index: -3, .. })),
+            line: Some(3),
+            cli: "{source}:3: vertex -3 does not exist (2 vertices)",
             compile: None,
         },
         Case {
@@ -161,6 +187,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:4: vertex 4294967297 does not exist (3 vertices)",
             is: |f| read_error(f, |e| matches!(e, ReadError::IndexOutOfRange { .. })),
+            line: Some(4),
+            cli: "{source}:4: vertex 4294967297 does not exist (3 vertices)",
             compile: None,
         },
         Case {
@@ -169,14 +197,20 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:4: vertex index 99999999999999999999 is out of range",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 4, .. })),
+            line: Some(4),
+            cli: "{source}:4: vertex index 99999999999999999999 is out of range",
             compile: None,
         },
         Case {
             name: "OFF index overflowing 64 bits",
             source: ("overflow.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 18446744073709551616\n"),
             target: None,
-            message: "{source}:6: a vertex index of face 0 is out of range: 18446744073709551616",
+            message: "{source}:6: a vertex index of face 0 (0-based) is out of range: \
+                      18446744073709551616",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 6, .. })),
+            line: Some(6),
+            cli: "{source}:6: a vertex index of face 0 (0-based) is out of range: \
+                  18446744073709551616",
             compile: None,
         },
         Case {
@@ -185,6 +219,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:2: coordinate 'NaN' after 'v' is not finite",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 2, .. })),
+            line: Some(2),
+            cli: "{source}:2: coordinate 'NaN' after 'v' is not finite",
             compile: None,
         },
         Case {
@@ -193,14 +229,18 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:3: coordinate '1e999' after 'v' is not finite",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 3, .. })),
+            line: Some(3),
+            cli: "{source}:3: coordinate '1e999' after 'v' is not finite",
             compile: None,
         },
         Case {
             name: "infinite coordinate in an OFF file",
             source: ("inf.off", b"OFF\n3 1 0\n0 0 0\n1 -inf 0\n0 1 0\n3 0 1 2\n"),
             target: None,
-            message: "{source}:4: a coordinate of vertex 1 is not finite",
+            message: "{source}:4: a coordinate of vertex 1 (0-based) is not finite",
             is: |f| read_error(f, |e| matches!(e, ReadError::Parse { line: 4, .. })),
+            line: Some(4),
+            cli: "{source}:4: a coordinate of vertex 1 (0-based) is not finite",
             compile: None,
         },
         Case {
@@ -209,6 +249,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}: the mesh has 3 vertices but no faces",
             is: |f| read_error(f, |e| matches!(e, ReadError::NoFaces { vertices: 3, .. })),
+            line: None,
+            cli: "{source}: the mesh has 3 vertices but no faces",
             compile: None,
         },
         Case {
@@ -217,6 +259,8 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}: the mesh has 3 vertices but no faces",
             is: |f| read_error(f, |e| matches!(e, ReadError::NoFaces { vertices: 3, .. })),
+            line: None,
+            cli: "{source}: the mesh has 3 vertices but no faces",
             compile: None,
         },
         Case {
@@ -225,22 +269,42 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "{source}:5: face has 4 corners; only triangles are supported",
             is: |f| read_error(f, |e| matches!(e, ReadError::NotATriangle { corners: 4, .. })),
+            line: Some(5),
+            cli: "{source}:5: face has 4 corners; only triangles are supported",
             compile: None,
         },
         Case {
             name: "not planar",
             source: ("bent.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0.5\nf 1 2 3\n"),
             target: None,
-            message: "{source}: vertex 2 has z = 0.5; a planar mesh (z = 0) is required",
-            is: |f| matches!(f, Failure::Read(MeshError::NotPlanar { vertex: 2, .. })),
+            message: "{source}: vertex 2 (0-based) has z = 0.5; a planar mesh (z = 0) is required",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::NotPlanar { vertex: 2, .. })),
+            line: Some(3),
+            cli: "{source}:3: vertex 2 (0-based) has z = 0.5; a planar mesh (z = 0) is required",
+            compile: None,
+        },
+        Case {
+            name: "not planar in an OFF file, a vertex over two lines",
+            source: (
+                "bent.off",
+                b"OFF\n4 2 0\n0 0 0\n1 0 0\n# the third\n1 1\n  0.25\n0 1 0\n3 0 1 2\n3 0 2 3\n",
+            ),
+            target: None,
+            message: "{source}: vertex 2 (0-based) has z = 0.25; a planar mesh (z = 0) is \
+                      required",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::NotPlanar { vertex: 2, .. })),
+            line: Some(6),
+            cli: "{source}:6: vertex 2 (0-based) has z = 0.25; a planar mesh (z = 0) is required",
             compile: None,
         },
         Case {
             name: "zero-area triangle",
             source: ("flat.obj", b"v 0 0\nv 1 0\nv 2 0\nf 1 2 3\n"),
             target: None,
-            message: "face 0 is degenerate (area 0e0)",
+            message: "face 0 (0-based) is degenerate (area 0e0)",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::Degenerate { face: 0, .. })),
+            line: Some(4),
+            cli: "{source}:4: face 0 (0-based) is degenerate (area 0e0)",
             compile: None,
         },
         Case {
@@ -250,18 +314,87 @@ fn cases() -> Vec<Case> {
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.5 0.5\nf 1 2 5\nf 2 3 5\nf 3 5 4\nf 4 1 5\n",
             ),
             target: None,
-            message: "face 2 is clockwise (signed area -2.5e-1); triangles must be \
+            message: "face 2 (0-based) is clockwise (signed area -2.5e-1); triangles must be \
                       counter-clockwise, consistently",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::Clockwise { face: 2, .. })),
+            line: Some(8),
+            cli: "{source}:8: face 2 (0-based) is clockwise (signed area -2.5e-1); triangles \
+                  must be counter-clockwise, consistently",
+            compile: None,
+        },
+        Case {
+            name: "a clockwise face in an OFF file, its record over two lines",
+            source: (
+                "clockwise.off",
+                b"OFF\n5 4 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0\n3 0 1 4\n3 1 2 4\n\
+                  # the last two\n3 2 3 4\n3\n  3 4 0\n",
+            ),
+            target: None,
+            message: "face 3 (0-based) is clockwise (signed area -2.5e-1); triangles must be \
+                      counter-clockwise, consistently",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::Clockwise { face: 3, .. })),
+            line: Some(12),
+            cli: "{source}:12: face 3 (0-based) is clockwise (signed area -2.5e-1); triangles \
+                  must be counter-clockwise, consistently",
+            compile: None,
+        },
+        Case {
+            name: "every triangle clockwise: mirrored",
+            source: (
+                "mirrored.obj",
+                b"v 0 0\nv 1 0\nv 1 -1\nv 0 -1\nv 0.5 -0.5\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
+            ),
+            target: None,
+            message: "all 4 triangles are clockwise: the mesh is mirrored, as when exported with \
+                      y pointing down; reverse each triangle's corner order (a b c -> a c b) or \
+                      negate one coordinate (y -> -y)",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::Mirrored { clockwise: 4, .. })),
+            line: None,
+            cli: "{source}: all 4 triangles are clockwise: the mesh is mirrored, as when \
+                  exported with y pointing down; reverse each triangle's corner order \
+                  (a b c -> a c b) or negate one coordinate (y -> -y)",
+            compile: None,
+        },
+        Case {
+            name: "most triangles clockwise: mirrored, one would be left",
+            source: (
+                "mostly.obj",
+                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.5 0.5\nf 1 5 2\nf 2 5 3\nf 3 4 5\nf 4 5 1\n",
+            ),
+            target: None,
+            message: "3 of 4 triangles are clockwise: the mesh looks mirrored, as when exported \
+                      with y pointing down; reverse each triangle's corner order (a b c -> a c b) \
+                      or negate one coordinate (y -> -y), after which face 2 (0-based), \
+                      counter-clockwise now, would be clockwise",
+            is: |f| {
+                mesh_error(f, |e| {
+                    matches!(
+                        e,
+                        MeshError::Mirrored {
+                            clockwise: 3,
+                            first_counter_clockwise: Some(2),
+                            ..
+                        }
+                    )
+                })
+            },
+            line: Some(8),
+            cli: "{source}:8: 3 of 4 triangles are clockwise: the mesh looks mirrored, as when \
+                  exported with y pointing down; reverse each triangle's corner order \
+                  (a b c -> a c b) or negate one coordinate (y -> -y), after which face 2 \
+                  (0-based), counter-clockwise now, would be clockwise",
             compile: None,
         },
         Case {
             name: "inconsistent orientation: two faces along one directed edge",
             source: ("overlap.obj", b"v 0 0\nv 1 0\nv 0.5 1\nv 0.3 0.5\nf 1 2 3\nf 1 2 4\n"),
             target: Some(("overlap2.obj", b"v 0 0\nv 1 0\nv 0.5 1\nv 0.4 0.5\nf 1 2 3\nf 1 2 4\n")),
-            message: "face 0 and face 1 both run from vertex 0 to vertex 1: inconsistent \
-                      orientation",
+            message: "face 0 and face 1 both run from vertex 0 to vertex 1 (0-based): \
+                      inconsistent orientation",
             is: topology,
+            line: Some(6),
+            cli: "{source}:6: face 0 and face 1 both run from vertex 0 to vertex 1 (0-based): \
+                  inconsistent orientation; face 1 is line 6, face 0 is line 5",
             compile: Some(CompileError::InconsistentOrientation {
                 a: V(0),
                 b: V(1),
@@ -278,8 +411,12 @@ fn cases() -> Vec<Case> {
                 "fin2.obj",
                 b"v 0 0\nv 1 0\nv 0.5 1\nv 0.5 -1\nv 0.4 2\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
             )),
-            message: "edge (vertex 0, vertex 1) is shared by 3 faces (non-manifold)",
+            message: "the edge between vertex 0 and vertex 1 (0-based) is shared by 3 faces \
+                      (non-manifold)",
             is: topology,
+            line: Some(6),
+            cli: "{source}:6: the edge between vertex 0 and vertex 1 (0-based) is shared by 3 \
+                  faces (non-manifold); face 0 is line 6, face 1 is line 7, face 2 is line 8",
             compile: Some(CompileError::NonManifoldEdge {
                 a: V(0),
                 b: V(1),
@@ -296,8 +433,10 @@ fn cases() -> Vec<Case> {
                 "lonely2.obj",
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nv 3 3\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
             )),
-            message: "vertex 5 belongs to no face",
+            message: "vertex 5 (0-based) belongs to no face",
             is: topology,
+            line: Some(6),
+            cli: "{source}:6: vertex 5 (0-based) belongs to no face",
             compile: Some(CompileError::UnreferencedVertex { vertex: V(5) }),
         },
         Case {
@@ -310,18 +449,45 @@ fn cases() -> Vec<Case> {
                 "twice2.obj",
                 b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\nf 2 5 1\n",
             )),
-            message: "face 0 and face 4 are the same triangle (duplicate face)",
+            message: "face 0 and face 4 (0-based) are the same triangle (duplicate face)",
             is: topology,
+            line: Some(10),
+            cli: "{source}:10: face 0 and face 4 (0-based) are the same triangle (duplicate \
+                  face); face 4 is line 10, face 0 is line 6",
             compile: Some(CompileError::DuplicateFace {
                 faces: [FaceId(0), FaceId(4)],
+            }),
+        },
+        Case {
+            name: "duplicate face in an OFF file",
+            source: (
+                "twice.off",
+                b"OFF\n5 5\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0\n3 0 1 4\n3 1 2 4\n\n3 2 3 4\n\
+                  3 3 0 4\n# again\n3 4 1 2\n",
+            ),
+            target: Some((
+                "twice2.off",
+                b"OFF\n5 5\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.6 0.4 0\n3 0 1 4\n3 1 2 4\n3 2 3 4\n\
+                  3 3 0 4\n3 4 1 2\n",
+            )),
+            message: "face 1 and face 4 (0-based) are the same triangle (duplicate face)",
+            is: topology,
+            line: Some(14),
+            cli: "{source}:14: face 1 and face 4 (0-based) are the same triangle (duplicate \
+                  face); face 4 is line 14, face 1 is line 9",
+            compile: Some(CompileError::DuplicateFace {
+                faces: [FaceId(1), FaceId(4)],
             }),
         },
         Case {
             name: "several components",
             source: ("two.obj", b"v 0 0\nv 1 0\nv 0 1\nv 3 0\nv 4 0\nv 3 1\nf 1 2 3\nf 4 5 6\n"),
             target: Some(("two2.obj", b"v 0 0\nv 1 0\nv 0 1\nv 3 0\nv 5 0\nv 3 1\nf 1 2 3\nf 4 5 6\n")),
-            message: "the mesh is not connected: face 1 cannot be reached from face 0",
+            message: "the mesh is not connected: face 1 (0-based) cannot be reached from face 0",
             is: topology,
+            line: Some(8),
+            cli: "{source}:8: the mesh is not connected: face 1 (0-based) cannot be reached \
+                  from face 0; face 1 is line 8, face 0 is line 7",
             compile: Some(CompileError::Disconnected { face: FaceId(1) }),
         },
         Case {
@@ -337,6 +503,8 @@ fn cases() -> Vec<Case> {
                     matches!(e, MeshError::CountMismatch { what: "vertex count", .. })
                 })
             },
+            line: None,
+            cli: "{source} -> {target}: source and target differ: vertex count 5 vs 6",
             compile: None,
         },
         Case {
@@ -349,6 +517,8 @@ fn cases() -> Vec<Case> {
                     matches!(e, MeshError::CountMismatch { what: "face count", .. })
                 })
             },
+            line: None,
+            cli: "{source} -> {target}: source and target differ: face count 4 vs 3",
             compile: None,
         },
         Case {
@@ -356,11 +526,15 @@ fn cases() -> Vec<Case> {
             source: ("square.obj", SQUARE.as_bytes()),
             target: Some((
                 "other.obj",
-                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nf 1 2 5\nf 2 3 5\nf 4 1 5\nf 3 4 5\n",
+                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\n# reordered\nf 1 2 5\nf 2 3 5\nf 4 1 5\nf 3 4 5\n",
             )),
-            message: "source and target differ at face 2: [2, 3, 4] vs [3, 0, 4]; both meshes \
-                      need the same triangles",
+            message: "source and target differ at face 2: vertices [2, 3, 4] vs [3, 0, 4] \
+                      (0-based); both meshes need the same triangles",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::FaceMismatch { face: 2, .. })),
+            line: Some(9),
+            cli: "{target}:9: source and target differ at face 2: vertices [2, 3, 4] vs \
+                  [3, 0, 4] (0-based); both meshes need the same triangles (compared with \
+                  {source}:8)",
             compile: None,
         },
     ]
@@ -370,7 +544,7 @@ fn cases() -> Vec<Case> {
 fn each_bad_input_has_its_own_error_and_nothing_is_written() {
     let dir = scratch("cases");
     let mut messages = Vec::new();
-    for (i, case) in cases().iter().enumerate() {
+    for (i, case) in cases().into_iter().enumerate() {
         let case_dir = dir.join(i.to_string());
         std::fs::create_dir(&case_dir).expect("case dir");
         let source = case_dir.join(case.source.0);
@@ -378,32 +552,44 @@ fn each_bad_input_has_its_own_error_and_nothing_is_written() {
         let (name, bytes) = case.target.unwrap_or(("target.obj", MOVED.as_bytes()));
         let target = case_dir.join(name);
         std::fs::write(&target, bytes).expect("write");
-        let expected = case
-            .message
-            .replace("{source}", &source.display().to_string())
-            .replace("{target}", &target.display().to_string());
+        let paths = |text: &str| {
+            text.replace("{source}", &source.display().to_string())
+                .replace("{target}", &target.display().to_string())
+        };
         let name = case.name;
 
-        // The library.
+        // The library: its own message and type, and the line of the face or vertex.
         let failure = library(&source, &target).expect_err(name);
         assert!((case.is)(&failure), "{name}: {failure:?}");
+        let expected = paths(case.message);
         assert_eq!(failure.message(), expected, "{name}");
+        assert_eq!(failure.line(), case.line, "{name}");
         if let Some(expected) = &case.compile {
             let mesh = PlanarMesh::read(&source).expect(name);
             let err = bdmorph::compile(&mesh.positions, &mesh.faces).expect_err(name);
             assert_eq!(&err, expected, "{name}");
         }
-        messages.push(expected.clone());
+        messages.push(expected);
 
-        // The command line.
+        // The command line: the exact line, naming the file and the line in it.
         let before = entries(&case_dir);
         let out = case_dir.join("out.obj");
         let r = cli(&source, &target, &out);
         assert_eq!(r.status.code(), Some(1), "{name}");
         assert!(r.stdout.is_empty(), "{name}");
         let stderr = String::from_utf8(r.stderr).expect("UTF-8");
-        assert_eq!(stderr, failure.cli_line(&source, &target), "{name}");
+        assert_eq!(
+            stderr,
+            format!("bdmorph: error: {}\n", paths(case.cli)),
+            "{name}"
+        );
         assert!(stderr.contains(case.source.0), "{name}: names the file");
+        if let Some(line) = case.line {
+            assert!(
+                stderr.contains(&format!(":{line}: ")),
+                "{name}: names the line"
+            );
+        }
         assert!(!out.exists(), "{name}: wrote {}", out.display());
         assert_eq!(entries(&case_dir), before, "{name}: left files behind");
     }

@@ -967,8 +967,437 @@ fn bounded_param_and_deform_meet_the_bound_or_say_why() {
     let err = String::from_utf8(r.stderr).expect("utf8");
     assert!(!r.status.success(), "{err}");
     assert!(
-        err.contains("was not met") && err.contains("worst: face"),
+        err.contains("was not met") && err.contains("worst (0-based): face"),
+        "{err}"
+    );
+    // Each worst face with its line in disk.obj (vertices first, one line each).
+    let face = number_after(&err, "worst (0-based): face ");
+    let n = disk.positions.len();
+    assert!(
+        err.contains(&format!("face {face} on line {} (", n + face + 1)),
         "{err}"
     );
     assert!(out.is_file());
+}
+
+/// `m` as an OBJ file with a two-line header and as an OFF file: in both, vertex `v` is on line
+/// `3 + v` and face `f` on line `3 + n + f` (`n` vertices).
+fn write_obj_and_off(dir: &Path, stem: &str, m: &PlanarMesh) -> [PathBuf; 2] {
+    let obj = dir.join(format!("{stem}.obj"));
+    let header = ["written by a test", "vertices, then faces"];
+    io::write_obj_2d(&obj, &m.positions, &m.faces, &header).expect("write");
+    let off = dir.join(format!("{stem}.off"));
+    let mut text = format!("OFF\n{} {} 0\n", m.positions.len(), m.faces.len());
+    for p in &m.positions {
+        text += &format!("{} {} 0\n", p[0], p[1]);
+    }
+    for f in &m.faces {
+        text += &format!("3 {} {} {}\n", f[0], f[1], f[2]);
+    }
+    std::fs::write(&off, text).expect("write");
+    [obj, off]
+}
+
+/// Runs a command that must fail, writing nothing into `dir`, and returns its one line of
+/// stderr.
+fn fails_writing_nothing(cmd: &mut Command, dir: &Path) -> String {
+    let before = listing(dir);
+    let r = cmd.current_dir(dir).output().expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(r.stdout.is_empty(), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(listing(dir), before, "{err}");
+    err
+}
+
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// The commands that read a planar mesh, with `mesh` where a bad one is given and `good` /
+/// `target` (valid, with `mesh`'s triangles when `mesh` is valid) elsewhere; each writes into
+/// the current directory.
+fn planar_commands(mesh: &Path, good: &Path, target: &Path) -> Vec<Command> {
+    let mut commands = Vec::new();
+    let mut c = morph();
+    c.arg(mesh)
+        .arg(target)
+        .args(["--t", "0.5", "-o", "out.obj"]);
+    commands.push(c);
+    let mut c = morph();
+    c.arg(good)
+        .arg(mesh)
+        .args(["--frames", "3", "-o", "frames"]);
+    commands.push(c);
+    let mut c = bin();
+    c.arg("blend").arg(good).arg(target).arg(mesh).args([
+        "--weights",
+        "0.2,0.3,0.5",
+        "-o",
+        "mix.png",
+    ]);
+    commands.push(c);
+    let mut c = bin();
+    c.arg("compile").arg(mesh).args(["-o", "prog.bdm"]);
+    commands.push(c);
+    let mut c = bin();
+    c.arg("deform")
+        .arg(mesh)
+        .args(["--pin", "0:0,0", "--max-distortion", "3", "-o", "posed.obj"]);
+    commands.push(c);
+    commands
+}
+
+/// What `info` says of `mesh`'s morphability.
+fn morphable(mesh: &Path) -> String {
+    let out = run_ok(bin().arg("info").arg(mesh));
+    let text = String::from_utf8(out.stdout).expect("utf8");
+    let line = text.lines().find(|l| l.contains("morphable: "));
+    line.expect("a morphable line").trim().to_owned()
+}
+
+#[test]
+fn a_clockwise_face_is_named_with_its_line_in_obj_and_off_by_every_command() {
+    let dir = scratch("clockwise-line");
+    let a = generate::disk(6, 0.2);
+    let n = a.positions.len();
+    let good = write(&dir, "a.obj", &a);
+    let target = write(&dir, "b.obj", &generate::twist(&a, 0.8));
+    let mut cw = a.clone();
+    cw.faces[40].swap(1, 2);
+    let line = 3 + n + 40;
+    for path in write_obj_and_off(&dir, "cw", &cw) {
+        let expected = format!(
+            "{}:{line}: face 40 (0-based) is clockwise (signed area ",
+            path.display()
+        );
+        for mut command in planar_commands(&path, &good, &target) {
+            let err = fails_writing_nothing(&mut command, &dir);
+            assert!(
+                err.starts_with(&format!("bdmorph: error: {expected}")),
+                "{command:?}: {err}"
+            );
+            assert!(err.ends_with("; triangles must be counter-clockwise, consistently\n"));
+        }
+        let info = morphable(&path);
+        assert!(
+            info.starts_with(&format!("morphable: no: {expected}")),
+            "{info}"
+        );
+    }
+}
+
+#[test]
+fn topology_errors_name_the_lines_of_their_faces_and_vertices() {
+    let dir = scratch("topology-lines");
+    let a = generate::disk(6, 0.2);
+    let (n, m) = (a.positions.len(), a.faces.len());
+    let b = generate::twist(&a, 0.8);
+    // Face 7 listed again at the end.
+    let twice = |mut mesh: PlanarMesh| {
+        mesh.faces.push(mesh.faces[7]);
+        mesh
+    };
+    let [a_obj, a_off] = write_obj_and_off(&dir, "twice", &twice(a.clone()));
+    let [b_obj, b_off] = write_obj_and_off(&dir, "twice-b", &twice(b.clone()));
+    for (path, target) in [(&a_obj, &b_obj), (&a_off, &b_off)] {
+        let (l7, lm) = (3 + n + 7, 3 + n + m);
+        let expected = format!(
+            "{}:{lm}: face 7 and face {m} (0-based) are the same triangle (duplicate face); \
+             face {m} is line {lm}, face 7 is line {l7}",
+            path.display()
+        );
+        let compile = bin()
+            .arg("compile")
+            .arg(path)
+            .args(["-o", "prog.bdm"])
+            .current_dir(&dir)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8(compile.stderr).expect("utf8");
+        assert_eq!(err, format!("bdmorph: error: {expected}\n"));
+        let err = fails_writing_nothing(
+            morph()
+                .arg(path)
+                .arg(target)
+                .args(["--t", "0.5", "-o", "out.obj"]),
+            &dir,
+        );
+        assert_eq!(err, format!("bdmorph: error: {expected}\n"));
+        assert_eq!(morphable(path), format!("morphable: no: {expected}"));
+    }
+    // A vertex no face uses: its own line.
+    let mut lonely = a.clone();
+    lonely.positions.push([5.0, 5.0]);
+    for path in write_obj_and_off(&dir, "lonely", &lonely) {
+        let expected = format!(
+            "{}:{}: vertex {n} (0-based) belongs to no face",
+            path.display(),
+            3 + n
+        );
+        assert_eq!(morphable(&path), format!("morphable: no: {expected}"));
+        let err = fails_writing_nothing(
+            bin().arg("compile").arg(&path).args(["-o", "prog.bdm"]),
+            &dir,
+        );
+        assert_eq!(err, format!("bdmorph: error: {expected}\n"));
+    }
+    // Source and target with other triangles: the target's face, compared with the source's.
+    let mut reordered = b.clone();
+    reordered.faces.swap(3, 4);
+    for (source, target) in [
+        (
+            write(&dir, "plain.obj", &a),
+            write_obj_and_off(&dir, "reordered", &reordered)[1].clone(),
+        ),
+        (
+            write_obj_and_off(&dir, "a", &a)[1].clone(),
+            write(&dir, "reordered-plain.obj", &reordered),
+        ),
+    ] {
+        let (source_line, target_line) = match source.extension() {
+            Some(e) if e == "obj" => (n + 4, 3 + n + 3),
+            _ => (3 + n + 3, n + 4),
+        };
+        let err = fails_writing_nothing(
+            morph()
+                .arg(&source)
+                .arg(&target)
+                .args(["--t", "0.5", "-o", "out.obj"]),
+            &dir,
+        );
+        let prefix = format!(
+            "bdmorph: error: {}:{target_line}: source and target differ at face 3: vertices ",
+            target.display()
+        );
+        let suffix = format!(
+            " (0-based); both meshes need the same triangles (compared with {}:{source_line})\n",
+            source.display()
+        );
+        assert!(err.starts_with(&prefix) && err.ends_with(&suffix), "{err}");
+    }
+}
+
+#[test]
+fn a_mirrored_mesh_is_reported_as_mirrored_with_the_fix() {
+    let dir = scratch("mirrored");
+    let a = generate::disk(6, 0.2);
+    let good = write(&dir, "a.obj", &a);
+    let target = write(&dir, "b.obj", &generate::twist(&a, 0.8));
+    let nf = a.faces.len();
+    // As exported with y pointing down: every triangle clockwise.
+    let mirrored = PlanarMesh {
+        positions: a.positions.iter().map(|p| [p[0], -p[1]]).collect(),
+        faces: a.faces.clone(),
+    };
+    for path in write_obj_and_off(&dir, "mirrored", &mirrored) {
+        let expected = format!(
+            "{}: all {nf} triangles are clockwise: the mesh is mirrored, as when exported with \
+             y pointing down; reverse each triangle's corner order (a b c -> a c b) or negate \
+             one coordinate (y -> -y)",
+            path.display()
+        );
+        for mut command in planar_commands(&path, &good, &target) {
+            let err = fails_writing_nothing(&mut command, &dir);
+            assert_eq!(err, format!("bdmorph: error: {expected}\n"), "{command:?}");
+        }
+        assert_eq!(morphable(&path), format!("morphable: no: {expected}"));
+    }
+    // Either fix gives a morphable mesh.
+    let mut reversed = mirrored.clone();
+    reversed.faces.iter_mut().for_each(|f| f.swap(1, 2));
+    let flipped_back = PlanarMesh {
+        positions: mirrored.positions.iter().map(|p| [p[0], -p[1]]).collect(),
+        faces: mirrored.faces.clone(),
+    };
+    for (name, fixed) in [("reversed.obj", reversed), ("flipped.obj", flipped_back)] {
+        let path = write(&dir, name, &fixed);
+        assert_eq!(
+            morphable(&path),
+            "morphable: yes (a counter-clockwise planar disk)"
+        );
+    }
+    // Mostly clockwise: mirrored too, naming the counter-clockwise faces left over.
+    let mut mostly = mirrored.clone();
+    mostly.faces[5].swap(1, 2);
+    mostly.faces[9].swap(1, 2);
+    let n = a.positions.len();
+    for path in write_obj_and_off(&dir, "mostly", &mostly) {
+        let expected = format!(
+            "{}:{}: {} of {nf} triangles are clockwise: the mesh looks mirrored, as when \
+             exported with y pointing down; reverse each triangle's corner order (a b c -> a c b) \
+             or negate one coordinate (y -> -y), after which the 2 counter-clockwise ones, from \
+             face 5 (0-based), would be clockwise",
+            path.display(),
+            3 + n + 5,
+            nf - 2
+        );
+        let err = fails_writing_nothing(
+            morph()
+                .arg(&path)
+                .arg(&target)
+                .args(["--t", "0.5", "-o", "out.obj"]),
+            &dir,
+        );
+        assert_eq!(err, format!("bdmorph: error: {expected}\n"));
+        assert_eq!(morphable(&path), format!("morphable: no: {expected}"));
+    }
+}
+
+/// The number right after `before` in `text`.
+fn number_after(text: &str, before: &str) -> usize {
+    let at = text
+        .find(before)
+        .unwrap_or_else(|| panic!("{before:?} in {text}"))
+        + before.len();
+    let digits: String = text[at..]
+        .chars()
+        .take_while(char::is_ascii_digit)
+        .collect();
+    digits
+        .parse()
+        .unwrap_or_else(|_| panic!("a number after {before:?} in {text}"))
+}
+
+#[test]
+fn surface_commands_name_the_lines_of_the_faces_at_fault() {
+    let dir = scratch("surface-lines");
+    let write_off = |name: &str, mesh: &bdmorph::SurfaceMesh| {
+        let mut text = format!("OFF\n{} {}\n", mesh.positions.len(), mesh.faces.len());
+        for p in &mesh.positions {
+            text += &format!("{} {} {}\n", p[0], p[1], p[2]);
+        }
+        for f in &mesh.faces {
+            text += &format!("3 {} {} {}\n", f[0], f[1], f[2]);
+        }
+        let path = dir.join(name);
+        std::fs::write(&path, text).expect("write");
+        path
+    };
+    // geodesic: a sphere with face 12 listed again, so that its edges run twice one way.
+    let mut sphere = generate::icosphere(1);
+    let (n, m) = (sphere.positions.len(), sphere.faces.len());
+    sphere.faces.push(sphere.faces[12]);
+    for (path, first) in [
+        (write_surface(&dir, "sphere.obj", &sphere), 1),
+        (write_off("sphere.off", &sphere), 3),
+    ] {
+        let err = fails_writing_nothing(
+            bin()
+                .arg("geodesic")
+                .arg(&path)
+                .args(["--source", "0", "-o", "d.txt"]),
+            &dir,
+        );
+        let expected = format!(
+            "bdmorph: error: {}:{}: the edge from vertex ",
+            path.display(),
+            first + n + m
+        );
+        assert!(err.starts_with(&expected), "{err}");
+        assert!(
+            err.ends_with(&format!(
+                "by faces 12 and {m} (0-based): the mesh is non-manifold or inconsistently \
+                 oriented there; face {m} is line {}, face 12 is line {}\n",
+                first + n + m,
+                first + n + 12
+            )),
+            "{err}"
+        );
+    }
+    // param: a cap with face 3 listed again is not a disk.
+    let mut cap = generate::sphere_cap(3, 0.2);
+    let (n, m) = (cap.positions.len(), cap.faces.len());
+    cap.faces.push(cap.faces[3]);
+    for (path, first) in [
+        (write_surface(&dir, "cap.obj", &cap), 1),
+        (write_off("cap.off", &cap), 3),
+    ] {
+        let err = fails_writing_nothing(
+            bin()
+                .arg("param")
+                .arg(&path)
+                .args(["--method", "tutte", "-o", "flat.obj"]),
+            &dir,
+        );
+        assert_eq!(
+            err,
+            format!(
+                "bdmorph: error: {}:{}: not a disk: face 3 and face {m} (0-based) are the same \
+                 triangle (duplicate face); face {m} is line {}, face 3 is line {}\n",
+                path.display(),
+                first + n + m,
+                first + n + m,
+                first + n + 3
+            )
+        );
+    }
+}
+
+#[test]
+fn failed_frames_name_the_lines_of_their_worst_triangles() {
+    let dir = scratch("frame-lines");
+    let (a, pa, _, pb) = pair(&dir);
+    let n = a.positions.len();
+    // One Newton step is not enough at t = 0.5 (see frames_that_fail_are_reported_...).
+    let r = morph()
+        .arg(&pa)
+        .arg(&pb)
+        .args(["--t", "0.5", "--max-iterations", "1", "--stats"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    // The worst triangle, by its vertices, is face f: on line n + f + 1 of a.obj.
+    let needle = "worst triangles (0-based vertices): (";
+    let at = err.find(needle).expect(&err) + needle.len();
+    let vertices: Vec<u32> = err[at..]
+        .split(')')
+        .next()
+        .expect("a triangle")
+        .split(' ')
+        .map(|v| v.parse().expect("a vertex"))
+        .collect();
+    let rotations: Vec<[u32; 3]> = (0..3)
+        .map(|k| [0, 1, 2].map(|i| vertices[(i + k) % 3]))
+        .collect();
+    let face = a
+        .faces
+        .iter()
+        .position(|f| rotations.contains(f))
+        .expect("the worst triangle is a face");
+    let line = n + face + 1;
+    let prefix = format!(
+        "bdmorph: error: {}:{line}: frame t = 0.5: Newton did not converge",
+        pa.display()
+    );
+    assert!(err.starts_with(&prefix), "{err}");
+    assert!(
+        err.contains(&format!("; face {face} is line {line}, face ")),
+        "{err}"
+    );
+    // Extrapolated too far: the triangle that breaks, and its line.
+    let r = morph()
+        .arg(&pa)
+        .arg(&pb)
+        .args(["--t", "40", "--stats"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    let face = number_after(&err, "edge lengths of triangle ");
+    assert!(
+        err.starts_with(&format!(
+            "bdmorph: error: {}:{}: t = 40: the extrapolated edge lengths of triangle {face} \
+             (0-based; vertices ",
+            pa.display(),
+            n + face + 1
+        )),
+        "{err}"
+    );
 }

@@ -640,7 +640,7 @@ fn fuzz_off_reader_regression_long_z_in_message() {
     read(text, Format::Off);
     let mesh = bdmorph::io::parse_off(text, std::path::Path::new("z.off")).expect("parses");
     let err = bdmorph::PlanarMesh::from_surface(mesh, std::path::Path::new("z.off"));
-    let expected = "z.off: vertex 0 has z = 1e308; a planar mesh (z = 0) is required";
+    let expected = "z.off: vertex 0 (0-based) has z = 1e308; a planar mesh (z = 0) is required";
     assert_eq!(err.expect_err("not planar").to_string(), expected);
 }
 

@@ -2,7 +2,9 @@
 
 use crate::ids::{FaceId, VertexId};
 
-/// A mesh the compiler refuses, with the elements that show why. All indices are 0-based.
+/// A mesh the compiler refuses, with the elements that show why. All indices are 0-based, and
+/// the messages say so; the compiler knows no file, so a caller that read the mesh from one
+/// names the lines (`bdmorph::located`).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum CompileError {
@@ -18,7 +20,7 @@ pub enum CompileError {
         faces: usize,
     },
     /// A face names a vertex that does not exist.
-    #[error("{face} refers to vertex {vertex}, but the mesh has {n_vertices} vertices")]
+    #[error("{face} refers to vertex {vertex} (0-based), but the mesh has {n_vertices} vertices")]
     VertexOutOfRange {
         /// The face.
         face: FaceId,
@@ -28,7 +30,7 @@ pub enum CompileError {
         n_vertices: usize,
     },
     /// The anchor asked for does not exist.
-    #[error("anchor {anchor} does not exist: the mesh has {n_vertices} vertices")]
+    #[error("anchor {anchor} (0-based) does not exist: the mesh has {n_vertices} vertices")]
     AnchorOutOfRange {
         /// The anchor.
         anchor: VertexId,
@@ -36,13 +38,13 @@ pub enum CompileError {
         n_vertices: usize,
     },
     /// A face uses one vertex twice.
-    #[error("{face} uses the same vertex twice")]
+    #[error("{face} (0-based) uses the same vertex twice")]
     RepeatedVertex {
         /// The face.
         face: FaceId,
     },
     /// A vertex position is NaN or infinite.
-    #[error("{vertex} has a non-finite coordinate")]
+    #[error("{vertex} (0-based) has a non-finite coordinate")]
     NonFinitePosition {
         /// The vertex.
         vertex: VertexId,
@@ -56,7 +58,7 @@ pub enum CompileError {
         n_vertices: usize,
     },
     /// More than two faces share an edge.
-    #[error("edge ({a}, {b}) is shared by {faces} faces (non-manifold)")]
+    #[error("the edge between {a} and {b} (0-based) is shared by {faces} faces (non-manifold)")]
     NonManifoldEdge {
         /// One end.
         a: VertexId,
@@ -66,13 +68,13 @@ pub enum CompileError {
         faces: usize,
     },
     /// The same triangle is listed twice (in either orientation).
-    #[error("{} and {} are the same triangle (duplicate face)", faces[0], faces[1])]
+    #[error("{} and {} (0-based) are the same triangle (duplicate face)", faces[0], faces[1])]
     DuplicateFace {
         /// The first listing and the repeat, in face order.
         faces: [FaceId; 2],
     },
     /// Two faces traverse an edge in the same direction.
-    #[error("{} and {} both run from {a} to {b}: inconsistent orientation", faces[0], faces[1])]
+    #[error("{} and {} both run from {a} to {b} (0-based): inconsistent orientation", faces[0], faces[1])]
     InconsistentOrientation {
         /// Start of the directed edge.
         a: VertexId,
@@ -82,19 +84,19 @@ pub enum CompileError {
         faces: [FaceId; 2],
     },
     /// The faces around a vertex do not form a single fan (for example a bow tie).
-    #[error("{vertex} is non-manifold: its faces do not form a single fan")]
+    #[error("{vertex} (0-based) is non-manifold: its faces do not form a single fan")]
     NonManifoldVertex {
         /// The vertex.
         vertex: VertexId,
     },
     /// A vertex belongs to no face.
-    #[error("{vertex} belongs to no face")]
+    #[error("{vertex} (0-based) belongs to no face")]
     UnreferencedVertex {
         /// The vertex.
         vertex: VertexId,
     },
     /// The mesh has several connected components.
-    #[error("the mesh is not connected: {face} cannot be reached from face 0")]
+    #[error("the mesh is not connected: {face} (0-based) cannot be reached from face 0")]
     Disconnected {
         /// A face of another component.
         face: FaceId,

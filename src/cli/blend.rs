@@ -4,7 +4,7 @@ use std::io::Write;
 
 use bdmorph::Blend;
 
-use super::morph::{check_options, morph_options, read_inputs, setup_error, write_frames};
+use super::morph::{check_options, morph_options, read_inputs, write_frames};
 use super::output::{self, Plan};
 use super::BlendArgs;
 
@@ -33,10 +33,10 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
         }
         None => Blend::with_options(&inputs.keyframes, options),
     };
-    let mut blend = blend.map_err(|e| setup_error(e, &args.meshes))?;
+    let mut blend = blend.map_err(|e| inputs.setup_error(e))?;
     let frame = blend
         .frame_weights(&args.weights)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| inputs.frame_error(e))?;
     if args.out.stats {
         // The frame's statistics, with its weights in place of a time.
         let json = frame.stats.to_json();

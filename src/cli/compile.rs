@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use bdmorph::{MeshKey, PlanarMesh, Program};
+use bdmorph::{Located, MeshKey, PlanarMesh, Program};
 
 use super::CompileArgs;
 
@@ -19,9 +19,9 @@ pub(super) fn run(args: CompileArgs) -> Result<(), String> {
             args.output.display()
         ));
     }
-    let (source, _) = super::morph::read(&args.source)?;
+    let (source, _, lines) = super::morph::read(&args.source)?;
     let program = bdmorph::compile(&source.positions, &source.faces)
-        .map_err(|e| format!("{}: {e}", args.source.display()))?;
+        .map_err(|e| Located::new(&args.source, &lines, &source.faces, e).to_string())?;
     let bytes = program.to_bytes(&key(&source));
     bdmorph::io::write_bytes_atomic(&args.output, &bytes).map_err(|e| e.to_string())?;
     if !args.quiet {

@@ -51,7 +51,8 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
         Some(path) => Some(output_kind(path)?),
         None => None,
     };
-    let mesh = bdmorph::io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
+    let file = bdmorph::MeshFile::read(&args.mesh).map_err(|e| e.to_string())?;
+    let mesh = &file.mesh;
     if let Some(&v) = sources
         .iter()
         .find(|&&v| v as usize >= mesh.positions.len())
@@ -71,8 +72,7 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
         })
         .with_intrinsic_delaunay(!args.no_intrinsic_delaunay);
     let started = Instant::now();
-    let mut heat =
-        HeatGeodesics::new(&mesh, options).map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let mut heat = HeatGeodesics::new(mesh, options).map_err(|e| file.locate(e).to_string())?;
     let setup = started.elapsed().as_secs_f64();
     let started = Instant::now();
     let fields: Vec<Vec<f64>> = if each {
@@ -80,7 +80,7 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
     } else {
         heat.distance(sources).map(|d| vec![d])
     }
-    .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    .map_err(|e| file.locate(e).to_string())?;
     let query = started.elapsed().as_secs_f64();
     if args.stats {
         let s = heat.stats();

@@ -1,13 +1,13 @@
 //! `bdmorph info MESH`.
 
-use bdmorph::info::{check_morphable, MeshInfo};
-use bdmorph::io;
+use bdmorph::info::{morphable, MeshInfo};
+use bdmorph::MeshFile;
 
 use super::InfoArgs;
 
 pub(super) fn run(args: InfoArgs) -> Result<(), String> {
-    let mesh = io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
-    let i = MeshInfo::of(&mesh);
+    let file = MeshFile::read(&args.mesh).map_err(|e| e.to_string())?;
+    let i = MeshInfo::of(&file.mesh);
     let yes = |b: bool| if b { "yes" } else { "no" };
     println!("{}", args.mesh.display());
     println!(
@@ -27,7 +27,8 @@ pub(super) fn run(args: InfoArgs) -> Result<(), String> {
         yes(i.planar),
         yes(i.texcoords)
     );
-    match check_morphable(&mesh, &args.mesh) {
+    // Said as `morph` would say it, with the file and the line.
+    match morphable(&file) {
         Ok(()) => println!("  morphable: yes (a counter-clockwise planar disk)"),
         Err(why) => println!("  morphable: no: {why}"),
     }

@@ -3,21 +3,29 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use bdmorph::io::TexCoords;
+use bdmorph::io::{LineMap, TexCoords};
+use bdmorph::located::Locate;
 use bdmorph::render::{raster, Image};
-use bdmorph::{Morph, MorphError, MorphOptions, Path, PathOptions, PlanarMesh};
+use bdmorph::PlanarMesh;
+use bdmorph::{Located, MeshError, MeshFile, Morph, MorphError, MorphOptions, Path, PathOptions};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::output::{self, Look, Plan};
 use super::{times, MorphArgs, OutputArgs, SolverArgs};
 
+/// Reads a planar mesh and checks it as a keyframe; errors name the file and the line. Also
+/// returns its texture coordinates and the line of each vertex and face, for later errors.
 pub(super) fn read(
     path: &std::path::Path,
-) -> Result<(PlanarMesh, Option<bdmorph::io::TexCoords>), String> {
-    let (mesh, tex) = PlanarMesh::read_textured(path).map_err(|e| e.to_string())?;
-    mesh.validate()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok((mesh, tex))
+) -> Result<(PlanarMesh, Option<TexCoords>, LineMap), String> {
+    let file = MeshFile::read(path).map_err(|e| e.to_string())?;
+    let mesh = file.planar().map_err(|e| e.to_string())?;
+    let MeshFile {
+        mesh: surface,
+        lines,
+        ..
+    } = file;
+    Ok((mesh, surface.texcoords, lines))
 }
 
 /// A progress bar on stderr, drawn only when stderr is a terminal and not `quiet`.
@@ -57,13 +65,15 @@ pub(super) fn read_inputs(
     plan: Option<&Plan>,
 ) -> Result<Inputs, String> {
     let mut keyframes = Vec::with_capacity(meshes.len());
+    let mut lines = Vec::with_capacity(meshes.len());
     let mut texcoords = None;
     for (i, path) in meshes.iter().enumerate() {
-        let (mesh, tex) = read(path)?;
+        let (mesh, tex, map) = read(path)?;
         if i == 0 {
             texcoords = tex;
         }
         keyframes.push(mesh);
+        lines.push(map);
     }
     let texture = match &out.texture {
         Some(path) => Some(raster::read_image(path).map_err(|e| e.to_string())?),
@@ -77,7 +87,9 @@ pub(super) fn read_inputs(
         eprintln!("bdmorph: warning: --color-by only affects PNG, GIF, SVG and HTML output");
     }
     Ok(Inputs {
+        paths: meshes.to_vec(),
         keyframes,
+        lines,
         texcoords,
         texture,
     })
@@ -85,8 +97,12 @@ pub(super) fn read_inputs(
 
 /// The meshes and pictures a command works on.
 pub(super) struct Inputs {
+    /// The keyframes' files, in order.
+    pub paths: Vec<PathBuf>,
     /// The keyframes, in order.
     pub keyframes: Vec<PlanarMesh>,
+    /// Where each keyframe's vertices and faces are in its file.
+    pub lines: Vec<LineMap>,
     /// The first keyframe's texture coordinates.
     pub texcoords: Option<TexCoords>,
     /// The texture image.
@@ -100,16 +116,56 @@ pub(super) fn morph_options(solver: &SolverArgs) -> MorphOptions {
         .with_max_iterations(solver.max_iterations)
 }
 
-/// A set-up error, naming the file of a keyframe that is at fault.
-pub(super) fn setup_error(e: MorphError, meshes: &[PathBuf]) -> String {
-    let names: Vec<String> = meshes.iter().map(|p| p.display().to_string()).collect();
-    match e {
-        MorphError::Keyframe { index, source } => format!(
-            "{}: {source} (compared with {})",
-            names.get(index).map_or("?", String::as_str),
-            names[0]
-        ),
-        other => format!("{}: {other}", names.join(" -> ")),
+impl Inputs {
+    /// `error`, about keyframe `k`, naming its file and the lines of the faces and vertices
+    /// it is about.
+    fn locate<E: Locate>(&self, k: usize, error: E) -> Located<E> {
+        Located::new(
+            &self.paths[k],
+            &self.lines[k],
+            &self.keyframes[k].faces,
+            error,
+        )
+    }
+
+    /// A set-up error, naming the file (and the line) of the keyframe at fault: keyframe `k`
+    /// for an error that compares it with the first, the first one for its compilation.
+    pub(super) fn setup_error(&self, e: MorphError) -> String {
+        let pair = |k: usize, e: MeshError| {
+            let first = match e {
+                MeshError::FaceMismatch { face, .. } => self.lines[0].face_line(face),
+                _ => None,
+            };
+            let first = match first {
+                Some(line) => format!("{}:{line}", self.paths[0].display()),
+                None => self.paths[0].display().to_string(),
+            };
+            format!("{} (compared with {first})", self.locate(k, e))
+        };
+        match e {
+            MorphError::Keyframe { index, source } => pair(index, source),
+            // Morph::new compares its target with its source.
+            MorphError::Mesh(e @ MeshError::FaceMismatch { .. }) => pair(1, e),
+            // Each mesh was checked when read: what is left is the first one's compilation.
+            MorphError::Mesh(e @ MeshError::Topology(_)) => self.locate(0, e).to_string(),
+            e @ MorphError::ProgramMismatch { .. } => self.locate(0, e).to_string(),
+            other => {
+                let names: Vec<String> =
+                    self.paths.iter().map(|p| p.display().to_string()).collect();
+                format!("{}: {other}", names.join(" -> "))
+            }
+        }
+    }
+
+    /// A frame's error; when it names triangles, with the first keyframe's file and their
+    /// lines.
+    pub(super) fn frame_error(&self, e: MorphError) -> String {
+        let located = self.locate(0, e);
+        if located.places.is_empty() {
+            located.error.to_string()
+        } else {
+            located.to_string()
+        }
     }
 }
 
@@ -186,7 +242,7 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         }
         .map(Animation::Morph)
     };
-    let mut animation = animation.map_err(|e| setup_error(e, &args.meshes))?;
+    let mut animation = animation.map_err(|e| inputs.setup_error(e))?;
 
     let colour = args.out.color_by.is_some();
     let bar = progress_bar(times.len(), args.out.quiet, "morphing");
@@ -197,16 +253,13 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         let frame = match animation.frame(t) {
             Ok(frame) => frame,
             // One frame: its error is the command's. Several: report it, write the others.
-            Err(e) if times.len() == 1 => return Err(e.to_string()),
+            Err(e) if times.len() == 1 => return Err(inputs.frame_error(e)),
             Err(e) => {
                 failed += 1;
+                let e = inputs.frame_error(e);
                 if args.out.stats {
-                    writeln!(
-                        stdout,
-                        "{{\"t\":{t},\"error\":\"{}\"}}",
-                        json_escape(&e.to_string())
-                    )
-                    .map_err(|e| e.to_string())?;
+                    writeln!(stdout, "{{\"t\":{t},\"error\":\"{}\"}}", json_escape(&e))
+                        .map_err(|e| e.to_string())?;
                 }
                 bar.suspend(|| eprintln!("bdmorph: error: {e}; frame skipped"));
                 bar.inc(1);

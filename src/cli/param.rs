@@ -52,8 +52,14 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             ))
         }
     }
-    let mesh = bdmorph::io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
-    let in_file = |e: bdmorph::param::ParamError| format!("{}: {e}", args.mesh.display());
+    let bdmorph::MeshFile {
+        mesh,
+        lines: mesh_lines,
+        ..
+    } = bdmorph::MeshFile::read(&args.mesh).map_err(|e| e.to_string())?;
+    let in_file = |e: bdmorph::param::ParamError| {
+        bdmorph::Located::new(&args.mesh, &mesh_lines, &mesh.faces, e).to_string()
+    };
     let (name, uv, iterations, seconds, unmet) = match args.method {
         ParamMethod::Param(method) => {
             let mut options = ParamOptions::default();
@@ -117,7 +123,8 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
                 args.stats,
                 &in_file,
             )?;
-            let unmet = (!report.converged).then(|| unmet_message(&report, k));
+            let line = |f| mesh_lines.face_line(f);
+            let unmet = (!report.converged).then(|| unmet_message(&report, k, &line));
             ("bounded", uv, report.iterations, report.seconds, unmet)
         }
     };
@@ -231,15 +238,17 @@ fn bounded_json(r: &BoundedReport) -> String {
     )
 }
 
-/// Why the bound was not met, naming the worst triangles.
-fn unmet_message(r: &BoundedReport, k: f64) -> String {
+/// Why the bound was not met, naming the worst triangles (and their lines in the file, by
+/// `line`).
+fn unmet_message(r: &BoundedReport, k: f64, line: &dyn Fn(usize) -> Option<usize>) -> String {
     let worst: Vec<String> = r
         .worst
         .iter()
         .take(3)
-        .map(|(f, d)| {
+        .map(|&(f, d)| {
             format!(
-                "face {f} ({})",
+                "face {f}{} ({})",
+                line(f).map_or(String::new(), |l| format!(" on line {l}")),
                 if d.is_finite() {
                     format!("{d:.3}")
                 } else {
@@ -254,7 +263,7 @@ fn unmet_message(r: &BoundedReport, k: f64) -> String {
         "the iteration limit was reached; --iterations raises it"
     };
     format!(
-        "the distortion bound {k} was not met after {} iterations ({} of them Newton): largest distortion {}, {} inverted triangles; worst: {} ({why})",
+        "the distortion bound {k} was not met after {} iterations ({} of them Newton): largest distortion {}, {} inverted triangles; worst (0-based): {} ({why})",
         r.iterations,
         r.newton_iterations,
         if r.max_distortion.is_finite() { format!("{:.4}", r.max_distortion) } else { "infinite".into() },
@@ -329,13 +338,15 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     if plan.as_ref().is_some_and(|p| p.format.is_animation()) {
         return Err("deform writes one shape: use .obj, .svg or .png".into());
     }
-    let (planar, texcoords) = super::morph::read(&args.mesh)?;
+    let (planar, texcoords, lines) = super::morph::read(&args.mesh)?;
     let mesh = bdmorph::SurfaceMesh {
         positions: planar.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
         faces: planar.faces.clone(),
         texcoords: None,
     };
-    let in_file = |e: bdmorph::param::ParamError| format!("{}: {e}", args.mesh.display());
+    let in_file = |e: bdmorph::param::ParamError| {
+        bdmorph::Located::new(&args.mesh, &lines, &planar.faces, e).to_string()
+    };
     let options = BoundedOptions::new(args.max_distortion).with_iterations(args.iterations);
     let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
     let mut uv = planar.positions.clone();
@@ -348,7 +359,8 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
         args.stats,
         &in_file,
     )?;
-    let unmet = (!report.converged).then(|| unmet_message(&report, args.max_distortion));
+    let line = |f| lines.face_line(f);
+    let unmet = (!report.converged).then(|| unmet_message(&report, args.max_distortion, &line));
     if let Some(plan) = plan {
         let title = format!("bdmorph deform: {}", args.mesh.display());
         let look = output::Look {

@@ -75,7 +75,7 @@ pub enum GeodesicError {
     #[error("the mesh has no triangles")]
     Empty,
     /// A coordinate is NaN or infinite.
-    #[error("vertex {vertex} has a non-finite coordinate")]
+    #[error("vertex {vertex} (0-based) has a non-finite coordinate")]
     NonFinite {
         /// The vertex.
         vertex: usize,
@@ -87,7 +87,7 @@ pub enum GeodesicError {
     #[error("time factor {0} must be a positive number")]
     TimeFactor(f64),
     /// A source index that is not a vertex.
-    #[error("source vertex {vertex} does not exist (the mesh has {n_vertices} vertices)")]
+    #[error("source vertex {vertex} does not exist (the mesh has {n_vertices} vertices, numbered from 0)")]
     SourceOutOfRange {
         /// The index.
         vertex: u32,

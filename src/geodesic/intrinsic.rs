@@ -22,7 +22,7 @@ pub const NONE: u32 = u32::MAX;
 pub enum TriangulationError {
     /// Two faces use the same edge in the same direction: the mesh is not manifold there, or
     /// its faces are not consistently oriented.
-    #[error("edge {a}-{b} is used twice in the same direction (faces {first} and {second}): the mesh is non-manifold or inconsistently oriented there")]
+    #[error("the edge from vertex {a} to vertex {b} is used twice in the same direction, by faces {first} and {second} (0-based): the mesh is non-manifold or inconsistently oriented there")]
     NonManifoldEdge {
         /// Origin vertex.
         a: u32,
@@ -34,7 +34,7 @@ pub enum TriangulationError {
         second: usize,
     },
     /// A face names one vertex twice or an index out of range.
-    #[error("face {face} ({} {} {}) repeats a vertex or names one out of range", vertices[0], vertices[1], vertices[2])]
+    #[error("face {face} (0-based; vertices {} {} {}) repeats a vertex or names one out of range", vertices[0], vertices[1], vertices[2])]
     BadFace {
         /// The face.
         face: usize,
@@ -42,7 +42,7 @@ pub enum TriangulationError {
         vertices: [u32; 3],
     },
     /// A face whose edge lengths do not make a triangle of positive area.
-    #[error("face {face} is degenerate (edge lengths {} {} {})", lengths[0], lengths[1], lengths[2])]
+    #[error("face {face} (0-based) is degenerate (edge lengths {} {} {})", lengths[0], lengths[1], lengths[2])]
     Degenerate {
         /// The face.
         face: usize,

@@ -130,13 +130,13 @@ pub enum ParamError {
     #[error("not a disk: {0}")]
     NotADisk(#[from] CompileError),
     /// A coordinate is NaN or infinite.
-    #[error("vertex {vertex} has a non-finite coordinate")]
+    #[error("vertex {vertex} (0-based) has a non-finite coordinate")]
     NonFinite {
         /// The vertex.
         vertex: usize,
     },
     /// A triangle of zero area.
-    #[error("face {face} is degenerate (zero area)")]
+    #[error("face {face} (0-based) is degenerate (zero area)")]
     Degenerate {
         /// The face.
         face: usize,
@@ -145,7 +145,7 @@ pub enum ParamError {
     #[error("the distortion bound {0} must be a number of at least 1")]
     BadBound(f64),
     /// A positional constraint on a vertex that does not exist, or to a non-finite point.
-    #[error("constraint on vertex {vertex}: no such vertex (the mesh has {n_vertices}) or a non-finite target")]
+    #[error("constraint on vertex {vertex} (0-based): no such vertex (the mesh has {n_vertices}) or a non-finite target")]
     BadPin {
         /// The vertex.
         vertex: u32,

@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 
 use bdmorph::info::MeshInfo;
 use bdmorph::io::{self, SurfaceMesh};
-use bdmorph::{generate, CompileError, MeshKey, NewtonOptions, PlanarMesh, Program, Vm};
+use bdmorph::{generate, CompileError, Located, MeshKey, NewtonOptions, PlanarMesh, Program, Vm};
 use bdmorph_isa::ProgramParts;
 
 /// An error message: non-empty, one line, short enough for a terminal.
@@ -41,36 +41,45 @@ pub fn reader_bytes(bytes: &[u8], format: Format) {
     reader(&String::from_utf8_lossy(bytes), format);
 }
 
-/// Parses `text`: a mesh whose every index is in range and every number finite, or a one-line
-/// error. A planar mesh read back from its OBJ output is the same mesh, and goes on through
-/// validation and (when small) the compiler and the VM.
+/// Parses `text`: a mesh whose every index is in range and every number finite, with the line
+/// of every vertex and face, or a one-line error. A planar mesh read back from its OBJ output
+/// is the same mesh, and goes on through validation and (when small) the compiler and the VM.
 pub fn reader(text: &str, format: Format) {
     let (path, parsed) = match format {
         Format::Obj => {
             let path = Path::new("fuzz.obj");
-            (path, io::parse_obj(text, path))
+            (path, io::parse_obj_with_lines(text, path))
         }
         Format::Off => {
             let path = Path::new("fuzz.off");
-            (path, io::parse_off(text, path))
+            (path, io::parse_off_with_lines(text, path))
         }
     };
-    let mesh = match parsed {
-        Ok(mesh) => mesh,
+    let (mesh, lines) = match parsed {
+        Ok(parsed) => parsed,
         Err(e) => return one_line(&e.to_string()),
     };
     surface_is_consistent(&mesh);
+    lines_are_consistent(text, &mesh, &lines, format);
     let _ = MeshInfo::of(&mesh);
     if !mesh.is_planar() {
         let err = PlanarMesh::from_surface(mesh, path).expect_err("not planar");
-        return one_line(&err.to_string());
+        one_line(&err.to_string());
+        let located = Located::new(path, &lines, &[], err);
+        assert!(located.line.is_some(), "{located}");
+        return one_line(&located.to_string());
     }
     round_trips(&mesh);
     let planar = PlanarMesh::from_surface(mesh, path).expect("planar");
     match planar.validate() {
         Ok(()) if planar.faces.len() <= 2000 => compile_and_run(&planar.positions, &planar.faces),
         Ok(()) => {}
-        Err(e) => one_line(&e.to_string()),
+        Err(e) => {
+            one_line(&e.to_string());
+            let located = Located::new(path, &lines, &planar.faces, e);
+            assert_eq!(located.line.is_some(), !located.places.is_empty());
+            one_line(&located.to_string());
+        }
     }
 }
 
@@ -89,6 +98,35 @@ fn surface_is_consistent(m: &SurfaceMesh) {
             .all(|&i| (i as usize) < t.uv.len()));
         assert!(t.uv.iter().flatten().all(|x| x.is_finite()));
     }
+}
+
+/// Every vertex and face has a line, in file order (one record per line at most); in OBJ, that
+/// line is its `v` or `f` line.
+fn lines_are_consistent(text: &str, m: &SurfaceMesh, lines: &io::LineMap, format: Format) {
+    let text_lines: Vec<&str> = text
+        .strip_prefix('\u{feff}')
+        .unwrap_or(text)
+        .lines()
+        .collect();
+    let check = |count: usize, line_of: &dyn Fn(usize) -> Option<usize>, keyword: &str| {
+        let mut last = 0;
+        for i in 0..count {
+            let line = line_of(i).unwrap_or_else(|| panic!("{keyword} {i} has no line"));
+            assert!(
+                line > last && line <= text_lines.len(),
+                "{keyword} {i}: line {line}"
+            );
+            if let Format::Obj = format {
+                let words = text_lines[line - 1].split('#').next().unwrap_or("");
+                let first = words.split_ascii_whitespace().next();
+                assert_eq!(first, Some(keyword), "{keyword} {i}: line {line}");
+            }
+            last = line;
+        }
+        assert_eq!(line_of(count), None);
+    };
+    check(m.positions.len(), &|v| lines.vertex_line(v), "v");
+    check(m.faces.len(), &|f| lines.face_line(f), "f");
 }
 
 /// Written as OBJ and read back: the same coordinates (bit for bit), faces and texture

@@ -163,7 +163,11 @@ impl Cholesky {
         let want_single = resolve(options.precision, len_val);
         let columns = options.columns.max(1);
         let workspace = analysis.workspace(columns, true)?;
-        let solver = analysis.structure.clone().map(SupernodalSolve::new);
+        let solver = analysis.structure.clone().map(|st| {
+            let mut solver = SupernodalSolve::new(st);
+            solver.reserve(columns);
+            solver
+        });
         let mut this = Cholesky {
             pattern: pattern.clone(),
             analysis,
@@ -309,6 +313,9 @@ impl Cholesky {
         }
         self.workspace = self.analysis.workspace(columns, true)?;
         self.columns = columns;
+        if let Some(solver) = &mut self.solver {
+            solver.reserve(columns);
+        }
         if !self.rhs32.is_empty() {
             self.rhs32 = vec![0.0; self.dim() * columns];
         }
@@ -466,12 +473,10 @@ impl Cholesky {
         }
         self.reserve_columns(columns)?;
         if let (Some(solver), Kernels::Own) = (&mut self.solver, kernels) {
-            for x in rhs.chunks_exact_mut(n.max(1)).take(columns) {
-                if single {
-                    solver.solve(&self.single, x);
-                } else {
-                    solver.solve(&self.double, x);
-                }
+            if single {
+                solver.solve_many(&self.single, rhs, columns);
+            } else {
+                solver.solve_many(&self.double, rhs, columns);
             }
             return Ok(());
         }

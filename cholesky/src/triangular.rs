@@ -27,6 +27,10 @@ use std::sync::Arc;
 
 use crate::supernodes::Supernodes;
 
+/// Right-hand sides solved together by [`SupernodalSolve::solve_many`]: each block of them
+/// reads the factor once.
+pub(crate) const BLOCK: usize = 4;
+
 /// The supernodal structure of a factor and the solves' work buffers.
 #[derive(Clone, Debug)]
 pub(crate) struct SupernodalSolve {
@@ -38,6 +42,10 @@ pub(crate) struct SupernodalSolve {
     below: Vec<f64>,
     /// The reciprocals of the factor's diagonal, set by [`SupernodalSolve::prepare`].
     inv_diag: Vec<f64>,
+    /// [`SupernodalSolve::y`] and [`SupernodalSolve::below`] for blocks of right-hand sides,
+    /// a row's values side by side (sized by [`SupernodalSolve::reserve`]).
+    y_block: Vec<f64>,
+    below_block: Vec<f64>,
 }
 
 impl SupernodalSolve {
@@ -49,7 +57,19 @@ impl SupernodalSolve {
             y: vec![0.0; n],
             below: vec![0.0; tallest.unwrap_or(0)],
             inv_diag: vec![0.0; n],
+            y_block: Vec::new(),
+            below_block: Vec::new(),
             structure,
+        }
+    }
+
+    /// Makes room for solves with `columns` right-hand sides at once (blocks of up to
+    /// [`BLOCK`]).
+    pub fn reserve(&mut self, columns: usize) {
+        let c = columns.min(BLOCK);
+        if c > 1 && self.y_block.len() < self.structure.n() * c {
+            self.y_block = vec![0.0; self.structure.n() * c];
+            self.below_block = vec![0.0; self.below.len() * c];
         }
     }
 
@@ -144,6 +164,122 @@ impl SupernodalSolve {
         }
         for (&yi, &p) in y.iter().zip(&st.perm) {
             x[p as usize] = yi;
+        }
+    }
+
+    /// [`SupernodalSolve::solve`] for `columns` right-hand sides stored one after another in
+    /// `x` (`n` values each), in blocks of [`BLOCK`] (then two, then one): each block reads
+    /// the factor once. Needs room made by [`SupernodalSolve::reserve`] for more than one.
+    pub fn solve_many<T: Copy + Into<f64>>(&mut self, values: &[T], x: &mut [f64], columns: usize) {
+        let n = self.structure.n();
+        assert_eq!(x.len(), n * columns, "n values per right-hand side");
+        let mut done = 0;
+        while done < columns {
+            let part = &mut x[done * n..];
+            match columns - done {
+                left if left >= BLOCK => {
+                    self.solve_block::<T, BLOCK>(values, &mut part[..BLOCK * n])
+                }
+                left if left >= 2 => self.solve_block::<T, 2>(values, &mut part[..2 * n]),
+                _ => self.solve(values, &mut part[..n]),
+            }
+            done += match columns - done {
+                left if left >= BLOCK => BLOCK,
+                left if left >= 2 => 2,
+                _ => 1,
+            };
+        }
+    }
+
+    /// The solves of [`SupernodalSolve::solve`] for `C` right-hand sides at once (`x` holds
+    /// them one after another), the `C` values of a row side by side.
+    fn solve_block<T: Copy + Into<f64>, const C: usize>(&mut self, values: &[T], x: &mut [f64]) {
+        let st = &*self.structure;
+        let n = st.n();
+        assert_eq!(values.len(), st.len_val, "a factor of this structure");
+        assert_eq!(x.len(), n * C, "n values per right-hand side");
+        assert!(self.y_block.len() >= n * C, "room reserved for the block");
+        let (y, _) = self.y_block[..n * C].as_chunks_mut::<C>();
+        let (scratch, _) = self.below_block.as_chunks_mut::<C>();
+        for (yi, &p) in y.iter_mut().zip(&st.perm) {
+            for (c, v) in yi.iter_mut().enumerate() {
+                *v = x[c * n + p as usize];
+            }
+        }
+        // Forward: L z = P x.
+        for s in &st.list {
+            let (b, w, h) = (s.begin as usize, s.width as usize, s.height as usize);
+            let ld = w + h;
+            let block = &values[s.values_start..s.values_start + ld * w];
+            let inv = &self.inv_diag[b..b + w];
+            let top = &mut y[b..b + w];
+            for j in 0..w {
+                let mut xj = top[j];
+                for v in &mut xj {
+                    *v *= inv[j];
+                }
+                top[j] = xj;
+                let col = &block[j * ld + j + 1..j * ld + w];
+                for (t, &l) in top[j + 1..].iter_mut().zip(col) {
+                    let l: f64 = l.into();
+                    for (t, x) in t.iter_mut().zip(&xj) {
+                        *t -= l * x;
+                    }
+                }
+            }
+            if h == 0 {
+                continue;
+            }
+            let below = &mut scratch[..h];
+            below.fill([0.0; C]);
+            for (j, xj) in top.iter().enumerate() {
+                for (t, &a) in below.iter_mut().zip(&block[j * ld + w..(j + 1) * ld]) {
+                    let a: f64 = a.into();
+                    for (t, x) in t.iter_mut().zip(xj) {
+                        *t += a * x;
+                    }
+                }
+            }
+            for (&r, t) in st.rows_of(s).iter().zip(&*below) {
+                for (v, t) in y[r as usize].iter_mut().zip(t) {
+                    *v -= t;
+                }
+            }
+        }
+        // Backward: L^T y = z, each block read from its end to its start (see `solve`).
+        for s in st.list.iter().rev() {
+            let (b, w) = (s.begin as usize, s.width as usize);
+            let ld = s.ld();
+            let block = &values[s.values_start..s.values_start + ld * w];
+            let inv = &self.inv_diag[b..b + w];
+            let v = &mut scratch[..ld];
+            for (t, &r) in v[w..].iter_mut().zip(st.rows_of(s)) {
+                *t = y[r as usize];
+            }
+            for j in (0..w).rev() {
+                let mut acc = [0.0; C];
+                for (&l, t) in block[j * ld + j + 1..(j + 1) * ld]
+                    .iter()
+                    .zip(&v[j + 1..])
+                    .rev()
+                {
+                    let l: f64 = l.into();
+                    for (a, t) in acc.iter_mut().zip(t) {
+                        *a += l * t;
+                    }
+                }
+                let mut out = y[b + j];
+                for (o, a) in out.iter_mut().zip(&acc) {
+                    *o = (*o - a) * inv[j];
+                }
+                v[j] = out;
+            }
+            y[b..b + w].copy_from_slice(&v[..w]);
+        }
+        for (yi, &p) in y.iter().zip(&st.perm) {
+            for (c, v) in yi.iter().enumerate() {
+                x[c * n + p as usize] = *v;
+            }
         }
     }
 }

@@ -189,7 +189,7 @@ proptest! {
         seed in any::<u64>(),
         sn in supernodal(),
         custom in any::<bool>(),
-        columns in 1usize..4,
+        columns in 1usize..8,
     ) {
         let m = matrix(kind, size, seed, 1e-3);
         let (pattern, values) = m.assemble().expect("pattern");
@@ -210,10 +210,14 @@ proptest! {
             let range = k * m.n..(k + 1) * m.n;
             let e = backward_error(&pattern, &values, &ours[range.clone()], &b[range.clone()]);
             prop_assert!(e < 1e-13, "column {}: backward error {:e}", k, e);
-            // One column at a time gives the same bits.
+            // One column at a time gives the same solution, to rounding (blocks of columns
+            // sum in another order).
             let mut one = b[range.clone()].to_vec();
             chol.solve_in_place(&mut one, 1).expect("solve");
-            prop_assert_eq!(&one[..], &ours[range]);
+            let scale = one.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            for (x, y) in one.iter().zip(&ours[range]) {
+                prop_assert!((x - y).abs() <= 1e-12 * scale, "{} vs {}", x, y);
+            }
         }
         let mut theirs = b.clone();
         chol.solve_with_faer(&mut theirs, columns).expect("solve");

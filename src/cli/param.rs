@@ -4,7 +4,10 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 
 use bdmorph::param::bounded::{BoundedDistortion, BoundedOptions, BoundedReport};
-use bdmorph::param::{Method, ParamOptions, Parameterization};
+use bdmorph::param::{
+    Energies, Method, ParamOptions, Parameterization, SolveReport, COLLAPSE_RATIO, STALL_DECREASE,
+    STALL_ITERATIONS, STALL_STEP,
+};
 use bdmorph::render::{raster, surface, Drawing, Image, Viewport};
 
 use super::morph::progress_bar;
@@ -54,11 +57,14 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     }
     let mesh = bdmorph::io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
     let in_file = |e: bdmorph::param::ParamError| format!("{}: {e}", args.mesh.display());
-    let (name, uv, iterations, seconds, unmet) = match args.method {
+    let (name, uv, iterations, seconds, setup_seconds, stop, unmet) = match args.method {
         ParamMethod::Param(method) => {
             let mut options = ParamOptions::default();
             if let Some(n) = args.iterations {
                 options = options.with_iterations(n);
+            }
+            if let Some(w) = args.collapse_barrier {
+                options = options.with_collapse_barrier(w);
             }
             let name = method_name(method);
             let mut p = Parameterization::new(&mesh, method, options).map_err(in_file)?;
@@ -84,12 +90,15 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             if args.stats {
                 write!(std::io::stdout().lock(), "{lines}").map_err(|e| e.to_string())?;
             }
+            let unmet = param_failure(name, &report, &p.energies(), options);
             (
                 name,
                 p.uv().to_vec(),
                 report.iterations,
                 report.seconds,
-                None,
+                report.setup_seconds,
+                report.stop.name(),
+                unmet,
             )
         }
         ParamMethod::Bounded => {
@@ -118,22 +127,41 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
                 &in_file,
             )?;
             let unmet = (!report.converged).then(|| unmet_message(&report, k));
-            ("bounded", uv, report.iterations, report.seconds, unmet)
+            let stop = if report.converged {
+                "converged"
+            } else if report.stalled {
+                "stalled"
+            } else {
+                "iteration-limit"
+            };
+            (
+                "bounded",
+                uv,
+                report.iterations,
+                report.seconds,
+                0.0,
+                stop,
+                unmet,
+            )
         }
     };
     let e = bdmorph::param::energies(&mesh, &uv).map_err(in_file)?;
     if args.stats {
         writeln!(
             std::io::stdout().lock(),
-            "{{\"method\":\"{name}\",\"vertices\":{},\"faces\":{},\"iterations\":{},\"seconds\":{},\"symmetric_dirichlet\":{},\"arap\":{},\"mips\":{},\"flipped\":{}}}",
+            "{{\"method\":\"{name}\",\"vertices\":{},\"faces\":{},\"iterations\":{},\"seconds\":{},\"setup_seconds\":{},\"stop\":\"{stop}\",\"stalled\":{},\"symmetric_dirichlet\":{},\"arap\":{},\"mips\":{},\"flipped\":{},\"collapsed\":{},\"max_distortion\":{}}}",
             mesh.positions.len(),
             mesh.faces.len(),
             iterations,
             seconds,
+            setup_seconds,
+            stop == "stalled",
             json(e.symmetric_dirichlet),
             json(e.arap),
             json(e.mips),
-            e.flipped
+            e.flipped,
+            e.collapsed,
+            json(e.max_distortion)
         )
         .map_err(|e| e.to_string())?;
     }
@@ -170,8 +198,9 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     bdmorph::io::write_bytes_atomic(path, &bytes).map_err(|e| e.to_string())?;
     if !args.quiet {
         eprintln!(
-            "wrote {} ({name}: {} iterations in {:.2} s; E_SD {:.5}, E_ARAP {:.5}, E_MIPS {:.5}, {} flipped)",
+            "wrote {} ({name}: set-up {:.2} s, {} iterations in {:.2} s; E_SD {:.5}, E_ARAP {:.5}, E_MIPS {:.5}, {} flipped)",
             path.display(),
+            setup_seconds,
             iterations,
             seconds,
             e.symmetric_dirichlet,
@@ -181,6 +210,42 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
         );
     }
     unmet.map_or(Ok(()), Err)
+}
+
+/// What went wrong with a parameterisation, if anything: a stall (the map is not a minimum)
+/// or collapsed triangles (the map is degenerate there).
+fn param_failure(
+    name: &str,
+    report: &SolveReport,
+    e: &Energies,
+    options: ParamOptions,
+) -> Option<String> {
+    let mut parts = Vec::new();
+    if report.stalled() {
+        let held = report
+            .limiting_face
+            .map(|f| format!(", held back by face {f} about to collapse or invert"))
+            .unwrap_or_default();
+        parts.push(format!(
+            "{name} stalled after {} iterations: {STALL_ITERATIONS} steps in a row below {STALL_STEP} of the Newton step lowered the energy by less than {STALL_DECREASE} of it while the gradient norm was still {:.3e}{held}; the map is not a minimum",
+            report.iterations, report.gradient_norm
+        ));
+    }
+    if e.collapsed > 0 {
+        parts.push(format!(
+            "{} collapsed triangles (conformal distortion above {COLLAPSE_RATIO:e}; largest {:.3e})",
+            e.collapsed, e.max_distortion
+        ));
+    }
+    if parts.is_empty() {
+        return None;
+    }
+    let hint = if name == "arap-newton" && options.collapse_barrier == 0.0 {
+        ": ARAP is finite on degenerate triangles, so the flip-free line search keeps them from inverting but not from collapsing; a collapse barrier (--collapse-barrier 1e-4, the default) keeps them open"
+    } else {
+        ""
+    };
+    Some(format!("{}{hint}", parts.join("; ")))
 }
 
 /// Runs the bounded-distortion iterations with a progress bar (showing the largest

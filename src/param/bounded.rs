@@ -302,6 +302,8 @@ impl BoundedDistortion {
             {
                 let bound = (k_bound * (1.0 - 0.5 * self.options.tolerance)).max(1.0);
                 let mut solver = Newton::new(&self.frames, uv.len(), Energy::Excess { bound })?;
+                // As measured and documented for the finish (BENCHMARKS.md).
+                solver.set_partial_projection(false);
                 solver.fix(self.pins.iter().map(|&(v, _)| v));
                 newton = Some(solver);
             }

@@ -141,3 +141,114 @@ fn issue_23_stats_report_set_up_apart() {
         assert!(line.contains("\"collapsed\":0"), "{method}: {line}");
     }
 }
+
+/// A cone: `n` rim vertices on the unit circle (the boundary) and an apex at height `h`.
+fn cone(n: u32, h: f64) -> bdmorph::SurfaceMesh {
+    let mut positions: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * f64::from(i) / f64::from(n);
+            [a.cos(), a.sin(), 0.0]
+        })
+        .collect();
+    positions.push([0.0, 0.0, h]);
+    bdmorph::SurfaceMesh {
+        positions,
+        faces: (0..n).map(|i| [i, (i + 1) % n, n]).collect(),
+        texcoords: None,
+    }
+}
+
+fn bounded(mesh: &Path, k: &str, init: &str) -> Output {
+    bin()
+        .arg("param")
+        .arg(mesh)
+        .args(["--method", "bounded", "--max-distortion", k, "--init", init])
+        .args(["--stats", "-q"])
+        .output()
+        .expect("runs")
+}
+
+/// Issue 23: `--init lscm` that stalls goes on from Tutte before giving up, says what it
+/// tried, and says "not met", not "infeasible", without evidence; with evidence (a cone's
+/// apex whose angles cannot open to 2π under the bound) it says "infeasible" and why.
+#[test]
+fn issue_23_bounded_reports_the_starts_tried_and_infeasibility_only_with_evidence() {
+    let dir = scratch("bounded");
+    let finger = write_surface(&dir, "finger.obj", &generate::finger(6, 8, 0.6));
+    let r = bounded(&finger, "1.5", "lscm");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("was not met (not proved infeasible")
+            && err.contains("tried from lscm stalled")
+            && err.contains("then from tutte stalled")
+            && !err.contains("is infeasible"),
+        "{err}"
+    );
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    let first = stdout.lines().next().expect("the bounded report");
+    assert!(
+        first.contains("\"starts\":[{\"start\":\"lscm\"")
+            && first.contains("{\"start\":\"tutte\"")
+            && first.contains("\"infeasible\":false"),
+        "{first}"
+    );
+    assert!(field(&summary(&r), "setup_seconds") > 0.0);
+
+    let sharp = write_surface(&dir, "cone.obj", &cone(6, 3.0));
+    let r = bounded(&sharp, "1.2", "lscm");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("the distortion bound 1.2 is infeasible for this mesh: interior vertex 6"),
+        "{err}"
+    );
+    let first = String::from_utf8_lossy(&r.stdout)
+        .lines()
+        .next()
+        .expect("report")
+        .to_string();
+    assert!(first.contains("\"infeasible\":true"), "{first}");
+    assert!(field(&first, "lower_bound") > 1.2, "{first}");
+    // Met from the first start: one attempt, exit code 0.
+    let r = bounded(&finger, "2.5", "lscm");
+    assert!(r.status.success());
+    let first = String::from_utf8_lossy(&r.stdout)
+        .lines()
+        .next()
+        .expect("report")
+        .to_string();
+    assert!(
+        first.starts_with("{\"converged\":true") && !first.contains("{\"start\":\"tutte\""),
+        "{first}"
+    );
+}
+
+/// The same on shared disks: the hand at K = 2 is not met from either start (and not
+/// proved infeasible); David328 at K = 3 is proved infeasible by its vertex 284.
+#[test]
+fn issue_23_bounded_on_shared_disks() {
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data"));
+    if !dir.is_dir() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "../shared/data is missing, but CI must have it"
+        );
+        eprintln!("SKIPPED: {} not found", dir.display());
+        return;
+    }
+    let r = bounded(&dir.join("disk3d/odedstein/hand_lowres.obj"), "2", "lscm");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("not proved infeasible") && err.contains("then from tutte"),
+        "{err}"
+    );
+    let r = bounded(&dir.join("disk3d/ustc-cg/David328.obj"), "3", "lscm");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("is infeasible for this mesh: interior vertex 284"),
+        "{err}"
+    );
+}

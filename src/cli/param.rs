@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::io::Write as _;
 
-use bdmorph::param::bounded::{BoundedDistortion, BoundedOptions, BoundedReport};
+use bdmorph::param::bounded::{self, BoundedDistortion, BoundedOptions, BoundedReport, Flattening};
 use bdmorph::param::{
     Energies, Method, ParamOptions, Parameterization, SolveReport, COLLAPSE_RATIO, STALL_DECREASE,
     STALL_ITERATIONS, STALL_STEP,
@@ -105,28 +105,28 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             let k = args
                 .max_distortion
                 .ok_or("--method bounded needs --max-distortion K")?;
-            let init = match args.init {
-                InitArg::Tutte => Method::Tutte,
-                InitArg::Lscm => Method::Lscm,
+            // The chosen start first; when it does not meet the bound, the other one.
+            let starts = match args.init {
+                InitArg::Tutte => [Method::Tutte, Method::Lscm],
+                InitArg::Lscm => [Method::Lscm, Method::Tutte],
             };
-            let start =
-                Parameterization::new(&mesh, init, ParamOptions::default()).map_err(in_file)?;
-            let mut uv = start.uv().to_vec();
             let mut options = BoundedOptions::new(k);
             if let Some(n) = args.iterations {
                 options = options.with_iterations(n);
             }
-            let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
-            let report = run_bounded(
-                &mut bd,
-                &mut uv,
-                options.iterations,
-                "bounded",
-                args.quiet,
-                args.stats,
-                &in_file,
-            )?;
-            let unmet = (!report.converged).then(|| unmet_message(&report, k));
+            let bar = progress_bar(options.iterations as usize, args.quiet, "bounded");
+            let flat = bounded::flatten(&mesh, &args.pins, options, &starts, |i, it, worst| {
+                bar.set_position(u64::from(it));
+                bar.set_message(format!("{} start, K {worst:.3}", method_name(starts[i])));
+            })
+            .map_err(in_file)?;
+            bar.finish_and_clear();
+            if args.stats {
+                writeln!(std::io::stdout().lock(), "{}", flattening_json(&flat))
+                    .map_err(|e| e.to_string())?;
+            }
+            let report = flat.report();
+            let unmet = (!report.converged).then(|| flattening_message(&flat));
             let stop = if report.converged {
                 "converged"
             } else if report.stalled {
@@ -134,12 +134,14 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             } else {
                 "iteration-limit"
             };
+            let iterations = flat.attempts.iter().map(|a| a.report.iterations).sum();
+            let seconds = flat.attempts.iter().map(|a| a.report.seconds).sum();
             (
                 "bounded",
-                uv,
-                report.iterations,
-                report.seconds,
-                0.0,
+                flat.uv.clone(),
+                iterations,
+                seconds,
+                flat.setup_seconds,
                 stop,
                 unmet,
             )
@@ -296,6 +298,124 @@ fn bounded_json(r: &BoundedReport) -> String {
     )
 }
 
+/// A bounded-distortion parameterisation as one line of JSON: the kept map's report, which
+/// start it came from, every start tried, and the angle argument's lower bound.
+fn flattening_json(flat: &Flattening) -> String {
+    let report = bounded_json(flat.report());
+    let attempts: Vec<String> = flat
+        .attempts
+        .iter()
+        .map(|a| {
+            format!(
+                "{{\"start\":\"{}\",\"converged\":{},\"stalled\":{},\"iterations\":{},\"newton_iterations\":{},\"max_distortion\":{},\"inverted\":{},\"seconds\":{}}}",
+                method_name(a.start),
+                a.report.converged,
+                a.report.stalled,
+                a.report.iterations,
+                a.report.newton_iterations,
+                json(a.report.max_distortion),
+                a.report.inverted,
+                a.report.seconds
+            )
+        })
+        .collect();
+    format!(
+        "{},\"start\":\"{}\",\"starts\":[{}],\"setup_seconds\":{},\"lower_bound\":{},\"lower_bound_vertex\":{},\"infeasible\":{}}}",
+        report.trim_end_matches('}'),
+        method_name(flat.attempts[flat.kept].start),
+        attempts.join(","),
+        flat.setup_seconds,
+        json(flat.lower_bound.bound),
+        flat.lower_bound
+            .vertex
+            .map_or("null".to_string(), |v| v.to_string()),
+        flat.infeasible()
+    )
+}
+
+/// Why a bounded-distortion parameterisation did not meet its bound: the evidence that the
+/// bound is infeasible when there is some, otherwise every start tried and how it ended.
+fn flattening_message(flat: &Flattening) -> String {
+    let k = flat.bound;
+    let r = flat.report();
+    let lb = flat.lower_bound;
+    let tried: Vec<String> = flat
+        .attempts
+        .iter()
+        .map(|a| {
+            format!(
+                "from {} {} after {} iterations ({} Newton) at largest distortion {}",
+                method_name(a.start),
+                if a.report.stalled {
+                    "stalled"
+                } else {
+                    "stopped at the iteration limit"
+                },
+                a.report.iterations,
+                a.report.newton_iterations,
+                fmt_distortion(a.report.max_distortion)
+            )
+        })
+        .collect();
+    let kept = format!(
+        "kept the {} map: largest distortion {}, {} inverted triangles; worst: {}",
+        method_name(flat.attempts[flat.kept].start),
+        fmt_distortion(r.max_distortion),
+        r.inverted,
+        worst_faces(r)
+    );
+    if flat.infeasible() {
+        let vertex = lb
+            .vertex
+            .map_or(String::new(), |v| format!("interior vertex {v}"));
+        return format!(
+            "the distortion bound {k} is infeasible for this mesh: {vertex} has an angle sum of {:.4}π, and no corner angle can change by more than a bound of K allows (from θ to between 2 atan(tan(θ/2)/K) and 2 atan(K tan(θ/2))), so flattening it to 2π needs K >= {:.4}; {}; {kept}",
+            lb.angle_sum / std::f64::consts::PI,
+            lb.bound,
+            tried.join("; ")
+        );
+    }
+    let more = if r.stalled {
+        "; --iterations does not help a stall"
+    } else {
+        "; --iterations raises the limit"
+    };
+    format!(
+        "the distortion bound {k} was not met (not proved infeasible: the mesh's angle sums only show K >= {:.4}): tried {}; {kept}{more}",
+        lb.bound,
+        tried.join(", then ")
+    )
+}
+
+/// A distortion for messages: four decimals, or "infinite".
+fn fmt_distortion(d: f64) -> String {
+    if d.is_finite() {
+        format!("{d:.4}")
+    } else {
+        "infinite".into()
+    }
+}
+
+/// The three worst faces of a report, for messages.
+fn worst_faces(r: &BoundedReport) -> String {
+    let worst: Vec<String> = r
+        .worst
+        .iter()
+        .take(3)
+        .map(|(f, d)| {
+            format!(
+                "face {f} ({})",
+                if d.is_finite() {
+                    format!("{d:.3}")
+                } else {
+                    "inverted".into()
+                }
+            )
+        })
+        .collect();
+    worst.join(", ")
+}
+
 /// Why the bound was not met, naming the worst triangles.
 fn unmet_message(r: &BoundedReport, k: f64) -> String {
     let worst: Vec<String> = r
@@ -314,7 +434,7 @@ fn unmet_message(r: &BoundedReport, k: f64) -> String {
         })
         .collect();
     let why = if r.stalled {
-        "neither alternating projections nor the Newton finish could lower it further: the bound may be infeasible for this mesh and these constraints"
+        "neither alternating projections nor the Newton finish could lower it further: a local minimum, which does not prove the bound infeasible for this mesh and these handles"
     } else {
         "the iteration limit was reached; --iterations raises it"
     };

@@ -93,6 +93,17 @@ pub fn svd2(f: [[f64; 2]; 2]) -> Svd2 {
     }
 }
 
+/// The signed singular values of [`svd2`] alone (the same values, bit for bit, without the
+/// angles of `U` and `V`).
+pub fn sigma2(f: [[f64; 2]; 2]) -> [f64; 2] {
+    let [[a, b], [c, d]] = f;
+    let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
+    let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
+    let q = e.hypot(h);
+    let r = fq.hypot(g);
+    [q + r, q - r]
+}
+
 /// `U diag(x) Vᵀ`, or `U M Vᵀ` for a general middle `m`.
 fn sandwich(s: &Svd2, m: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
     let mut um = [[0.0; 2]; 2];
@@ -339,6 +350,7 @@ mod tests {
                 [random(&mut st), random(&mut st)],
             ];
             let s = svd2(f);
+            assert_eq!(sigma2(f), s.sigma);
             let back = sandwich(&s, [[s.sigma[0], 0.0], [0.0, s.sigma[1]]]);
             for i in 0..2 {
                 for j in 0..2 {

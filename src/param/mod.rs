@@ -41,7 +41,7 @@ use bdmorph_compiler::CompileError;
 use bdmorph_vm::VmError;
 
 use crate::io::SurfaceMesh;
-use energy::{svd2, Energy};
+use energy::{sigma2, Energy};
 use frames::Frames;
 use local_global::{Fit, LocalGlobal};
 use newton::{mean_energy, Newton};
@@ -291,13 +291,19 @@ pub fn energies(mesh: &SurfaceMesh, uv: &[[f64; 2]]) -> Result<Energies, ParamEr
 
 fn energies_of(frames: &Frames, uv: &[[f64; 2]]) -> Energies {
     let (mut flipped, mut collapsed, mut max_distortion) = (0, 0, 1.0f64);
+    let (mut sd, mut arap, mut mips) = (0.0, 0.0, 0.0);
     for f in 0..frames.len() {
         let m = frames.gradient(f, uv);
         let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
         if det.is_nan() || det <= 0.0 {
             flipped += 1;
         }
-        let [s1, s2] = svd2(m).sigma;
+        let sigma = sigma2(m);
+        let a = frames.area[f];
+        sd += a * Energy::SymmetricDirichlet.psi(sigma);
+        arap += a * Energy::Arap.psi(sigma);
+        mips += a * Energy::Mips.psi(sigma);
+        let [s1, s2] = sigma;
         let ratio = if s2 != 0.0 {
             s1 / s2.abs()
         } else {
@@ -312,10 +318,11 @@ fn energies_of(frames: &Frames, uv: &[[f64; 2]]) -> Energies {
             max_distortion.max(ratio)
         };
     }
+    let total = frames.total_area;
     Energies {
-        symmetric_dirichlet: mean_energy(Energy::SymmetricDirichlet, frames, uv),
-        arap: mean_energy(Energy::Arap, frames, uv),
-        mips: mean_energy(Energy::Mips, frames, uv),
+        symmetric_dirichlet: sd / total,
+        arap: arap / total,
+        mips: mips / total,
         flipped,
         collapsed,
         max_distortion,
@@ -324,7 +331,7 @@ fn energies_of(frames: &Frames, uv: &[[f64; 2]]) -> Energies {
 
 enum Solver {
     Direct,
-    LocalGlobal(Box<LocalGlobal>, Energy),
+    LocalGlobal(Box<LocalGlobal>),
     Newton(Box<Newton>),
 }
 
@@ -387,14 +394,18 @@ impl Parameterization {
         };
         let solver = match method {
             Method::Tutte | Method::Lscm => Solver::Direct,
-            Method::Arap => Solver::LocalGlobal(
-                Box::new(LocalGlobal::new(&frames, n, boundary[0], Fit::Rotation)?),
-                Energy::Arap,
-            ),
-            Method::Asap => Solver::LocalGlobal(
-                Box::new(LocalGlobal::new(&frames, n, boundary[0], Fit::Similarity)?),
-                Energy::Mips,
-            ),
+            Method::Arap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
+                &frames,
+                n,
+                boundary[0],
+                Fit::Rotation,
+            )?)),
+            Method::Asap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
+                &frames,
+                n,
+                boundary[0],
+                Fit::Similarity,
+            )?)),
             Method::SymmetricDirichlet => Solver::Newton(Box::new(Newton::new(
                 &frames,
                 n,
@@ -448,10 +459,8 @@ impl Parameterization {
     pub fn step(&mut self) -> Result<Option<StepReport>, ParamError> {
         match &mut self.solver {
             Solver::Direct => Ok(None),
-            Solver::LocalGlobal(lg, e) => {
-                let before = mean_energy(*e, &self.frames, &self.uv);
-                lg.iterate(&self.frames, &mut self.uv)?;
-                let after = mean_energy(*e, &self.frames, &self.uv);
+            Solver::LocalGlobal(lg) => {
+                let (before, after) = lg.iterate(&self.frames, &mut self.uv)?;
                 Ok(Some(StepReport {
                     energy_before: before,
                     energy_after: after,

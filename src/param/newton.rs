@@ -14,7 +14,7 @@
 
 use bdmorph_vm::sparse::{Cholesky, LowerPattern};
 
-use super::energy::{svd2, Energy};
+use super::energy::{sigma2, svd2, Energy};
 use super::frames::Frames;
 use super::ParamError;
 
@@ -318,8 +318,7 @@ fn regularise(pattern: &LowerPattern, values: &mut [f64]) {
 pub(crate) fn mean_energy(energy: Energy, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
     let mut e = 0.0;
     for f in 0..frames.len() {
-        let svd = svd2(frames.gradient(f, uv));
-        e += frames.area[f] * energy.psi(svd.sigma);
+        e += frames.area[f] * energy.psi(sigma2(frames.gradient(f, uv)));
     }
     e / frames.total_area
 }

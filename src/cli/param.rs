@@ -57,7 +57,7 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     }
     let mesh = bdmorph::io::read_mesh(&args.mesh).map_err(|e| e.to_string())?;
     let in_file = |e: bdmorph::param::ParamError| format!("{}: {e}", args.mesh.display());
-    let (name, uv, iterations, seconds, setup_seconds, stop, unmet) = match args.method {
+    let (name, uv, e, iterations, seconds, setup_seconds, stop, unmet) = match args.method {
         ParamMethod::Param(method) => {
             let mut options = ParamOptions::default();
             if let Some(n) = args.iterations {
@@ -90,10 +90,12 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             if args.stats {
                 write!(std::io::stdout().lock(), "{lines}").map_err(|e| e.to_string())?;
             }
-            let unmet = param_failure(name, &report, &p.energies(), options);
+            let energies = p.energies();
+            let unmet = param_failure(name, &report, &energies, options);
             (
                 name,
                 p.uv().to_vec(),
+                energies,
                 report.iterations,
                 report.seconds,
                 report.setup_seconds,
@@ -136,9 +138,11 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             };
             let iterations = flat.attempts.iter().map(|a| a.report.iterations).sum();
             let seconds = flat.attempts.iter().map(|a| a.report.seconds).sum();
+            let energies = bdmorph::param::energies(&mesh, &flat.uv).map_err(in_file)?;
             (
                 "bounded",
                 flat.uv.clone(),
+                energies,
                 iterations,
                 seconds,
                 flat.setup_seconds,
@@ -147,7 +151,6 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             )
         }
     };
-    let e = bdmorph::param::energies(&mesh, &uv).map_err(in_file)?;
     if args.stats {
         writeln!(
             std::io::stdout().lock(),

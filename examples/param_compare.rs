@@ -1,5 +1,6 @@
 //! Every parameterisation method on one disk-topology mesh: energies (area-weighted means,
-//! the mesh scaled to area 1), flips, iterations and time, for BENCHMARKS.md.
+//! the mesh scaled to area 1), flipped and collapsed triangles, iterations and why they
+//! stopped, set-up and total time, for BENCHMARKS.md.
 //!
 //! ```sh
 //! cargo run --release --example param_compare -- ../shared/data/disk3d/libigl/camelhead.off
@@ -51,14 +52,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let method: Method = name.parse()?;
         let started = std::time::Instant::now();
         let mut p = Parameterization::new(&mesh, method, ParamOptions::default())?;
-        let setup = started.elapsed().as_secs_f64();
         let mut trace = Vec::new();
         let report =
             p.solve_with(|i, r| trace.push((i, r.energy_after, started.elapsed().as_secs_f64())))?;
         let e = p.energies();
         println!(
-            "{name:>12}: E_SD {:.5}  E_ARAP {:.5}  E_MIPS {:.5}  flipped {}  iterations {}  set-up {:.3} s  total {:.3} s",
-            e.symmetric_dirichlet, e.arap, e.mips, e.flipped, report.iterations, setup, setup + report.seconds
+            "{name:>12}: E_SD {:.5}  E_ARAP {:.5}  E_MIPS {:.5}  flipped {}  collapsed {}  largest distortion {:.3e}  iterations {} ({})  set-up {:.3} s  total {:.3} s",
+            e.symmetric_dirichlet,
+            e.arap,
+            e.mips,
+            e.flipped,
+            e.collapsed,
+            e.max_distortion,
+            report.iterations,
+            report.stop.name(),
+            report.setup_seconds,
+            report.setup_seconds + report.seconds
         );
         for (i, energy, t) in trace
             .iter()

@@ -4,7 +4,9 @@
 mod common;
 
 use bdmorph::generate;
-use bdmorph::param::bounded::{distortion, BoundedDistortion, BoundedOptions};
+use bdmorph::param::bounded::{
+    angle_lower_bound, distortion, flatten, BoundedDistortion, BoundedOptions,
+};
 use bdmorph::param::{Method, ParamError, ParamOptions, Parameterization};
 use bdmorph::SurfaceMesh;
 
@@ -228,4 +230,130 @@ fn bad_bounds_and_pins_are_typed_errors() {
         BoundedDistortion::new(&mesh, &[(999, [0.0, 0.0])], BoundedOptions::new(2.0)),
         Err(ParamError::BadPin { vertex: 999, .. })
     ));
+}
+
+/// A cone: `n` rim vertices on the unit circle (the boundary) and an apex at height `h`.
+fn cone(n: u32, h: f64) -> SurfaceMesh {
+    let mut positions: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * f64::from(i) / f64::from(n);
+            [a.cos(), a.sin(), 0.0]
+        })
+        .collect();
+    positions.push([0.0, 0.0, h]);
+    let faces = (0..n).map(|i| [i, (i + 1) % n, n]).collect();
+    SurfaceMesh {
+        positions,
+        faces,
+        texcoords: None,
+    }
+}
+
+/// The angle argument on a sharp cone has a closed form: the apex's `n` equal angles `θ`
+/// must open to `2π / n` each, and a bound `K` opens an angle at most to
+/// `2 atan(K tan(θ/2))`, so `K >= tan(π/n) / tan(θ/2)`. Below it the bound is reported
+/// infeasible with that vertex as evidence and no further start is tried; above it, met.
+#[test]
+fn issue_23_infeasibility_needs_evidence_the_angle_bound_of_a_cone() {
+    let (n, h) = (6u32, 3.0);
+    let mesh = cone(n, h);
+    let theta = 2.0 * ((std::f64::consts::PI / f64::from(n)).sin() / (1.0 + h * h).sqrt()).asin();
+    let expected = (std::f64::consts::PI / f64::from(n)).tan() / (0.5 * theta).tan();
+    let lb = angle_lower_bound(&mesh);
+    assert!(
+        (lb.bound - expected).abs() < 1e-9 * expected,
+        "{lb:?} vs {expected}"
+    );
+    assert_eq!(lb.vertex, Some(n));
+    assert!((lb.angle_sum - f64::from(n) * theta).abs() < 1e-12);
+
+    let below = BoundedOptions::new(0.9 * expected).with_iterations(300);
+    let flat = flatten(
+        &mesh,
+        &[],
+        below,
+        &[Method::Lscm, Method::Tutte],
+        |_, _, _| {},
+    )
+    .expect("flatten");
+    assert!(flat.infeasible() && !flat.converged(), "{flat:?}");
+    assert_eq!(
+        flat.attempts.len(),
+        1,
+        "no second start once proved infeasible"
+    );
+    // No map beats the bound: the solver's best is at or above it.
+    assert!(flat.report().max_distortion >= expected * (1.0 - 1e-9));
+
+    let above = BoundedOptions::new(1.05 * expected);
+    let flat = flatten(&mesh, &[], above, &[Method::Tutte], |_, _, _| {}).expect("flatten");
+    assert!(flat.converged() && !flat.infeasible(), "{flat:?}");
+    assert!(largest(&mesh, &flat.uv) <= 1.05 * expected * (1.0 + 1e-3));
+}
+
+/// Issue 23: a start that stalls does not prove the bound infeasible. `flatten` tries the
+/// next start, reports every attempt, and keeps the best map; the coarse finger at K = 1.5
+/// stalls from LSCM and from Tutte (above the angle argument's bound, so "not met", not
+/// "infeasible").
+#[test]
+fn issue_23_a_stalled_start_is_followed_by_the_other() {
+    let mesh = generate::finger(6, 8, 0.6);
+    let options = BoundedOptions::new(1.5).with_iterations(1500);
+    let mut seen = Vec::new();
+    let flat = flatten(
+        &mesh,
+        &[],
+        options,
+        &[Method::Lscm, Method::Tutte],
+        |i, _, _| {
+            if seen.last() != Some(&i) {
+                seen.push(i);
+            }
+        },
+    )
+    .expect("flatten");
+    eprintln!("{flat:#?}");
+    assert_eq!(seen, [0, 1]);
+    let starts: Vec<Method> = flat.attempts.iter().map(|a| a.start).collect();
+    assert_eq!(starts, [Method::Lscm, Method::Tutte]);
+    assert!(flat
+        .attempts
+        .iter()
+        .all(|a| a.report.stalled && !a.report.converged));
+    assert!(
+        !flat.infeasible() && flat.lower_bound.bound < 1.5,
+        "{flat:?}"
+    );
+    let best = flat
+        .attempts
+        .iter()
+        .map(|a| a.report.max_distortion)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(flat.report().max_distortion, best);
+    assert!((largest(&mesh, &flat.uv) - flat.report().max_distortion).abs() < 1e-9);
+    // Where the first start meets the bound, it is the only one tried.
+    let flat = flatten(
+        &mesh,
+        &[],
+        BoundedOptions::new(2.5),
+        &[Method::Lscm, Method::Tutte],
+        |_, _, _| {},
+    )
+    .expect("flatten");
+    assert!(flat.converged() && flat.attempts.len() == 1, "{flat:?}");
+}
+
+/// The shared disks' angle bounds: what the stalls at the hand's K = 2 do and do not prove.
+#[test]
+fn issue_23_shared_disks_angle_bounds() {
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    for rel in common::SHARED_DISKS {
+        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let lb = angle_lower_bound(&mesh);
+        eprintln!("{rel}: {lb:?}");
+        // Every bound met in `shared_disks_are_pushed_under_the_bound` is above it.
+        assert!(lb.bound < 2.0, "{rel}: {lb:?}");
+    }
 }

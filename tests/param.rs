@@ -4,7 +4,7 @@
 mod common;
 
 use bdmorph::generate;
-use bdmorph::param::{Method, ParamError, ParamOptions, Parameterization};
+use bdmorph::param::{Method, ParamError, ParamOptions, Parameterization, Stop, COLLAPSE_RATIO};
 use bdmorph::SurfaceMesh;
 
 /// A disk of `rings` rings lifted to a bumpy height field.
@@ -252,4 +252,88 @@ fn camel_head_reaches_the_bar_of_slim() {
     let e = p.energies();
     assert!(e.mips <= 2.0073, "SLIM reaches 2.0073: {}", e.mips);
     assert_eq!(e.flipped, 0);
+}
+
+/// Issue 23: ARAP is finite on a degenerate triangle, so plain ARAP by flip-free projected
+/// Newton squashes triangles of a coarse finger flat against the `det F = 0` wall, each
+/// step a tenth of the last; the solver must say it stalled and count the collapsed
+/// triangles. With the default collapse barrier it reaches a minimum (the gradient down by
+/// orders of magnitude) with a lower ARAP energy and none collapsed.
+#[test]
+fn issue_23_plain_arap_newton_stalls_and_says_so_the_barrier_converges() {
+    let mesh = generate::finger(6, 8, 0.6);
+    let plain = ParamOptions::default().with_collapse_barrier(0.0);
+    let mut p = Parameterization::new(&mesh, Method::ArapNewton, plain).expect("set up");
+    let report = p.solve().expect("solve");
+    let stalled = p.energies();
+    eprintln!("plain ARAP: {report:?} {stalled:?}");
+    assert_eq!(report.stop, Stop::Stalled);
+    assert!(
+        report.stalled() && report.limiting_face.is_some(),
+        "{report:?}"
+    );
+    assert!(report.iterations < 20, "stops by itself: {report:?}");
+    assert!(report.collapsed > 0 && report.collapsed == stalled.collapsed);
+    assert!(stalled.max_distortion > COLLAPSE_RATIO);
+    assert_eq!(stalled.flipped, 0);
+    let first = report.energies[0];
+
+    let mut p =
+        Parameterization::new(&mesh, Method::ArapNewton, ParamOptions::default()).expect("set up");
+    let start_gradient = p.step().expect("step").expect("iterative").gradient_norm;
+    let report = p.solve().expect("solve");
+    let e = p.energies();
+    eprintln!("with the barrier: {report:?} {e:?}");
+    assert_eq!(report.stop, Stop::Converged, "{report:?}");
+    assert!(report.gradient_norm < 1e-4 * start_gradient, "{report:?}");
+    assert_eq!((e.collapsed, e.flipped, report.collapsed), (0, 0, 0));
+    assert!(e.max_distortion < 100.0, "{e:?}");
+    assert!(
+        e.arap < 0.8 * stalled.arap,
+        "{} vs {}",
+        e.arap,
+        stalled.arap
+    );
+    assert!(first.is_finite());
+}
+
+/// The collapse barrier's weight is checked.
+#[test]
+fn bad_collapse_barrier_weights_are_typed_errors() {
+    let mesh = generate::finger(6, 8, 0.6);
+    for w in [-1e-3, f64::NAN, f64::INFINITY] {
+        let options = ParamOptions::default().with_collapse_barrier(w);
+        assert!(matches!(
+            Parameterization::new(&mesh, Method::ArapNewton, options),
+            Err(ParamError::BadBarrier(_))
+        ));
+    }
+}
+
+/// Issue 23 on the shared disks (cow, camel head, bunny head, hand): plain ARAP by projected
+/// Newton stalls with one triangle collapsed; the default (with the collapse barrier)
+/// converges with none collapsed or flipped, every method's report carries its set-up time,
+/// and no flip-free method stalls.
+#[test]
+fn issue_23_shared_disks_arap_newton_converges_without_collapse() {
+    let Some(dir) = common::shared_data() else {
+        return;
+    };
+    for rel in common::SHARED_DISKS {
+        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let plain = ParamOptions::default().with_collapse_barrier(0.0);
+        let mut p = Parameterization::new(&mesh, Method::ArapNewton, plain).expect(rel);
+        let report = p.solve().expect(rel);
+        eprintln!("{rel}: plain ARAP {report:?} {:?}", p.energies());
+        assert!(report.stalled(), "{rel}: {report:?}");
+        for method in [Method::ArapNewton, Method::SymmetricDirichlet, Method::Mips] {
+            let mut p = Parameterization::new(&mesh, method, ParamOptions::default()).expect(rel);
+            let report = p.solve().expect(rel);
+            let e = p.energies();
+            eprintln!("{rel} {method:?}: {report:?} {e:?}");
+            assert_eq!(report.stop, Stop::Converged, "{rel} {method:?}: {report:?}");
+            assert_eq!((e.collapsed, e.flipped), (0, 0), "{rel} {method:?}");
+            assert!(report.setup_seconds > 0.0);
+        }
+    }
 }

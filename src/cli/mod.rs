@@ -356,6 +356,10 @@ struct ParamArgs {
     /// the projected Newton methods, which usually stop much sooner).
     #[arg(long, value_name = "N")]
     iterations: Option<u32>,
+    /// For --method arap-newton: the weight of the collapse barrier added to ARAP (default
+    /// 1e-4); 0 minimises plain ARAP, which can squash triangles flat and stall.
+    #[arg(long, value_name = "W", allow_hyphen_values = true)]
+    collapse_barrier: Option<f64>,
     /// Output: .obj (the mesh with `vt`) or .png (a picture of the flattened mesh).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,

@@ -3,8 +3,11 @@
 use std::fmt::Write as _;
 use std::io::Write as _;
 
-use bdmorph::param::bounded::{BoundedDistortion, BoundedOptions, BoundedReport};
-use bdmorph::param::{Method, ParamOptions, Parameterization};
+use bdmorph::param::bounded::{self, BoundedDistortion, BoundedOptions, BoundedReport, Flattening};
+use bdmorph::param::{
+    Energies, Method, ParamOptions, Parameterization, SolveReport, COLLAPSE_RATIO, STALL_DECREASE,
+    STALL_ITERATIONS, STALL_STEP,
+};
 use bdmorph::render::{raster, surface, Drawing, Image, Viewport};
 
 use super::morph::progress_bar;
@@ -60,11 +63,15 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     let in_file = |e: bdmorph::param::ParamError| {
         bdmorph::Located::new(&args.mesh, &mesh_lines, &mesh.faces, e).to_string()
     };
-    let (name, uv, iterations, seconds, unmet) = match args.method {
+    let line = |f| mesh_lines.face_line(f);
+    let (name, uv, e, iterations, seconds, setup_seconds, stop, unmet) = match args.method {
         ParamMethod::Param(method) => {
             let mut options = ParamOptions::default();
             if let Some(n) = args.iterations {
                 options = options.with_iterations(n);
+            }
+            if let Some(w) = args.collapse_barrier {
+                options = options.with_collapse_barrier(w);
             }
             let name = method_name(method);
             let mut p = Parameterization::new(&mesh, method, options).map_err(in_file)?;
@@ -90,57 +97,83 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
             if args.stats {
                 write!(std::io::stdout().lock(), "{lines}").map_err(|e| e.to_string())?;
             }
+            let energies = p.energies();
+            let unmet = param_failure(name, &report, &energies, options);
             (
                 name,
                 p.uv().to_vec(),
+                energies,
                 report.iterations,
                 report.seconds,
-                None,
+                report.setup_seconds,
+                report.stop.name(),
+                unmet,
             )
         }
         ParamMethod::Bounded => {
             let k = args
                 .max_distortion
                 .ok_or("--method bounded needs --max-distortion K")?;
-            let init = match args.init {
-                InitArg::Tutte => Method::Tutte,
-                InitArg::Lscm => Method::Lscm,
+            // The chosen start first; when it does not meet the bound, the other one.
+            let starts = match args.init {
+                InitArg::Tutte => [Method::Tutte, Method::Lscm],
+                InitArg::Lscm => [Method::Lscm, Method::Tutte],
             };
-            let start =
-                Parameterization::new(&mesh, init, ParamOptions::default()).map_err(in_file)?;
-            let mut uv = start.uv().to_vec();
             let mut options = BoundedOptions::new(k);
             if let Some(n) = args.iterations {
                 options = options.with_iterations(n);
             }
-            let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
-            let report = run_bounded(
-                &mut bd,
-                &mut uv,
-                options.iterations,
+            let bar = progress_bar(options.iterations as usize, args.quiet, "bounded");
+            let flat = bounded::flatten(&mesh, &args.pins, options, &starts, |i, it, worst| {
+                bar.set_position(u64::from(it));
+                bar.set_message(format!("{} start, K {worst:.3}", method_name(starts[i])));
+            })
+            .map_err(in_file)?;
+            bar.finish_and_clear();
+            if args.stats {
+                writeln!(std::io::stdout().lock(), "{}", flattening_json(&flat))
+                    .map_err(|e| e.to_string())?;
+            }
+            let report = flat.report();
+            let unmet = (!report.converged).then(|| flattening_message(&flat, &line));
+            let stop = if report.converged {
+                "converged"
+            } else if report.stalled {
+                "stalled"
+            } else {
+                "iteration-limit"
+            };
+            let iterations = flat.attempts.iter().map(|a| a.report.iterations).sum();
+            let seconds = flat.attempts.iter().map(|a| a.report.seconds).sum();
+            let energies = bdmorph::param::energies(&mesh, &flat.uv).map_err(in_file)?;
+            (
                 "bounded",
-                args.quiet,
-                args.stats,
-                &in_file,
-            )?;
-            let line = |f| mesh_lines.face_line(f);
-            let unmet = (!report.converged).then(|| unmet_message(&report, k, &line));
-            ("bounded", uv, report.iterations, report.seconds, unmet)
+                flat.uv.clone(),
+                energies,
+                iterations,
+                seconds,
+                flat.setup_seconds,
+                stop,
+                unmet,
+            )
         }
     };
-    let e = bdmorph::param::energies(&mesh, &uv).map_err(in_file)?;
     if args.stats {
         writeln!(
             std::io::stdout().lock(),
-            "{{\"method\":\"{name}\",\"vertices\":{},\"faces\":{},\"iterations\":{},\"seconds\":{},\"symmetric_dirichlet\":{},\"arap\":{},\"mips\":{},\"flipped\":{}}}",
+            "{{\"method\":\"{name}\",\"vertices\":{},\"faces\":{},\"iterations\":{},\"seconds\":{},\"setup_seconds\":{},\"stop\":\"{stop}\",\"stalled\":{},\"symmetric_dirichlet\":{},\"arap\":{},\"mips\":{},\"flipped\":{},\"collapsed\":{},\"max_distortion\":{}}}",
             mesh.positions.len(),
             mesh.faces.len(),
             iterations,
             seconds,
+            setup_seconds,
+            stop == "stalled",
             json(e.symmetric_dirichlet),
             json(e.arap),
             json(e.mips),
-            e.flipped
+            e.flipped,
+            e.collapsed,
+            json(e.max_distortion)
         )
         .map_err(|e| e.to_string())?;
     }
@@ -177,8 +210,9 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     bdmorph::io::write_bytes_atomic(path, &bytes).map_err(|e| e.to_string())?;
     if !args.quiet {
         eprintln!(
-            "wrote {} ({name}: {} iterations in {:.2} s; E_SD {:.5}, E_ARAP {:.5}, E_MIPS {:.5}, {} flipped)",
+            "wrote {} ({name}: set-up {:.2} s, {} iterations in {:.2} s; E_SD {:.5}, E_ARAP {:.5}, E_MIPS {:.5}, {} flipped)",
             path.display(),
+            setup_seconds,
             iterations,
             seconds,
             e.symmetric_dirichlet,
@@ -188,6 +222,42 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
         );
     }
     unmet.map_or(Ok(()), Err)
+}
+
+/// What went wrong with a parameterisation, if anything: a stall (the map is not a minimum)
+/// or collapsed triangles (the map is degenerate there).
+fn param_failure(
+    name: &str,
+    report: &SolveReport,
+    e: &Energies,
+    options: ParamOptions,
+) -> Option<String> {
+    let mut parts = Vec::new();
+    if report.stalled() {
+        let held = report
+            .limiting_face
+            .map(|f| format!(", held back by face {f} about to collapse or invert"))
+            .unwrap_or_default();
+        parts.push(format!(
+            "{name} stalled after {} iterations: {STALL_ITERATIONS} steps in a row below {STALL_STEP} of the Newton step lowered the energy by less than {STALL_DECREASE} of it while the gradient norm was still {:.3e}{held}; the map is not a minimum",
+            report.iterations, report.gradient_norm
+        ));
+    }
+    if e.collapsed > 0 {
+        parts.push(format!(
+            "{} collapsed triangles (conformal distortion above {COLLAPSE_RATIO:e}; largest {:.3e})",
+            e.collapsed, e.max_distortion
+        ));
+    }
+    if parts.is_empty() {
+        return None;
+    }
+    let hint = if name == "arap-newton" && options.collapse_barrier == 0.0 {
+        ": ARAP is finite on degenerate triangles, so the flip-free line search keeps them from inverting but not from collapsing; a collapse barrier (--collapse-barrier 1e-4, the default) keeps them open"
+    } else {
+        ""
+    };
+    Some(format!("{}{hint}", parts.join("; ")))
 }
 
 /// Runs the bounded-distortion iterations with a progress bar (showing the largest
@@ -238,9 +308,106 @@ fn bounded_json(r: &BoundedReport) -> String {
     )
 }
 
-/// Why the bound was not met, naming the worst triangles (and their lines in the file, by
-/// `line`).
-fn unmet_message(r: &BoundedReport, k: f64, line: &dyn Fn(usize) -> Option<usize>) -> String {
+/// A bounded-distortion parameterisation as one line of JSON: the kept map's report, which
+/// start it came from, every start tried, and the angle argument's lower bound.
+fn flattening_json(flat: &Flattening) -> String {
+    let report = bounded_json(flat.report());
+    let attempts: Vec<String> = flat
+        .attempts
+        .iter()
+        .map(|a| {
+            format!(
+                "{{\"start\":\"{}\",\"converged\":{},\"stalled\":{},\"iterations\":{},\"newton_iterations\":{},\"max_distortion\":{},\"inverted\":{},\"seconds\":{}}}",
+                method_name(a.start),
+                a.report.converged,
+                a.report.stalled,
+                a.report.iterations,
+                a.report.newton_iterations,
+                json(a.report.max_distortion),
+                a.report.inverted,
+                a.report.seconds
+            )
+        })
+        .collect();
+    format!(
+        "{},\"start\":\"{}\",\"starts\":[{}],\"setup_seconds\":{},\"lower_bound\":{},\"lower_bound_vertex\":{},\"infeasible\":{}}}",
+        report.trim_end_matches('}'),
+        method_name(flat.attempts[flat.kept].start),
+        attempts.join(","),
+        flat.setup_seconds,
+        json(flat.lower_bound.bound),
+        flat.lower_bound
+            .vertex
+            .map_or("null".to_string(), |v| v.to_string()),
+        flat.infeasible()
+    )
+}
+
+/// Why a bounded-distortion parameterisation did not meet its bound: the evidence that the
+/// bound is infeasible when there is some, otherwise every start tried and how it ended.
+fn flattening_message(flat: &Flattening, line: &dyn Fn(usize) -> Option<usize>) -> String {
+    let k = flat.bound;
+    let r = flat.report();
+    let lb = flat.lower_bound;
+    let tried: Vec<String> = flat
+        .attempts
+        .iter()
+        .map(|a| {
+            format!(
+                "from {} {} after {} iterations ({} Newton) at largest distortion {}",
+                method_name(a.start),
+                if a.report.stalled {
+                    "stalled"
+                } else {
+                    "stopped at the iteration limit"
+                },
+                a.report.iterations,
+                a.report.newton_iterations,
+                fmt_distortion(a.report.max_distortion)
+            )
+        })
+        .collect();
+    let kept = format!(
+        "kept the {} map: largest distortion {}, {} inverted triangles; worst (0-based): {}",
+        method_name(flat.attempts[flat.kept].start),
+        fmt_distortion(r.max_distortion),
+        r.inverted,
+        worst_faces(r, line)
+    );
+    if flat.infeasible() {
+        let vertex = lb
+            .vertex
+            .map_or(String::new(), |v| format!("interior vertex {v}"));
+        return format!(
+            "the distortion bound {k} is infeasible for this mesh: {vertex} has an angle sum of {:.4}π, and no corner angle can change by more than a bound of K allows (from θ to between 2 atan(tan(θ/2)/K) and 2 atan(K tan(θ/2))), so flattening it to 2π needs K >= {:.4}; {}; {kept}",
+            lb.angle_sum / std::f64::consts::PI,
+            lb.bound,
+            tried.join("; ")
+        );
+    }
+    let more = if r.stalled {
+        "; --iterations does not help a stall"
+    } else {
+        "; --iterations raises the limit"
+    };
+    format!(
+        "the distortion bound {k} was not met (not proved infeasible: the mesh's angle sums only show K >= {:.4}): tried {}; {kept}{more}",
+        lb.bound,
+        tried.join(", then ")
+    )
+}
+
+/// A distortion for messages: four decimals, or "infinite".
+fn fmt_distortion(d: f64) -> String {
+    if d.is_finite() {
+        format!("{d:.4}")
+    } else {
+        "infinite".into()
+    }
+}
+
+/// The three worst faces of a report (and their lines in the file, by `line`), for messages.
+fn worst_faces(r: &BoundedReport, line: &dyn Fn(usize) -> Option<usize>) -> String {
     let worst: Vec<String> = r
         .worst
         .iter()
@@ -257,8 +424,14 @@ fn unmet_message(r: &BoundedReport, k: f64, line: &dyn Fn(usize) -> Option<usize
             )
         })
         .collect();
+    worst.join(", ")
+}
+
+/// Why the bound was not met, naming the worst triangles (and their lines in the file, by
+/// `line`).
+fn unmet_message(r: &BoundedReport, k: f64, line: &dyn Fn(usize) -> Option<usize>) -> String {
     let why = if r.stalled {
-        "neither alternating projections nor the Newton finish could lower it further: the bound may be infeasible for this mesh and these constraints"
+        "neither alternating projections nor the Newton finish could lower it further: a local minimum, which does not prove the bound infeasible for this mesh and these handles"
     } else {
         "the iteration limit was reached; --iterations raises it"
     };
@@ -266,9 +439,9 @@ fn unmet_message(r: &BoundedReport, k: f64, line: &dyn Fn(usize) -> Option<usize
         "the distortion bound {k} was not met after {} iterations ({} of them Newton): largest distortion {}, {} inverted triangles; worst (0-based): {} ({why})",
         r.iterations,
         r.newton_iterations,
-        if r.max_distortion.is_finite() { format!("{:.4}", r.max_distortion) } else { "infinite".into() },
+        fmt_distortion(r.max_distortion),
         r.inverted,
-        worst.join(", ")
+        worst_faces(r, line)
     )
 }
 

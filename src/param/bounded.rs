@@ -17,6 +17,10 @@
 //!
 //! The iterations stop when every triangle's distortion is at most `K (1 + tolerance)` and no
 //! triangle is inverted, or at the iteration limit, with the worst triangles reported.
+//!
+//! [`flatten`] runs it from one starting map after another (Tutte, LSCM, ...) until one
+//! meets the bound, and [`angle_lower_bound`] is the evidence that a bound is infeasible:
+//! no map of the mesh can meet a bound below it, whatever the start.
 
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -26,7 +30,7 @@ use bdmorph_cholesky::Cholesky;
 use super::energy::{svd2, Energy};
 use super::frames::Frames;
 use super::newton::Newton;
-use super::ParamError;
+use super::{Method, ParamError, ParamOptions, Parameterization};
 use crate::io::SurfaceMesh;
 
 const NONE: u32 = u32::MAX;
@@ -124,8 +128,9 @@ pub struct BoundedReport {
     /// Iterations run, both phases.
     pub iterations: u32,
     /// Whether the iterations stopped before the limit because neither phase could lower the
-    /// largest distortion any further (a local minimum of the excess: the bound may be
-    /// infeasible for this mesh and these constraints).
+    /// largest distortion any further: a local minimum of the excess, which does not prove
+    /// the bound infeasible (another start may meet it: [`flatten`]; [`angle_lower_bound`] is
+    /// evidence of infeasibility).
     pub stalled: bool,
     /// Of those, the projected Newton iterations of the finishing phase (zero when the
     /// alternating projections alone met the bound).
@@ -302,6 +307,8 @@ impl BoundedDistortion {
             {
                 let bound = (k_bound * (1.0 - 0.5 * self.options.tolerance)).max(1.0);
                 let mut solver = Newton::new(&self.frames, uv.len(), Energy::Excess { bound })?;
+                // As measured and documented for the finish (BENCHMARKS.md).
+                solver.set_partial_projection(false);
                 solver.fix(self.pins.iter().map(|&(v, _)| v));
                 newton = Some(solver);
             }
@@ -483,6 +490,227 @@ impl BoundedDistortion {
         }
         Ok(())
     }
+}
+
+/// A lower bound on the distortion bound `K` that any orientation-preserving piecewise-linear
+/// map of a mesh into the plane can meet ([`angle_lower_bound`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AngleBound {
+    /// No map has every triangle's distortion below this (1 when the argument proves
+    /// nothing).
+    pub bound: f64,
+    /// The interior vertex that gives it (`None` when no interior vertex constrains `K`).
+    pub vertex: Option<u32>,
+    /// That vertex's angle sum on the mesh, in radians (`2π` for a flat vertex).
+    pub angle_sum: f64,
+}
+
+/// The per-vertex angle argument: a linear map whose distortion `σ₁/σ₂` is at most `K` maps
+/// an angle `θ` to an angle between `2 atan(tan(θ/2) / K)` and `2 atan(K tan(θ/2))` (both
+/// reached, with the stretch along the angle's bisector). The corner angles around an
+/// interior vertex must add up to `2π` in the plane, so a vertex whose angles on the mesh add
+/// up to much less (the tip of a sharp cone) or much more (a saddle) forces a lower bound on
+/// `K`: the smallest `K` at which `2π` lies between the two sums, found by bisection. The
+/// largest over the interior vertices is returned: any bound below it is infeasible for
+/// every start and every constraint. (A necessary condition only: a bound above it may
+/// still be infeasible.)
+///
+/// ```
+/// use bdmorph::param::bounded::angle_lower_bound;
+/// // A flat disk constrains nothing.
+/// let disk = bdmorph::generate::disk(3, 0.0);
+/// let mesh = bdmorph::SurfaceMesh {
+///     positions: disk.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+///     faces: disk.faces.clone(),
+///     texcoords: None,
+/// };
+/// assert!(angle_lower_bound(&mesh).bound < 1.0 + 1e-9);
+/// ```
+pub fn angle_lower_bound(mesh: &SurfaceMesh) -> AngleBound {
+    let n = mesh.positions.len();
+    // Boundary vertices (on an edge of one triangle) are free: their angle sum is not fixed.
+    let mut edges: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    for f in &mesh.faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut free = vec![false; n];
+    for (&(a, b), &count) in &edges {
+        if count == 1 {
+            free[a as usize] = true;
+            free[b as usize] = true;
+        }
+    }
+    let mut corners: Vec<Vec<f64>> = vec![Vec::new(); n];
+    for f in &mesh.faces {
+        for k in 0..3 {
+            let p = |v: u32| mesh.positions.get(v as usize).copied().unwrap_or([0.0; 3]);
+            let (o, a, b) = (p(f[k]), p(f[(k + 1) % 3]), p(f[(k + 2) % 3]));
+            let u = [a[0] - o[0], a[1] - o[1], a[2] - o[2]];
+            let v = [b[0] - o[0], b[1] - o[1], b[2] - o[2]];
+            let cross = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+            let cos = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+            if let Some(c) = corners.get_mut(f[k] as usize) {
+                c.push(sin.atan2(cos));
+            }
+        }
+    }
+    let tau = std::f64::consts::TAU;
+    let feasible = |half_tans: &[f64], k: f64| {
+        let low: f64 = half_tans.iter().map(|t| 2.0 * (t / k).atan()).sum();
+        let high: f64 = half_tans.iter().map(|t| 2.0 * (t * k).atan()).sum();
+        low <= tau && tau <= high
+    };
+    let mut best = AngleBound {
+        bound: 1.0,
+        vertex: None,
+        angle_sum: tau,
+    };
+    for (v, angles) in corners.iter().enumerate() {
+        if free[v] || angles.is_empty() || angles.iter().any(|a| !a.is_finite()) {
+            continue;
+        }
+        let half_tans: Vec<f64> = angles.iter().map(|a| (0.5 * a).tan()).collect();
+        if feasible(&half_tans, best.bound) {
+            continue;
+        }
+        // The sums move monotonically with K: bracket, then bisect.
+        let (mut lo, mut hi) = (best.bound, 2.0 * best.bound);
+        while !feasible(&half_tans, hi) {
+            lo = hi;
+            hi *= 2.0;
+            if hi > 1e12 {
+                break;
+            }
+        }
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if feasible(&half_tans, mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        best = AngleBound {
+            bound: lo,
+            vertex: Some(v as u32),
+            angle_sum: angles.iter().sum(),
+        };
+    }
+    best
+}
+
+/// One starting map tried by [`flatten`], and what the iterations made of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attempt {
+    /// The method of the starting map.
+    pub start: Method,
+    /// The bounded-distortion iterations from it.
+    pub report: BoundedReport,
+}
+
+/// What [`flatten`] found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flattening {
+    /// The map kept: the first that met the bound, or else the one with the lowest largest
+    /// distortion.
+    pub uv: Vec<[f64; 2]>,
+    /// Every start tried, in order.
+    pub attempts: Vec<Attempt>,
+    /// The index in `attempts` of the map kept.
+    pub kept: usize,
+    /// The bound `K` asked for.
+    pub bound: f64,
+    /// The angle argument's lower bound on any feasible `K` ([`angle_lower_bound`]).
+    pub lower_bound: AngleBound,
+    /// Wall-clock seconds of the set-up (the checks, the factorisation and the starting maps),
+    /// apart from the attempts' own `seconds`.
+    pub setup_seconds: f64,
+}
+
+impl Flattening {
+    /// The report of the map kept.
+    pub fn report(&self) -> &BoundedReport {
+        &self.attempts[self.kept].report
+    }
+
+    /// Whether the bound was met.
+    pub fn converged(&self) -> bool {
+        self.report().converged
+    }
+
+    /// Whether the bound is proved infeasible: below [`Flattening::lower_bound`].
+    pub fn infeasible(&self) -> bool {
+        self.bound < self.lower_bound.bound
+    }
+}
+
+/// Flattens a disk-topology mesh under a distortion bound, trying the starting maps `starts`
+/// in order ([`Parameterization`] maps, run to their own stop for the iterative methods) until
+/// one meets the bound: a start whose iterations stall in a local minimum of the excess
+/// distortion does not prove the bound infeasible, and another start often ends elsewhere.
+/// No further start is tried once one meets the bound, or when the bound is below
+/// [`angle_lower_bound`] (proved infeasible: the first start's closest map is kept). With no
+/// start given, Tutte's embedding is used. `progress` sees the attempt's index, the
+/// iteration and the largest distortion.
+pub fn flatten(
+    mesh: &SurfaceMesh,
+    pins: &[(u32, [f64; 2])],
+    options: BoundedOptions,
+    starts: &[Method],
+    mut progress: impl FnMut(usize, u32, f64),
+) -> Result<Flattening, ParamError> {
+    let started = std::time::Instant::now();
+    let mut solver = BoundedDistortion::new(mesh, pins, options)?;
+    let lower_bound = angle_lower_bound(mesh);
+    let infeasible = options.max_distortion < lower_bound.bound;
+    let starts = if starts.is_empty() {
+        &[Method::Tutte][..]
+    } else {
+        starts
+    };
+    let mut setup_seconds = started.elapsed().as_secs_f64();
+    let mut attempts: Vec<Attempt> = Vec::new();
+    let mut best: Option<(usize, Vec<[f64; 2]>)> = None;
+    for (i, &start) in starts.iter().enumerate() {
+        let began = std::time::Instant::now();
+        let mut p = Parameterization::new(mesh, start, ParamOptions::default())?;
+        p.solve()?;
+        let mut uv = p.uv().to_vec();
+        setup_seconds += began.elapsed().as_secs_f64();
+        let report = solver.solve_with(&mut uv, |it, worst| progress(i, it, worst))?;
+        let better = match &best {
+            None => true,
+            Some((b, _)) => {
+                let old = &attempts[*b].report;
+                report.converged && !old.converged || report.max_distortion < old.max_distortion
+            }
+        };
+        let done = report.converged || infeasible;
+        attempts.push(Attempt { start, report });
+        if better {
+            best = Some((i, uv));
+        }
+        if done {
+            break;
+        }
+    }
+    let (kept, uv) = best.ok_or(ParamError::BadBound(options.max_distortion))?;
+    Ok(Flattening {
+        uv,
+        attempts,
+        kept,
+        bound: options.max_distortion,
+        lower_bound,
+        setup_seconds,
+    })
 }
 
 #[cfg(test)]

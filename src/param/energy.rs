@@ -34,6 +34,15 @@ pub enum Energy {
         /// The bound on `σ₁/σ₂` (at least 1).
         bound: f64,
     },
+    /// ARAP plus a collapse barrier: `(σ₁ − 1)² + (σ₂ − 1)² + w (σ₁⁻² + σ₂⁻² − 2)` (0 for a
+    /// rotation, infinite at `det F ≤ 0`). ARAP alone is finite on a degenerate triangle, so
+    /// a flip-free minimisation of it can squash a triangle flat against the `det F = 0`
+    /// wall; the barrier term (the inverse half of symmetric Dirichlet, weighted by `w`)
+    /// keeps every minimiser off that wall and changes little elsewhere (`w` is small).
+    ArapBarrier {
+        /// The weight `w > 0` of the barrier term.
+        weight: f64,
+    },
 }
 
 /// The weight `ε` of the conformal term in [`Energy::Excess`].
@@ -82,6 +91,17 @@ pub fn svd2(f: [[f64; 2]; 2]) -> Svd2 {
         u: rot(alpha),
         v: rot(beta),
     }
+}
+
+/// The signed singular values of [`svd2`] alone (the same values, bit for bit, without the
+/// angles of `U` and `V`).
+pub fn sigma2(f: [[f64; 2]; 2]) -> [f64; 2] {
+    let [[a, b], [c, d]] = f;
+    let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
+    let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
+    let q = e.hypot(h);
+    let r = fq.hypot(g);
+    [q + r, q - r]
 }
 
 /// `U diag(x) Vᵀ`, or `U M Vᵀ` for a general middle `m`.
@@ -133,6 +153,14 @@ impl Energy {
                 let c = 0.5 * (bound + 1.0 / bound);
                 EXCESS_CONFORMAL_WEIGHT * (m - 1.0) + (m - c).max(0.0).powi(2)
             }
+            Energy::ArapBarrier { weight } => {
+                if s1 * s2 <= 0.0 {
+                    return f64::INFINITY;
+                }
+                (s1 - 1.0).powi(2)
+                    + (s2 - 1.0).powi(2)
+                    + weight * (1.0 / (s1 * s1) + 1.0 / (s2 * s2) - 2.0)
+            }
         }
     }
 
@@ -149,6 +177,10 @@ impl Energy {
                 let [g1, g2] = Energy::Mips.gradient([s1, s2]);
                 [0.5 * d1 * g1, 0.5 * d1 * g2]
             }
+            Energy::ArapBarrier { weight } => [
+                2.0 * (s1 - 1.0) - 2.0 * weight / s1.powi(3),
+                2.0 * (s2 - 1.0) - 2.0 * weight / s2.powi(3),
+            ],
         }
     }
 
@@ -173,6 +205,11 @@ impl Energy {
                     0.5 * d1 * h22 + 0.25 * d2 * g2 * g2,
                 ]
             }
+            Energy::ArapBarrier { weight } => [
+                2.0 + 6.0 * weight / s1.powi(4),
+                0.0,
+                2.0 + 6.0 * weight / s2.powi(4),
+            ],
         }
     }
 
@@ -206,6 +243,15 @@ impl Energy {
                 let [d1, _] = excess_slopes(bound, 0.5 * (s1 / s2 + s2 / s1));
                 let [t, f] = Energy::Mips.twist_flip([s1, s2]);
                 [0.5 * d1 * t, 0.5 * d1 * f]
+            }
+            Energy::ArapBarrier { weight } => {
+                // Both quotients are linear in Ψ: ARAP's plus w times those of σ⁻² summed.
+                let [t, f] = Energy::Arap.twist_flip([s1, s2]);
+                let c = (s1 * s2).powi(3);
+                [
+                    t - 2.0 * weight * (s1 * s1 - s1 * s2 + s2 * s2) / c,
+                    f + 2.0 * weight * (s1 * s1 + s1 * s2 + s2 * s2) / c,
+                ]
             }
         }
     }
@@ -261,6 +307,23 @@ impl Energy {
         }
         h
     }
+
+    /// The part of `∂²Ψ/∂F²` that [`Energy::projected_hessian`] drops: its negative
+    /// eigenvalues with their eigenvectors (4×4 over `F` flattened row by row), so that
+    /// the projected Hessian plus this is the Hessian itself.
+    pub fn negative_hessian(self, svd: &Svd2) -> [[f64; 4]; 4] {
+        let mut h = [[0.0; 4]; 4];
+        for (l, q) in self.eigensystem(svd) {
+            if l < 0.0 {
+                for i in 0..4 {
+                    for j in 0..4 {
+                        h[i][j] += l * q[i] * q[j];
+                    }
+                }
+            }
+        }
+        h
+    }
 }
 
 #[cfg(test)]
@@ -287,6 +350,7 @@ mod tests {
                 [random(&mut st), random(&mut st)],
             ];
             let s = svd2(f);
+            assert_eq!(sigma2(f), s.sigma);
             let back = sandwich(&s, [[s.sigma[0], 0.0], [0.0, s.sigma[1]]]);
             for i in 0..2 {
                 for j in 0..2 {
@@ -310,6 +374,7 @@ mod tests {
             Energy::Arap,
             Energy::Mips,
             Energy::Excess { bound: 1.2 },
+            Energy::ArapBarrier { weight: 0.05 },
         ] {
             let mut checked = 0;
             while checked < 200 {
@@ -396,7 +461,12 @@ mod tests {
     #[test]
     fn projection_is_positive_semi_definite() {
         let svd = svd2([[0.3, 0.9], [-0.2, 1.4]]);
-        for energy in [Energy::SymmetricDirichlet, Energy::Arap, Energy::Mips] {
+        for energy in [
+            Energy::SymmetricDirichlet,
+            Energy::Arap,
+            Energy::Mips,
+            Energy::ArapBarrier { weight: 1e-3 },
+        ] {
             let h = energy.projected_hessian(&svd);
             let mut ev = jacobi_eigenvalues(h);
             ev.sort_by(f64::total_cmp);

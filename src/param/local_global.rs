@@ -38,6 +38,11 @@ pub(crate) struct LocalGlobal {
     rhs: Vec<f64>,
     /// Per triangle, the fitted `L` (rows).
     l: Vec<[[f64; 2]; 2]>,
+    /// Per triangle and edge `(b, c), (c, a), (a, b)`: its cotangent weight times its
+    /// vector in the triangle's isometric layout.
+    wdx: Vec<[[f64; 2]; 3]>,
+    /// The energy of the map the fits in `l` were made for, when they are up to date.
+    fitted: Option<f64>,
 }
 
 impl LocalGlobal {
@@ -81,6 +86,17 @@ impl LocalGlobal {
             }
         }
         let chol = Cholesky::assemble(k as usize, &pairs, &vals, 2).map_err(err)?;
+        let wdx = (0..frames.len())
+            .map(|f| {
+                let x = frames.local[f];
+                let mut out = [[0.0; 2]; 3];
+                for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
+                    let w = frames.cot[f][corner];
+                    out[corner] = [w * (x[i][0] - x[j][0]), w * (x[i][1] - x[j][1])];
+                }
+                out
+            })
+            .collect();
         Ok(LocalGlobal {
             fit,
             index,
@@ -88,67 +104,78 @@ impl LocalGlobal {
             chol,
             rhs: vec![0.0; 2 * k as usize],
             l: vec![[[1.0, 0.0], [0.0, 1.0]]; frames.len()],
+            wdx,
+            fitted: None,
         })
     }
 
-    /// One local step and one global step, in place.
-    pub fn iterate(&mut self, frames: &Frames, uv: &mut [[f64; 2]]) -> Result<(), ParamError> {
-        // Local.
-        for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
-            let x = frames.local[f];
-            let (mut p, mut q, mut norm) = (0.0, 0.0, 0.0);
-            for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
-                let w = frames.cot[f][corner];
-                let vs = [a, b, c];
-                let du = [
-                    uv[vs[i] as usize][0] - uv[vs[j] as usize][0],
-                    uv[vs[i] as usize][1] - uv[vs[j] as usize][1],
-                ];
-                let dx = [x[i][0] - x[j][0], x[i][1] - x[j][1]];
-                p += w * (du[0] * dx[0] + du[1] * dx[1]);
-                q += w * (du[1] * dx[0] - du[0] * dx[1]);
-                norm += w * (dx[0] * dx[0] + dx[1] * dx[1]);
-            }
-            let (p, q) = match self.fit {
-                Fit::Rotation => {
-                    let r = p.hypot(q);
-                    if r > 0.0 {
-                        (p / r, q / r)
-                    } else {
-                        (1.0, 0.0)
-                    }
-                }
-                Fit::Similarity => (p / norm, q / norm),
+    /// The local step on `uv`: each triangle's best rotation or similarity, from its
+    /// deformation gradient `J` (the cotangent-weighted fit of the edges is the same: for
+    /// any triangle `Σ cot θₖ eₖ eₖᵀ = 2A I`, so the fit of `J`'s edges is `J`'s closest
+    /// rotation or similarity); returns the method's energy of `uv` (ARAP
+    /// `2 (q − 1)² + 2 r²` or MIPS `2 (q² + r²) / (q² − r²)`, with `q`, `r` the norms of
+    /// `J`'s similarity and anti-similarity parts), as an area-weighted mean.
+    fn fit(&mut self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
+        let mut energy = 0.0;
+        for (f, l) in self.l.iter_mut().enumerate() {
+            let [[a, b], [c, d]] = frames.gradient(f, uv);
+            let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
+            let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
+            let (q2, r2) = (e * e + h * h, fq * fq + g * g);
+            let q = q2.sqrt();
+            let psi = match self.fit {
+                Fit::Rotation => 2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r2,
+                Fit::Similarity if q2 > r2 => 2.0 * (q2 + r2) / (q2 - r2),
+                Fit::Similarity => f64::INFINITY,
             };
-            self.l[f] = [[p, -q], [q, p]];
+            energy += frames.area[f] * psi;
+            let (p, s) = match self.fit {
+                Fit::Rotation if q > 0.0 => (e / q, h / q),
+                Fit::Rotation => (1.0, 0.0),
+                Fit::Similarity => (e, h),
+            };
+            *l = [[p, -s], [s, p]];
         }
+        energy / frames.total_area
+    }
+
+    /// One local step and one global step, in place; the method's energy (ARAP or MIPS,
+    /// see [`LocalGlobal::fit`]) before and after. The fits for the next iteration are made
+    /// in the same pass that measures the energy after.
+    pub fn iterate(
+        &mut self,
+        frames: &Frames,
+        uv: &mut [[f64; 2]],
+    ) -> Result<(f64, f64), ParamError> {
+        let before = match self.fitted.take() {
+            Some(e) => e,
+            None => self.fit(frames, uv),
+        };
         // Global: Σ_j w_ij (u_i - u_j) = Σ w_ij L (x_i - x_j), the pinned vertex moved right.
         let k = self.rhs.len() / 2;
         self.rhs.fill(0.0);
         let pin = uv[self.pinned as usize];
         for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
-            let x = frames.local[f];
             let l = self.l[f];
             let vs = [a, b, c];
             for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
+                let wdx = self.wdx[f][corner];
                 let w = frames.cot[f][corner];
-                let dx = [x[i][0] - x[j][0], x[i][1] - x[j][1]];
                 let ldx = [
-                    l[0][0] * dx[0] + l[0][1] * dx[1],
-                    l[1][0] * dx[0] + l[1][1] * dx[1],
+                    l[0][0] * wdx[0] + l[0][1] * wdx[1],
+                    l[1][0] * wdx[0] + l[1][1] * wdx[1],
                 ];
                 for (v, other, sign) in [(vs[i], vs[j], 1.0), (vs[j], vs[i], -1.0)] {
                     let iv = self.index[v as usize];
                     if iv == NONE {
                         continue;
                     }
-                    for d in 0..2 {
-                        self.rhs[d * k + iv as usize] += sign * w * ldx[d];
-                    }
+                    let iv = iv as usize;
+                    self.rhs[iv] += sign * ldx[0];
+                    self.rhs[k + iv] += sign * ldx[1];
                     if other == self.pinned {
-                        for d in 0..2 {
-                            self.rhs[d * k + iv as usize] += w * pin[d];
-                        }
+                        self.rhs[iv] += w * pin[0];
+                        self.rhs[k + iv] += w * pin[1];
                     }
                 }
             }
@@ -165,6 +192,82 @@ impl LocalGlobal {
                 *out = [self.rhs[i as usize], self.rhs[k + i as usize]];
             }
         }
-        Ok(())
+        let after = self.fit(frames, uv);
+        self.fitted = Some(after);
+        Ok((before, after))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::SurfaceMesh;
+    use crate::param::energy::Energy;
+    use crate::param::newton::mean_energy;
+
+    /// The fits from each triangle's `J` are the cotangent-weighted fits of its edges (the
+    /// definition of the local step), and the energies they report are the methods' own.
+    #[test]
+    fn fits_from_the_jacobian_are_the_cotangent_weighted_edge_fits() {
+        let d = crate::generate::disk(4, 0.3);
+        let mesh = SurfaceMesh {
+            positions: d
+                .positions
+                .iter()
+                .map(|p| [p[0], p[1], 0.4 * p[0] * p[1] + 0.2 * p[0]])
+                .collect(),
+            faces: d.faces.clone(),
+            texcoords: None,
+        };
+        let frames = Frames::new(&mesh).expect("frames");
+        // A map with rotation, shear and, near one side, inverted triangles.
+        let uv: Vec<[f64; 2]> = d
+            .positions
+            .iter()
+            .map(|p| {
+                [
+                    0.8 * p[0] + 0.3 * p[1],
+                    -0.2 * p[0] + 1.1 * p[1] - 0.9 * p[0] * p[0],
+                ]
+            })
+            .collect();
+        let n = uv.len();
+        for (fit, energy) in [
+            (Fit::Rotation, Energy::Arap),
+            (Fit::Similarity, Energy::Mips),
+        ] {
+            let mut lg = LocalGlobal::new(&frames, n, 0, fit).expect("set up");
+            let e = lg.fit(&frames, &uv);
+            let reference = mean_energy(energy, &frames, &uv);
+            assert!(
+                e == reference || (e - reference).abs() < 1e-12 * reference.abs(),
+                "{fit:?}: {e} vs {reference}"
+            );
+            for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
+                let x = frames.local[f];
+                let vs = [a, b, c];
+                let (mut p, mut q, mut norm) = (0.0, 0.0, 0.0);
+                for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
+                    let w = frames.cot[f][corner];
+                    let du = [
+                        uv[vs[i] as usize][0] - uv[vs[j] as usize][0],
+                        uv[vs[i] as usize][1] - uv[vs[j] as usize][1],
+                    ];
+                    let dx = [x[i][0] - x[j][0], x[i][1] - x[j][1]];
+                    p += w * (du[0] * dx[0] + du[1] * dx[1]);
+                    q += w * (du[1] * dx[0] - du[0] * dx[1]);
+                    norm += w * (dx[0] * dx[0] + dx[1] * dx[1]);
+                }
+                let (p, q) = match fit {
+                    Fit::Rotation => (p / p.hypot(q), q / p.hypot(q)),
+                    Fit::Similarity => (p / norm, q / norm),
+                };
+                let l = lg.l[f];
+                assert!(
+                    (l[0][0] - p).abs() < 1e-12 && (l[1][0] - q).abs() < 1e-12,
+                    "{fit:?} face {f}: {l:?} vs ({p}, {q})"
+                );
+            }
+        }
     }
 }

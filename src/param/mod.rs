@@ -41,7 +41,7 @@ use bdmorph_cholesky::CholeskyError;
 use bdmorph_compiler::CompileError;
 
 use crate::io::SurfaceMesh;
-use energy::Energy;
+use energy::{sigma2, Energy};
 use frames::Frames;
 use local_global::{Fit, LocalGlobal};
 use newton::{mean_energy, Newton};
@@ -98,13 +98,47 @@ pub struct ParamOptions {
     /// Stop when an iteration decreases the energy by less than this fraction of it (default
     /// 1e-9), or when the gradient norm falls below `1e-10`.
     pub tolerance: f64,
+    /// For `arap-newton`: the weight `w` of the collapse barrier added to ARAP
+    /// ([`Energy::ArapBarrier`], default [`DEFAULT_COLLAPSE_BARRIER`]). ARAP is finite on a
+    /// degenerate triangle, so its flip-free minimisation can squash triangles flat; with
+    /// `w > 0` the minimised energy is infinite there and the iterations reach a real
+    /// minimum. Zero minimises plain ARAP (which may then stall against a collapsing
+    /// triangle: [`Stop::Stalled`]).
+    pub collapse_barrier: f64,
 }
+
+/// The default weight of `arap-newton`'s collapse barrier ([`ParamOptions::collapse_barrier`]).
+pub const DEFAULT_COLLAPSE_BARRIER: f64 = 1e-4;
+
+/// A triangle whose conformal distortion `σ₁ / |σ₂|` exceeds this is counted as collapsed
+/// ([`Energies::collapsed`]): numerically a sliver (or a point), whatever its orientation.
+/// Tutte maps of the shared disks reach 2680, local/global ARAP's flipped triangles 1e5;
+/// the triangles squashed by a stalled flip-free ARAP minimisation 1e10 and more.
+pub const COLLAPSE_RATIO: f64 = 1e6;
+
+/// Newton iterations in a row whose step is below [`STALL_STEP`] of the Newton step and
+/// whose energy decrease is below [`STALL_DECREASE`] of the energy, with the gradient norm
+/// still above [`STALL_GRADIENT`] of its first value, after which
+/// [`Parameterization::solve`] gives up and reports [`Stop::Stalled`].
+pub const STALL_ITERATIONS: u32 = 3;
+
+/// The fraction of the Newton step below which a step counts towards a stall.
+pub const STALL_STEP: f64 = 1e-2;
+
+/// The relative energy decrease below which a step counts towards a stall. (Short steps
+/// that still lower the energy, as MIPS takes from the Tutte start, are progress.)
+pub const STALL_DECREASE: f64 = 1e-4;
+
+/// The fraction of the first gradient norm above which the gradient is "far from zero" for
+/// the stall rule.
+pub const STALL_GRADIENT: f64 = 1e-3;
 
 impl Default for ParamOptions {
     fn default() -> Self {
         ParamOptions {
             iterations: None,
             tolerance: 1e-9,
+            collapse_barrier: DEFAULT_COLLAPSE_BARRIER,
         }
     }
 }
@@ -118,6 +152,11 @@ impl ParamOptions {
     /// Sets the relative energy decrease below which iterations stop.
     pub fn with_tolerance(mut self, tolerance: f64) -> Self {
         self.tolerance = tolerance;
+        self
+    }
+    /// Sets the weight of `arap-newton`'s collapse barrier (zero: plain ARAP).
+    pub fn with_collapse_barrier(mut self, weight: f64) -> Self {
+        self.collapse_barrier = weight;
         self
     }
 }
@@ -144,6 +183,9 @@ pub enum ParamError {
     /// A distortion bound that is not a number of at least 1.
     #[error("the distortion bound {0} must be a number of at least 1")]
     BadBound(f64),
+    /// A collapse-barrier weight that is negative or not finite.
+    #[error("the collapse-barrier weight {0} must be a finite number of at least 0")]
+    BadBarrier(f64),
     /// A positional constraint on a vertex that does not exist, or to a non-finite point.
     #[error("constraint on vertex {vertex} (0-based): no such vertex (the mesh has {n_vertices}) or a non-finite target")]
     BadPin {
@@ -162,7 +204,7 @@ pub enum ParamError {
     },
 }
 
-/// The distortion of a map, area-weighted means over the triangles.
+/// The distortion of a map, area-weighted means over the triangles, and its bad triangles.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Energies {
     /// Symmetric Dirichlet (4 for an isometry; infinite with an inverted triangle).
@@ -173,17 +215,72 @@ pub struct Energies {
     pub mips: f64,
     /// Triangles with non-positive signed area in the plane.
     pub flipped: usize,
+    /// Triangles whose conformal distortion `σ₁ / |σ₂|` exceeds [`COLLAPSE_RATIO`] (or is
+    /// not finite), flipped or not: squashed to a sliver or a point.
+    pub collapsed: usize,
+    /// The largest conformal distortion `σ₁ / |σ₂|` over the triangles (infinite when one is
+    /// degenerate).
+    pub max_distortion: f64,
+}
+
+/// Why [`Parameterization::solve`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// A direct method (`tutte`, `lscm`): nothing to iterate.
+    Direct,
+    /// The energy stopped decreasing (relative decrease below the tolerance) or the gradient
+    /// vanished.
+    Converged,
+    /// The iteration limit was reached first.
+    IterationLimit,
+    /// Projected Newton could not make progress while the gradient was still far from
+    /// zero: [`STALL_ITERATIONS`] steps in a row below [`STALL_STEP`] of the Newton step (the
+    /// flip-free line search held back by a triangle about to collapse or invert), or a
+    /// line search that found no decrease at all. The map is not a minimum.
+    Stalled,
+}
+
+impl Stop {
+    /// `direct`, `converged`, `iteration-limit` or `stalled`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stop::Direct => "direct",
+            Stop::Converged => "converged",
+            Stop::IterationLimit => "iteration-limit",
+            Stop::Stalled => "stalled",
+        }
+    }
 }
 
 /// What [`Parameterization::solve`] did.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct SolveReport {
     /// Iterations run.
     pub iterations: u32,
     /// The method's own energy after each iteration (empty for direct methods).
     pub energies: Vec<f64>,
-    /// Wall-clock seconds.
+    /// Wall-clock seconds of the iterations (set-up excluded: see `setup_seconds`).
     pub seconds: f64,
+    /// Wall-clock seconds of [`Parameterization::new`]: checks, per-triangle constants, the
+    /// start (the whole work of `tutte` and `lscm`), patterns and factorisations.
+    pub setup_seconds: f64,
+    /// Why the iterations stopped.
+    pub stop: Stop,
+    /// The gradient norm before the last iteration (NaN for the methods without one).
+    pub gradient_norm: f64,
+    /// Collapsed triangles of the final map ([`Energies::collapsed`]).
+    pub collapsed: usize,
+    /// At a stall, the triangle whose imminent inversion (or collapse) bounded the last
+    /// step, if one did.
+    pub limiting_face: Option<usize>,
+}
+
+impl SolveReport {
+    /// Whether the iterations stalled ([`Stop::Stalled`]).
+    pub fn stalled(&self) -> bool {
+        self.stop == Stop::Stalled
+    }
 }
 
 /// The distortion of the map `uv` (one point per vertex) of `mesh`.
@@ -193,25 +290,49 @@ pub fn energies(mesh: &SurfaceMesh, uv: &[[f64; 2]]) -> Result<Energies, ParamEr
 }
 
 fn energies_of(frames: &Frames, uv: &[[f64; 2]]) -> Energies {
-    let flipped = (0..frames.len())
-        .filter(|&f| {
-            let m = frames.gradient(f, uv);
-            let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-            det.is_nan() || det <= 0.0
-        })
-        .count();
+    let (mut flipped, mut collapsed, mut max_distortion) = (0, 0, 1.0f64);
+    let (mut sd, mut arap, mut mips) = (0.0, 0.0, 0.0);
+    for f in 0..frames.len() {
+        let m = frames.gradient(f, uv);
+        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+        if det.is_nan() || det <= 0.0 {
+            flipped += 1;
+        }
+        let sigma = sigma2(m);
+        let a = frames.area[f];
+        sd += a * Energy::SymmetricDirichlet.psi(sigma);
+        arap += a * Energy::Arap.psi(sigma);
+        mips += a * Energy::Mips.psi(sigma);
+        let [s1, s2] = sigma;
+        let ratio = if s2 != 0.0 {
+            s1 / s2.abs()
+        } else {
+            f64::INFINITY
+        };
+        if ratio.is_nan() || ratio > COLLAPSE_RATIO {
+            collapsed += 1;
+        }
+        max_distortion = if ratio.is_nan() {
+            f64::INFINITY
+        } else {
+            max_distortion.max(ratio)
+        };
+    }
+    let total = frames.total_area;
     Energies {
-        symmetric_dirichlet: mean_energy(Energy::SymmetricDirichlet, frames, uv),
-        arap: mean_energy(Energy::Arap, frames, uv),
-        mips: mean_energy(Energy::Mips, frames, uv),
+        symmetric_dirichlet: sd / total,
+        arap: arap / total,
+        mips: mips / total,
         flipped,
+        collapsed,
+        max_distortion,
     }
 }
 
 enum Solver {
     Direct,
-    LocalGlobal(LocalGlobal, Energy),
-    Newton(Newton),
+    LocalGlobal(Box<LocalGlobal>),
+    Newton(Box<Newton>),
 }
 
 /// A parameterisation in progress: the current map and the prepared solver.
@@ -221,6 +342,9 @@ pub struct Parameterization {
     frames: Frames,
     uv: Vec<[f64; 2]>,
     solver: Solver,
+    /// The energy the iterations lower (and the direct methods' measure).
+    objective: Energy,
+    setup_seconds: f64,
 }
 
 impl std::fmt::Debug for Parameterization {
@@ -242,6 +366,7 @@ impl Parameterization {
         method: Method,
         options: ParamOptions,
     ) -> Result<Parameterization, ParamError> {
+        let started = Instant::now();
         if let Some(vertex) = mesh
             .positions
             .iter()
@@ -249,6 +374,17 @@ impl Parameterization {
         {
             return Err(ParamError::NonFinite { vertex });
         }
+        let barrier = options.collapse_barrier;
+        if !(barrier >= 0.0 && barrier.is_finite()) {
+            return Err(ParamError::BadBarrier(barrier));
+        }
+        let objective = match method {
+            Method::Arap => Energy::Arap,
+            Method::ArapNewton if barrier > 0.0 => Energy::ArapBarrier { weight: barrier },
+            Method::ArapNewton => Energy::Arap,
+            Method::Mips | Method::Lscm | Method::Asap => Energy::Mips,
+            Method::Tutte | Method::SymmetricDirichlet => Energy::SymmetricDirichlet,
+        };
         let boundary = bdmorph_compiler::disk_boundary(mesh.positions.len(), &mesh.faces)?;
         let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
         let n = mesh.positions.len();
@@ -258,19 +394,25 @@ impl Parameterization {
         };
         let solver = match method {
             Method::Tutte | Method::Lscm => Solver::Direct,
-            Method::Arap => Solver::LocalGlobal(
-                LocalGlobal::new(&frames, n, boundary[0], Fit::Rotation)?,
-                Energy::Arap,
-            ),
-            Method::Asap => Solver::LocalGlobal(
-                LocalGlobal::new(&frames, n, boundary[0], Fit::Similarity)?,
-                Energy::Mips,
-            ),
-            Method::SymmetricDirichlet => {
-                Solver::Newton(Newton::new(&frames, n, Energy::SymmetricDirichlet)?)
-            }
-            Method::Mips => Solver::Newton(Newton::new(&frames, n, Energy::Mips)?),
-            Method::ArapNewton => Solver::Newton(Newton::new(&frames, n, Energy::Arap)?),
+            Method::Arap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
+                &frames,
+                n,
+                boundary[0],
+                Fit::Rotation,
+            )?)),
+            Method::Asap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
+                &frames,
+                n,
+                boundary[0],
+                Fit::Similarity,
+            )?)),
+            Method::SymmetricDirichlet => Solver::Newton(Box::new(Newton::new(
+                &frames,
+                n,
+                Energy::SymmetricDirichlet,
+            )?)),
+            Method::Mips => Solver::Newton(Box::new(Newton::new(&frames, n, Energy::Mips)?)),
+            Method::ArapNewton => Solver::Newton(Box::new(Newton::new(&frames, n, objective)?)),
         };
         Ok(Parameterization {
             method,
@@ -278,7 +420,15 @@ impl Parameterization {
             frames,
             uv,
             solver,
+            objective,
+            setup_seconds: started.elapsed().as_secs_f64(),
         })
+    }
+
+    /// Wall-clock seconds [`Parameterization::new`] took (for `tutte` and `lscm`, the whole
+    /// method).
+    pub fn setup_seconds(&self) -> f64 {
+        self.setup_seconds
     }
 
     /// The method.
@@ -296,16 +446,12 @@ impl Parameterization {
         energies_of(&self.frames, &self.uv)
     }
 
-    /// The method's own energy of the current map (ARAP for `arap` and `arap-newton`, MIPS
-    /// for `asap`, `mips`, `lscm`, symmetric Dirichlet for `sd` and `tutte`).
+    /// The method's own energy of the current map, the one its iterations lower: ARAP for
+    /// `arap`, ARAP plus the collapse barrier for `arap-newton` ([`Energy::ArapBarrier`];
+    /// plain ARAP with a zero barrier weight), MIPS for `asap`, `mips`, `lscm`, symmetric
+    /// Dirichlet for `sd` and `tutte`.
     pub fn energy(&self) -> f64 {
-        let e = match (&self.solver, self.method) {
-            (Solver::LocalGlobal(_, e), _) => *e,
-            (_, Method::Arap | Method::ArapNewton) => Energy::Arap,
-            (_, Method::Mips | Method::Lscm | Method::Asap) => Energy::Mips,
-            _ => Energy::SymmetricDirichlet,
-        };
-        mean_energy(e, &self.frames, &self.uv)
+        mean_energy(self.objective, &self.frames, &self.uv)
     }
 
     /// One iteration; `None` for the direct methods (`tutte`, `lscm`), which are done at
@@ -313,16 +459,15 @@ impl Parameterization {
     pub fn step(&mut self) -> Result<Option<StepReport>, ParamError> {
         match &mut self.solver {
             Solver::Direct => Ok(None),
-            Solver::LocalGlobal(lg, e) => {
-                let before = mean_energy(*e, &self.frames, &self.uv);
-                lg.iterate(&self.frames, &mut self.uv)?;
-                let after = mean_energy(*e, &self.frames, &self.uv);
+            Solver::LocalGlobal(lg) => {
+                let (before, after) = lg.iterate(&self.frames, &mut self.uv)?;
                 Ok(Some(StepReport {
                     energy_before: before,
                     energy_after: after,
                     gradient_norm: f64::NAN,
                     step: 1.0,
                     max_step: f64::NAN,
+                    limiting_face: None,
                 }))
             }
             Solver::Newton(newton) => newton.iterate(&self.frames, &mut self.uv).map(Some),
@@ -330,7 +475,9 @@ impl Parameterization {
     }
 
     /// Iterates until the energy stops decreasing by more than the tolerance (relatively),
-    /// the gradient vanishes, or the iteration limit; `progress` sees every step.
+    /// the gradient vanishes, the iterations stall ([`Stop::Stalled`]: projected Newton
+    /// making no progress while the gradient is far from zero), or the iteration limit;
+    /// `progress` sees every step.
     pub fn solve_with(
         &mut self,
         mut progress: impl FnMut(u32, &StepReport),
@@ -342,6 +489,13 @@ impl Parameterization {
         });
         let mut energies = Vec::new();
         let mut iterations = 0;
+        let mut stop = match self.solver {
+            Solver::Direct => Stop::Direct,
+            _ => Stop::IterationLimit,
+        };
+        let (mut first_gradient, mut gradient_norm) = (f64::NAN, f64::NAN);
+        let mut blocked_run = 0;
+        let mut limiting_face = None;
         while iterations < limit {
             let Some(report) = self.step()? else {
                 break;
@@ -349,18 +503,48 @@ impl Parameterization {
             iterations += 1;
             energies.push(report.energy_after);
             progress(iterations, &report);
-            let decrease = report.energy_before - report.energy_after;
-            let converged = decrease <= self.options.tolerance * report.energy_after.abs()
-                || report.gradient_norm < 1e-10
-                || report.step == 0.0;
-            if converged {
-                break;
+            gradient_norm = report.gradient_norm;
+            limiting_face = report.limiting_face;
+            if iterations == 1 {
+                first_gradient = report.gradient_norm;
             }
+            // Far from zero: NaN (local/global has no gradient) is never far.
+            let far = report.gradient_norm > STALL_GRADIENT * first_gradient
+                && report.gradient_norm >= 1e-10;
+            let decrease = report.energy_before - report.energy_after;
+            let blocked = far
+                && report.step < STALL_STEP
+                && decrease < STALL_DECREASE * report.energy_after.abs();
+            blocked_run = if blocked { blocked_run + 1 } else { 0 };
+            if report.gradient_norm < 1e-10 {
+                stop = Stop::Converged;
+            } else if blocked_run >= STALL_ITERATIONS || (report.step == 0.0 && far) {
+                stop = Stop::Stalled;
+            } else if decrease <= self.options.tolerance * report.energy_after.abs()
+                || report.step == 0.0
+            {
+                // A negligible decrease from a tiny step with a large gradient is a stall
+                // that has not lasted long yet, not a minimum.
+                stop = if blocked {
+                    Stop::Stalled
+                } else {
+                    Stop::Converged
+                };
+            } else {
+                continue;
+            }
+            break;
         }
+        let seconds = started.elapsed().as_secs_f64();
         Ok(SolveReport {
             iterations,
             energies,
-            seconds: started.elapsed().as_secs_f64(),
+            seconds,
+            setup_seconds: self.setup_seconds,
+            stop,
+            gradient_norm,
+            collapsed: self.energies().collapsed,
+            limiting_face: limiting_face.filter(|_| stop == Stop::Stalled),
         })
     }
 

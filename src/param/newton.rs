@@ -14,7 +14,7 @@
 
 use bdmorph_cholesky::{Cholesky, LowerPattern};
 
-use super::energy::{svd2, Energy};
+use super::energy::{sigma2, svd2, Energy};
 use super::frames::Frames;
 use super::ParamError;
 
@@ -27,6 +27,16 @@ pub(crate) struct Newton {
     pattern: LowerPattern,
     chol: Cholesky,
     values: Vec<f64>,
+    /// The negative curvature the projection drops (assembled only when it is used).
+    negative: Vec<f64>,
+    /// The partly projected matrix being tried.
+    mixed: Vec<f64>,
+    /// The fraction of the negative curvature last left out (1: fully projected).
+    mu: f64,
+    /// Whether the next iteration tries a partly projected Hessian.
+    try_partial: bool,
+    /// Whether partly projected Hessians are tried at all.
+    partial: bool,
     grad: Vec<f64>,
     step: Vec<f64>,
     trial: Vec<[f64; 2]>,
@@ -47,6 +57,8 @@ pub struct StepReport {
     pub step: f64,
     /// The largest step that keeps every triangle uninverted.
     pub max_step: f64,
+    /// The triangle whose inversion bounds `max_step` (`None` when nothing does).
+    pub limiting_face: Option<usize>,
 }
 
 impl Newton {
@@ -91,6 +103,11 @@ impl Newton {
             energy,
             blocks,
             values: vec![0.0; pattern.nnz()],
+            negative: vec![0.0; pattern.nnz()],
+            mixed: vec![0.0; pattern.nnz()],
+            mu: 1.0,
+            try_partial: false,
+            partial: true,
             pattern,
             chol,
             grad: vec![0.0; 2 * n],
@@ -98,6 +115,13 @@ impl Newton {
             trial: vec![[0.0; 2]; n],
             fixed: vec![false; n],
         })
+    }
+
+    /// Whether, once full steps are taken, the iterations try Hessians that keep part of
+    /// the negative curvature (default on; see [`Newton::iterate`]).
+    pub fn set_partial_projection(&mut self, on: bool) {
+        self.partial = on;
+        self.try_partial &= on;
     }
 
     /// Holds `vertices` where they are: their rows of the step are zero.
@@ -108,6 +132,14 @@ impl Newton {
     }
 
     /// One projected Newton step with the flip-free line search, in place.
+    ///
+    /// Far from a minimum the Hessian is the projected one (each triangle's negative
+    /// eigenvalues set to zero). Once full steps are taken, the next iteration first tries
+    /// `H₊ + (1 − μ) H₋` (`H₋` the dropped negative curvature) with `μ` a quarter of the
+    /// last one that worked, multiplying it by 8 while the matrix is not positive definite
+    /// or the step is not a descent direction, and falling back to `μ = 1`: projecting every
+    /// triangle discards curvature that the whole mesh does not need discarded (compressed
+    /// triangles' twist modes under ARAP), and converges only linearly where that matters.
     pub fn iterate(
         &mut self,
         frames: &Frames,
@@ -120,7 +152,11 @@ impl Newton {
     /// Fills the gradient and the projected Hessian's values at `uv`; returns the energy.
     fn assemble(&mut self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
         let total = frames.total_area;
+        let partial = self.try_partial;
         self.values.fill(0.0);
+        if partial {
+            self.negative.fill(0.0);
+        }
         self.grad.fill(0.0);
         let mut energy_before = 0.0;
         for (f, face) in frames.faces.iter().enumerate() {
@@ -130,6 +166,11 @@ impl Newton {
             energy_before += w * self.energy.psi(svd.sigma);
             let p = self.energy.first_piola(&svd);
             let h = self.energy.projected_hessian(&svd);
+            let hx = if partial {
+                self.energy.negative_hessian(&svd)
+            } else {
+                [[0.0; 4]; 4]
+            };
             let g = &frames.g[f];
             // Gradient: ∂E/∂u[v][r] = Σ_c P[r][c] g[v][c].
             for (k, &v) in face.iter().enumerate() {
@@ -147,13 +188,19 @@ impl Newton {
                 if self.fixed[face[vp] as usize] || self.fixed[face[vq] as usize] {
                     continue;
                 }
-                let mut sum = 0.0;
+                let (mut sum, mut sum_x) = (0.0, 0.0);
                 for c in 0..2 {
                     for d in 0..2 {
                         sum += h[2 * r + c][2 * s + d] * g[vp][c] * g[vq][d];
+                        if partial {
+                            sum_x += hx[2 * r + c][2 * s + d] * g[vp][c] * g[vq][d];
+                        }
                     }
                 }
                 self.values[slot as usize] += w * sum;
+                if partial {
+                    self.negative[slot as usize] += w * sum_x;
+                }
             }
         }
         // A fixed vertex's rows are the identity (and its gradient zero): its step is zero.
@@ -180,28 +227,33 @@ impl Newton {
         // the diagonal keeps the projected Hessian definite without changing the step. It is
         // relative per entry, not to the mean, because the entries of a map whose scale
         // varies by orders of magnitude (a conformal flattening of long fingers) do too.
-        for j in 0..self.pattern.dim() as u32 {
-            if let Some(slot) = self.pattern.slot(j, j) {
-                let d = &mut self.values[slot as usize];
-                *d += 1e-9 * *d + 1e-300;
+        let tried_partial = self.try_partial;
+        let mut partial_step = false;
+        regularise(&self.pattern, &mut self.values);
+        if tried_partial {
+            let mut mu = (self.mu * 0.25).max(1e-6);
+            while mu < 1.0 {
+                for ((m, p), q) in self.mixed.iter_mut().zip(&self.values).zip(&self.negative) {
+                    *m = p + (1.0 - mu) * q;
+                }
+                if self.chol.factorize(&self.mixed).is_ok() && self.solve_step()? {
+                    partial_step = true;
+                    break;
+                }
+                mu *= 8.0;
             }
+            self.mu = if partial_step { mu } else { 1.0 };
         }
-        self.chol
-            .factorize(&self.values)
-            .map_err(|source| ParamError::Solver {
-                what: "Newton",
-                source,
-            })?;
-        for (s, g) in self.step.iter_mut().zip(&self.grad) {
-            *s = -g;
+        if !partial_step {
+            self.chol
+                .factorize(&self.values)
+                .map_err(|source| ParamError::Solver {
+                    what: "Newton",
+                    source,
+                })?;
+            self.solve_step()?;
         }
-        self.chol
-            .solve_in_place(&mut self.step, 1)
-            .map_err(|source| ParamError::Solver {
-                what: "Newton",
-                source,
-            })?;
-        let max_step = max_flip_free_step(frames, uv, &self.step);
+        let (max_step, limiting_face) = max_flip_free_step(frames, uv, &self.step);
         let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, s)| g * s).sum();
         let mut alpha = (0.9 * max_step).min(1.0);
         let mut energy_after = energy_before;
@@ -222,13 +274,43 @@ impl Newton {
             }
             alpha *= 0.5;
         }
+        self.try_partial = self.partial && taken == 1.0;
+        if !(tried_partial && partial_step) {
+            self.mu = 1.0;
+        }
         Ok(StepReport {
             energy_before,
             energy_after,
             gradient_norm,
             step: taken,
             max_step,
+            limiting_face,
         })
+    }
+
+    /// `step = −H⁻¹ grad` with the current factor; whether it is a descent direction.
+    fn solve_step(&mut self) -> Result<bool, ParamError> {
+        for (s, g) in self.step.iter_mut().zip(&self.grad) {
+            *s = -g;
+        }
+        self.chol
+            .solve_in_place(&mut self.step, 1)
+            .map_err(|source| ParamError::Solver {
+                what: "Newton",
+                source,
+            })?;
+        let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, s)| g * s).sum();
+        Ok(slope < 0.0 && self.step.iter().all(|x| x.is_finite()))
+    }
+}
+
+/// Adds a tiny relative amount to every diagonal entry (see `step_from_assembly`).
+fn regularise(pattern: &LowerPattern, values: &mut [f64]) {
+    for j in 0..pattern.dim() as u32 {
+        if let Some(slot) = pattern.slot(j, j) {
+            let d = &mut values[slot as usize];
+            *d += 1e-9 * *d + 1e-300;
+        }
     }
 }
 
@@ -236,17 +318,22 @@ impl Newton {
 pub(crate) fn mean_energy(energy: Energy, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
     let mut e = 0.0;
     for f in 0..frames.len() {
-        let svd = svd2(frames.gradient(f, uv));
-        e += frames.area[f] * energy.psi(svd.sigma);
+        e += frames.area[f] * energy.psi(sigma2(frames.gradient(f, uv)));
     }
     e / frames.total_area
 }
 
 /// The largest `α` (at most infinity) such that no triangle's `det F` reaches zero along
-/// `uv + α d`: per triangle the smallest positive root of `det(Ds + α dDs) = 0`.
-pub(crate) fn max_flip_free_step(frames: &Frames, uv: &[[f64; 2]], d: &[f64]) -> f64 {
+/// `uv + α d`: per triangle the smallest positive root of `det(Ds + α dDs) = 0`; and the
+/// triangle that sets it.
+pub(crate) fn max_flip_free_step(
+    frames: &Frames,
+    uv: &[[f64; 2]],
+    d: &[f64],
+) -> (f64, Option<usize>) {
     let mut best = f64::INFINITY;
-    for &[a, b, c] in &frames.faces {
+    let mut face = None;
+    for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
         let p = |v: u32| uv[v as usize];
         let q = |v: u32| [d[2 * v as usize], d[2 * v as usize + 1]];
         let (e1, e2) = (
@@ -262,10 +349,13 @@ pub(crate) fn max_flip_free_step(frames: &Frames, uv: &[[f64; 2]], d: &[f64]) ->
         let c1 = e1[0] * f2[1] + f1[0] * e2[1] - e1[1] * f2[0] - f1[1] * e2[0];
         let c2 = f1[0] * f2[1] - f1[1] * f2[0];
         if let Some(root) = smallest_positive_root(c2, c1, c0) {
-            best = best.min(root);
+            if root < best {
+                best = root;
+                face = Some(f);
+            }
         }
     }
-    best
+    (best, face)
 }
 
 /// The smallest positive root of `a α² + b α + c`, if any (stable formulas).
@@ -333,6 +423,7 @@ mod tests {
             Energy::Arap,
             Energy::Mips,
             Energy::Excess { bound: 1.02 },
+            Energy::ArapBarrier { weight: 1e-3 },
         ] {
             let mut newton = Newton::new(&frames, n, energy).expect("set up");
             newton.assemble(&frames, &uv);

@@ -694,3 +694,77 @@ fn dirichlet_and_average_use_neumann_for_a_source_on_the_boundary() {
         );
     }
 }
+
+#[test]
+fn the_command_line_notes_when_dirichlet_or_average_falls_back_at_a_boundary_source() {
+    let dir = std::env::temp_dir().join(format!("bdmorph-geodesic-note-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    let cap = generate::sphere_cap(2, 0.0);
+    let mut text = String::new();
+    for p in &cap.positions {
+        text.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+    }
+    for f in &cap.faces {
+        text.push_str(&format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1));
+    }
+    let mesh = dir.join("cap.obj");
+    std::fs::write(&mesh, text).expect("write");
+    let rim = (0..cap.positions.len())
+        .min_by(|&a, &b| cap.positions[a][2].total_cmp(&cap.positions[b][2]))
+        .expect("vertices");
+    let pole = nearest(&cap, [0.0, 0.0, 1.0]);
+    let run = |args: &[String]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(args)
+            .arg("-o")
+            .arg(dir.join("d.txt"))
+            .output()
+            .expect("runs");
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stderr).expect("utf8")
+    };
+    let args = |s: &str| s.split(' ').map(String::from).collect::<Vec<_>>();
+    for bc in ["dirichlet", "average"] {
+        let err = run(&args(&format!("--boundary {bc} --source {rim}")));
+        let notes: Vec<&str> = err.lines().filter(|l| l.starts_with("note:")).collect();
+        assert_eq!(notes.len(), 1, "{err}");
+        assert!(
+            notes[0].contains(&format!("source vertex {rim} "))
+                && notes[0].contains(&format!("--boundary {bc}"))
+                && notes[0].contains("--boundary neumann"),
+            "{err}"
+        );
+        let err = run(&args(&format!(
+            "--boundary {bc} --each-source {pole},{rim}"
+        )));
+        assert!(
+            err.contains(&format!("note: source vertex {rim} ")) && err.contains("its field"),
+            "{err}"
+        );
+        // No note when it does not apply.
+        let err = run(&args(&format!("--boundary {bc} --source {pole}")));
+        assert!(!err.contains("note:"), "{err}");
+        let err = run(&args(&format!("--boundary {bc} --source {rim} --quiet")));
+        assert!(err.is_empty(), "{err}");
+    }
+    for other in ["robin", "neumann"] {
+        let err = run(&args(&format!("--boundary {other} --source {rim}")));
+        assert!(!err.contains("note:"), "{err}");
+    }
+    let help = std::process::Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+        .args(["geodesic", "--help"])
+        .output()
+        .expect("runs");
+    let help = String::from_utf8(help.stdout).expect("utf8");
+    assert!(
+        help.contains("a source on the boundary uses neumann"),
+        "{help}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

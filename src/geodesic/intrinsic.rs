@@ -404,12 +404,16 @@ impl Intrinsic {
         let (c, d) = (self.origin[hp], self.origin[tp]);
         let (ab, bc, ca) = (self.len[h], self.len[hn], self.len[hp]);
         let (ad, db) = (self.len[tn], self.len[tp]);
-        // Lay the two triangles out with a at the origin and b on the positive x axis.
-        let cx = (ab * ab + ca * ca - bc * bc) / (2.0 * ab);
-        let cy = (ca * ca - cx * cx).max(0.0).sqrt();
-        let dx = (ab * ab + ad * ad - db * db) / (2.0 * ab);
-        let dy = -(ad * ad - dx * dx).max(0.0).sqrt();
-        let cd = (cx - dx).hypot(cy - dy);
+        // Lay the two triangles out with the midpoint of ab at the origin, a on the negative
+        // and b on the positive x axis, c above and d below. The formulas are symmetric in
+        // a and b to the last bit (swapping them negates cx and dx exactly), so that the
+        // mirror image of a flip on the doubled surface gives the same length, and the
+        // mirror pairs of faces are found again.
+        let cx = (ca * ca - bc * bc) / (2.0 * ab);
+        let cy = 2.0 * triangle_area(ab, bc, ca) / ab;
+        let dx = (ad * ad - db * db) / (2.0 * ab);
+        let dy = 2.0 * triangle_area(ab, ad, db) / ab;
+        let cd = (cx - dx).hypot(cy + dy);
         // The new triangles (d, c, a) and (c, d, b) must have positive area.
         if !(positive(triangle_area(cd, ca, ad)) && positive(triangle_area(cd, db, bc))) {
             return false;
@@ -613,6 +617,39 @@ mod tests {
             .iter()
             .any(|(v, _, w)| *w == 0.5 && v.iter().filter(|&&x| x == 2).count() == 2));
         assert!((weighted_area(&tri) - area).abs() < 1e-12 * area);
+    }
+
+    #[test]
+    fn a_flip_and_its_mirror_image_give_the_same_length_to_the_bit() {
+        // Quads (a, b, c, d) split along ab into (a, b, c) and (b, a, d), and their mirror
+        // images (a, c, b) and (b, d, a): flipping ab must give one length, so that the two
+        // sheets of the doubled surface stay mirror images after flips.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut checked = 0;
+        for _ in 0..200 {
+            let pos = vec![
+                [0.0, 0.0, 0.0],
+                [1.0 + 3.0 * next(), 0.1 * next(), 0.0],
+                [0.2 + next(), 0.05 + 0.3 * next(), 0.1 * next()],
+                [0.2 + next(), -0.05 - 0.3 * next(), 0.1 * next()],
+            ];
+            let mut front = Intrinsic::from_mesh(&pos, &[[0, 1, 2], [1, 0, 3]]).expect("valid");
+            let mut back = Intrinsic::from_mesh(&pos, &[[0, 2, 1], [1, 3, 0]]).expect("valid");
+            // Half-edge 0 runs a -> b in front; half-edge 2 runs b -> a in back.
+            assert_eq!((back.origin[2], back.origin[back.next[2] as usize]), (1, 0));
+            if front.flip(0) {
+                assert!(back.flip(2));
+                assert_eq!(front.len[0].to_bits(), back.len[2].to_bits());
+                checked += 1;
+            }
+        }
+        assert!(checked > 100, "{checked}");
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Heat-method geodesics: accuracy against exact distances, the properties of a distance,
-//! several sources, intrinsic Delaunay, boundaries, errors.
+//! several sources, intrinsic Delaunay (flips across the boundary, mollification, the time
+//! step), boundary conditions and the command line's note at boundary sources, errors.
 
 mod common;
 

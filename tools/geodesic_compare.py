@@ -5,14 +5,17 @@
     python3 -m venv peers && peers/bin/pip install libigl==2.6.3 potpourri3d==1.4.0 \
         pygeodesic==0.1.11 numpy scipy
     cargo build --release --example geodesic_fields
-    peers/bin/python tools/geodesic_compare.py                  # the table in BENCHMARKS.md
-    peers/bin/python tools/geodesic_compare.py --variant "m=0.5=--time-factor 0.5" \
+    peers/bin/python tools/geodesic_compare.py --variant "neumann=--boundary neumann" \
+        --variant "average=--boundary average" --variant "plain=--no-intrinsic-delaunay"
+                                                                # the tables in BENCHMARKS.md
+    peers/bin/python tools/geodesic_compare.py --variant "m0.5=--time-factor 0.5" \
         --meshes bunny --per-source                             # a variant, one mesh, detail
 
 Meshes: every OBJ and OFF file under `closed3d/` and `disk3d/` of the shared data folder
-(`--data`, default `../shared/data`). Sources: 5 per mesh (`--sources`), chosen by
+(`--data`, default `../shared/data`). Sources: 10 per mesh (`--sources`), chosen by
 farthest-point sampling in 3D (Euclidean) starting from vertex 0, so they are spread over the
-mesh; on meshes with a boundary most of them end up on it.
+mesh (on meshes with a boundary some end up on it; the table counts them);
+`--skip-sources 10` takes the next 10 of the same sequence, an independent set.
 
 Methods, each with its default time `t = h^2` (`h` the mean edge length):
   exact       pygeodesic 0.1.11 (MMP, exact polyhedral distances); cached as .npy files in

@@ -279,8 +279,9 @@ pub struct HeatGeodesics {
     component: Vec<u32>,
     n_components: usize,
     stats: HeatStats,
-    /// Per-vertex heat and divergence of one field.
+    /// Per-vertex heat and divergence of one field, and a per-face scratch.
     u: Vec<f64>,
+    grad: Vec<[f64; 2]>,
     div: Vec<f64>,
     /// Per component: the smallest potential at a source (for the shift).
     shift: Vec<f64>,
@@ -413,6 +414,7 @@ impl HeatGeodesics {
         };
         Ok(HeatGeodesics {
             u: vec![0.0; n],
+            grad: Vec::with_capacity(geometry.len()),
             div: vec![0.0; n],
             shift: vec![0.0; n_components],
             averaged: Vec::with_capacity(16),
@@ -569,7 +571,7 @@ impl HeatGeodesics {
                 }
             }
             self.geometry
-                .descent_divergence_into(&self.u, &mut self.div);
+                .descent_divergence_into(&self.u, &mut self.grad, &mut self.div);
             let pd = self.poisson.dim();
             for (i, &v) in self.poisson.vertex.iter().enumerate() {
                 self.poisson.rhs[c * pd + i] = -self.div[v as usize];

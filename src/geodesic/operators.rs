@@ -135,22 +135,39 @@ impl FaceGeometry {
     /// The two passes of a query in one: the integrated divergence at each vertex of the unit
     /// field `-∇u / |∇u|` (what [`FaceGeometry::divergence_into`] gives for the field of
     /// [`FaceGeometry::normalized_descent_into`]), without storing the field.
-    pub fn descent_divergence_into(&self, u: &[f64], div: &mut [f64]) {
-        div.fill(0.0);
-        for f in 0..self.vertices.len() {
-            let [a, b, c] = self.vertices[f];
+    pub fn descent_divergence_into(&self, u: &[f64], grad: &mut Vec<[f64; 2]>, div: &mut [f64]) {
+        let m = self.vertices.len();
+        grad.resize(m, [0.0; 2]);
+        // 1. The gradients (times 2A), gathering u.
+        for (((g, &[a, b, c]), (&xb, &xc)), &yc) in grad
+            .iter_mut()
+            .zip(&self.vertices)
+            .zip(self.xb.iter().zip(&self.xc))
+            .zip(&self.yc)
+        {
             let (ua, ub, uc) = (u[a as usize], u[b as usize], u[c as usize]);
-            let (xb, xc, yc) = (self.xb[f], self.xc[f], self.yc[f]);
-            // ∇u (times 2A, which the normalisation removes), as in normalized_descent_into.
-            let gx = (ub - ua) * yc;
-            let gy = ua * (xc - xb) - ub * xc + uc * xb;
-            let norm2 = gx * gx + gy * gy;
-            if norm2.is_nan() || norm2 <= 0.0 {
-                continue;
-            }
-            let scale = -1.0 / norm2.sqrt();
-            let (xx, xy) = (gx * scale, gy * scale);
-            let [wa, wb, wc] = self.half_cot[f];
+            *g = [(ub - ua) * yc, ua * (xc - xb) - ub * xc + uc * xb];
+        }
+        // 2. Normalised and negated, with no gathers or scatters, so the square roots and
+        // divisions of neighbouring triangles overlap (and vectorise).
+        for g in grad.iter_mut() {
+            let norm2 = g[0] * g[0] + g[1] * g[1];
+            let scale = if norm2 > 0.0 {
+                -1.0 / norm2.sqrt()
+            } else {
+                0.0
+            };
+            *g = [g[0] * scale, g[1] * scale];
+        }
+        // 3. The divergence, scattered to the corners.
+        div.fill(0.0);
+        for ((((&[xx, xy], &[a, b, c]), (&xb, &xc)), &yc), &[wa, wb, wc]) in grad
+            .iter()
+            .zip(&self.vertices)
+            .zip(self.xb.iter().zip(&self.xc))
+            .zip(&self.yc)
+            .zip(&self.half_cot)
+        {
             let ab = xb * xx;
             let ac = xc * xx + yc * xy;
             let bc = ac - ab;
@@ -214,7 +231,7 @@ mod tests {
         g.normalized_descent_into(&phi, &mut x);
         g.divergence_into(&x, &mut div);
         let mut fused = vec![0.0; 7];
-        g.descent_divergence_into(&phi, &mut fused);
+        g.descent_divergence_into(&phi, &mut Vec::new(), &mut fused);
         for (a, b) in div.iter().zip(&fused) {
             assert!((a - b).abs() < 1e-14, "{a} vs {b}");
         }

@@ -44,10 +44,10 @@ pub enum Boundary {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct HeatOptions {
-    /// The heat flows for `t = time_factor · h²`, `h` the mean edge length of the
-    /// triangulation the operators are built on: the intrinsic Delaunay one by default, whose
-    /// edges are shorter than the mesh's where it flipped (as geometry-central does). Default
-    /// 1, the paper's choice.
+    /// The heat flows for `t = time_factor · h²`, `h` the mean side of the triangles the
+    /// operators are built on (a side shared by two triangles counts twice): the intrinsic
+    /// Delaunay ones by default, whose sides are shorter than the mesh's where it flipped, as
+    /// geometry-central does. Default 1, the paper's choice.
     pub time_factor: f64,
     /// Boundary conditions (default [`Boundary::Robin`]).
     pub boundary: Boundary,
@@ -175,7 +175,8 @@ pub struct HeatStats {
     pub flips: usize,
     /// The heat flow's time `t`.
     pub time: f64,
-    /// Mean edge length `h`.
+    /// The length `h` of `t = m h²`: the mean side of the triangles the operators are built
+    /// on ([`HeatOptions::time_factor`]).
     pub mean_edge: f64,
     /// Whether the mesh has a boundary.
     pub has_boundary: bool,

@@ -1,6 +1,7 @@
 //! Accuracy and speed of the heat method on one mesh: mean relative error against a
 //! reference (the exact `acos` distance on a unit sphere, or a file of exact distances), set-up
-//! and per-query time, for each option set.
+//! and per-query time, for each option set. For every shared mesh against the peers, see
+//! `tools/geodesic_compare.py`.
 //!
 //! ```sh
 //! cargo run --release --example geodesic_accuracy -- ../shared/data/closed3d/odedstein/sphere.obj --sphere
@@ -47,7 +48,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mesh.faces.len()
     );
     for (name, options) in [
-        ("iDT, neumann", HeatOptions::default()),
+        ("default (robin)", HeatOptions::default()),
+        (
+            "iDT, neumann",
+            HeatOptions::default().with_boundary(Boundary::Neumann),
+        ),
         (
             "iDT, average",
             HeatOptions::default().with_boundary(Boundary::Average),
@@ -57,7 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             HeatOptions::default().with_boundary(Boundary::Dirichlet),
         ),
         (
-            "plain, neumann",
+            "plain, robin",
             HeatOptions::default().with_intrinsic_delaunay(false),
         ),
     ] {

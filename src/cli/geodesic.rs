@@ -66,14 +66,23 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
     let options = HeatOptions::default()
         .with_time_factor(args.time_factor)
         .with_boundary(match args.boundary {
+            BoundaryArg::Robin => Boundary::Robin,
             BoundaryArg::Neumann => Boundary::Neumann,
             BoundaryArg::Dirichlet => Boundary::Dirichlet,
             BoundaryArg::Average => Boundary::Average,
         })
-        .with_intrinsic_delaunay(!args.no_intrinsic_delaunay);
+        .with_absorption(args.absorption)
+        .with_intrinsic_delaunay(!args.no_intrinsic_delaunay)
+        .with_flip_boundary(!args.no_flip_boundary)
+        .with_mollify(args.mollify);
     let started = Instant::now();
     let mut heat = HeatGeodesics::new(mesh, options).map_err(|e| file.locate(e).to_string())?;
     let setup = started.elapsed().as_secs_f64();
+    if !args.quiet {
+        if let Some(note) = boundary_source_note(&heat, sources, each) {
+            eprintln!("{note}");
+        }
+    }
     let started = Instant::now();
     let fields: Vec<Vec<f64>> = if each {
         heat.distances_each(sources)
@@ -86,8 +95,8 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
         let s = heat.stats();
         writeln!(
             std::io::stdout().lock(),
-            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
-            s.vertices, s.faces, s.flips, s.has_boundary, s.time, s.factor_nnz, setup, fields.len(), query
+            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"mollified\":{:e},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
+            s.vertices, s.faces, s.flips, s.has_boundary, s.mollified, s.time, s.factor_nnz, setup, fields.len(), query
         )
         .map_err(|e| e.to_string())?;
     }
@@ -155,6 +164,42 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// The note for `--boundary dirichlet|average` when a source lies on the boundary: those
+/// fields are computed with Neumann conditions ([`Boundary::Dirichlet`]). `None` when it
+/// does not apply.
+fn boundary_source_note(heat: &HeatGeodesics, sources: &[u32], each: bool) -> Option<String> {
+    let name = match heat.boundary() {
+        Boundary::Dirichlet => "dirichlet",
+        Boundary::Average => "average",
+        _ => return None,
+    };
+    let mut on: Vec<u32> = Vec::new();
+    for &s in sources {
+        if heat.on_boundary(s) && !on.contains(&s) {
+            on.push(s);
+        }
+    }
+    if on.is_empty() {
+        return None;
+    }
+    let which = if on.len() == 1 {
+        format!("source vertex {} is", on[0])
+    } else {
+        format!("source vertices {} are", list(&on))
+    };
+    let fields = if !each {
+        "the field is".to_string()
+    } else if on.len() == 1 {
+        "its field is".to_string()
+    } else {
+        "their fields are".to_string()
+    };
+    Some(format!(
+        "note: {which} on the mesh's boundary, where --boundary {name} cannot hold (zero heat at \
+         a source), so {fields} computed with --boundary neumann"
+    ))
 }
 
 fn list(sources: &[u32]) -> String {

@@ -97,6 +97,11 @@ enum Command {
     /// isolines (an orthographic view along the mesh's thinnest direction; one picture per
     /// field, side by side); -o OUT.html puts the same pictures in a page.
     ///
+    /// Boundaries: --boundary robin (the default) lets the boundary absorb part of the heat,
+    /// and works for sources anywhere. With --boundary dirichlet or average, a field with a
+    /// source on the boundary is computed with neumann conditions instead (zero heat on the
+    /// boundary would contradict that source), and a one-line note on stderr says so.
+    ///
     /// Examples:
     ///   bdmorph geodesic camelhead.off --source 0 -o distance.txt
     ///   bdmorph geodesic camelhead.off --source 0 --source 500 -o nearest.png
@@ -303,16 +308,32 @@ struct GeodesicArgs {
     /// Output: .txt (distances), .png or .html (pictures).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
-    /// The heat flows for t = M h^2, h the mean edge length.
+    /// The heat flows for t = M h^2, h the mean edge length of the (intrinsic Delaunay)
+    /// triangulation.
     #[arg(long, value_name = "M", default_value_t = 1.0)]
     time_factor: f64,
-    /// Boundary conditions of the heat flow on meshes with a boundary.
-    #[arg(long, value_enum, value_name = "BC", default_value = "neumann")]
+    /// Boundary conditions of the heat flow on meshes with a boundary. With dirichlet or
+    /// average, a field with a source on the boundary uses neumann (a note on stderr says
+    /// so): zero heat on the boundary would contradict that source.
+    #[arg(long, value_enum, value_name = "BC", default_value = "robin")]
     boundary: BoundaryArg,
+    /// The absorption r of --boundary robin: the boundary absorbs heat at the rate
+    /// kappa = r / sqrt(t) (0 is neumann).
+    #[arg(long, value_name = "R", default_value_t = 0.2)]
+    absorption: f64,
     /// Build the operators on the mesh's own triangles, not its intrinsic Delaunay
     /// triangulation (less accurate on poor triangles).
     #[arg(long)]
     no_intrinsic_delaunay: bool,
+    /// Keep the intrinsic Delaunay flips off the boundary edges (by default they may flip
+    /// across the boundary, on the mesh glued to its mirror image).
+    #[arg(long)]
+    no_flip_boundary: bool,
+    /// Intrinsic mollification margin, relative to the mean edge length: every edge grows by
+    /// the least amount that gives each triangle this margin in the triangle inequality, so
+    /// degenerate triangles are accepted (0: off).
+    #[arg(long, value_name = "DELTA", default_value_t = 1e-5)]
+    mollify: f64,
     /// Picture size for PNG and HTML output, as WxH (per field).
     #[arg(long, value_name = "WxH", default_value = "800x800")]
     size: ImageSize,
@@ -327,11 +348,14 @@ struct GeodesicArgs {
 /// Boundary conditions, on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum BoundaryArg {
+    /// Partly absorbing (see --absorption); the default.
+    Robin,
     /// Zero flux.
     Neumann,
-    /// Zero heat.
+    /// Zero heat (neumann for a field with a source on the boundary).
     Dirichlet,
-    /// The mean of both (a third back-substitution per field).
+    /// The mean of neumann and dirichlet (a third back-substitution per field; neumann for a
+    /// field with a source on the boundary).
     Average,
 }
 

@@ -10,19 +10,33 @@ use crate::io::SurfaceMesh;
 /// Boundary conditions of the heat flow, for meshes with a boundary (closed meshes have none
 /// and ignore this).
 ///
-/// The default is [`Boundary::Neumann`]: measured against exact polyhedral distances it is
-/// as accurate as the paper's recommended average (0.0132 against 0.0135 mean relative error
-/// on the camel head from vertex 0; 0.0127 against 0.0128 on a hemisphere from its pole),
-/// and the average costs a second heat factorisation and a third back-substitution per query.
+/// The default is [`Boundary::Robin`], chosen by measurement against exact polyhedral
+/// distances on the shared meshes with a boundary (BENCHMARKS.md, "Geodesic distances"): from
+/// 90 sources on 9 meshes it was more accurate than zero flux on 50 of the 67 interior
+/// sources and 12 of the 23 boundary sources (geometric mean of the error ratios 0.95 and
+/// 0.98), where the paper's average was better on 38 of 67 and up to 1.8 times worse on the
+/// cut-open cow; and it needs no second heat system.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Boundary {
-    /// Zero flux through the boundary: the cotan Laplacian as it is.
+    /// Partly absorbing (Robin): `∂u/∂n = −κ u` on the boundary, with `κ = r / √t`, `r` the
+    /// [`HeatOptions::absorption`] (default 0.2) and `√t` the distance heat spreads in the
+    /// time `t`. Between zero flux, which bends the directions near the boundary along it,
+    /// and zero heat, which bends them across it. A source on the boundary is handled like
+    /// any other. One heat system, as for Neumann.
     #[default]
+    Robin,
+    /// Zero flux through the boundary: the cotan Laplacian as it is.
     Neumann,
-    /// Zero heat on the boundary. A source on the boundary falls back to Neumann.
+    /// Zero heat on the boundary. A field with a source on the boundary uses the Neumann heat
+    /// instead: zero heat there would contradict the source (and measured, zero heat on the
+    /// rest of the boundary was 4.6 times less accurate than Neumann, geometric mean over 23
+    /// boundary sources, `tools/boundary_source_experiment.py`).
+    /// [`HeatGeodesics::on_boundary`] tells which sources this applies to.
     Dirichlet,
     /// The mean of the Neumann and Dirichlet heat, which the paper recommends (their
-    /// boundary errors partly cancel). Costs a third back-substitution per query.
+    /// boundary errors partly cancel). Costs a second heat factorisation and a third
+    /// back-substitution per query. A field with a source on the boundary uses the Neumann
+    /// heat alone, as for [`Boundary::Dirichlet`].
     Average,
 }
 
@@ -30,21 +44,41 @@ pub enum Boundary {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct HeatOptions {
-    /// The heat flows for `t = time_factor · h²`, `h` the mean edge length (default 1, the
-    /// paper's choice).
+    /// The heat flows for `t = time_factor · h²`, `h` the mean side of the triangles the
+    /// operators are built on (a side shared by two triangles counts twice): the intrinsic
+    /// Delaunay ones by default, whose sides are shorter than the mesh's where it flipped, as
+    /// geometry-central does. Default 1, the paper's choice.
     pub time_factor: f64,
-    /// Boundary conditions (default [`Boundary::Neumann`]).
+    /// Boundary conditions (default [`Boundary::Robin`]).
     pub boundary: Boundary,
+    /// The absorption `r = κ √t` of [`Boundary::Robin`] (default 0.2; 0 is Neumann). It
+    /// is relative to the heat's spread `√t`, so it means the same on any mesh size and scale.
+    pub absorption: f64,
     /// Build the operators on the intrinsic Delaunay triangulation (default true).
     pub intrinsic_delaunay: bool,
+    /// On a mesh with a boundary, let the intrinsic Delaunay flips cross the boundary: flip on
+    /// the doubled surface ([`Intrinsic::double_across_boundary`]), so that boundary edges
+    /// opposite an obtuse angle lose their negative cotan weight too (default true; no effect
+    /// without `intrinsic_delaunay` or on closed meshes).
+    pub flip_boundary: bool,
+    /// Intrinsic mollification margin, relative to the mean edge length (default `1e-5`, as
+    /// geometry-central's robust Laplacian): every edge length grows by the least amount
+    /// that makes each triangle satisfy the triangle inequality with this margin, so
+    /// triangles of zero or nearly zero area are accepted. On meshes whose triangles all meet
+    /// the margin (every shared mesh) nothing changes. `0` turns it off, and then a triangle
+    /// of zero area is an error.
+    pub mollify: f64,
 }
 
 impl Default for HeatOptions {
     fn default() -> Self {
         HeatOptions {
             time_factor: 1.0,
-            boundary: Boundary::Neumann,
+            boundary: Boundary::Robin,
+            absorption: 0.2,
             intrinsic_delaunay: true,
+            flip_boundary: true,
+            mollify: 1e-5,
         }
     }
 }
@@ -60,9 +94,24 @@ impl HeatOptions {
         self.boundary = boundary;
         self
     }
+    /// Sets the absorption `r` of [`Boundary::Robin`].
+    pub fn with_absorption(mut self, r: f64) -> Self {
+        self.absorption = r;
+        self
+    }
     /// Turns the intrinsic Delaunay triangulation on or off.
     pub fn with_intrinsic_delaunay(mut self, on: bool) -> Self {
         self.intrinsic_delaunay = on;
+        self
+    }
+    /// Lets the intrinsic Delaunay flips cross the boundary, or not.
+    pub fn with_flip_boundary(mut self, on: bool) -> Self {
+        self.flip_boundary = on;
+        self
+    }
+    /// Sets the intrinsic mollification margin (relative to the mean edge length; 0: off).
+    pub fn with_mollify(mut self, relative_delta: f64) -> Self {
+        self.mollify = relative_delta;
         self
     }
 }
@@ -86,6 +135,12 @@ pub enum GeodesicError {
     /// An option out of range.
     #[error("time factor {0} must be a positive number")]
     TimeFactor(f64),
+    /// The absorption is negative or not a number.
+    #[error("absorption {0} must be zero or a positive number")]
+    Absorption(f64),
+    /// The mollification margin is negative or not a number.
+    #[error("mollification margin {0} must be zero or a positive number")]
+    Mollify(f64),
     /// A source index that is not a vertex.
     #[error("source vertex {vertex} does not exist (the mesh has {n_vertices} vertices, numbered from 0)")]
     SourceOutOfRange {
@@ -112,16 +167,21 @@ pub enum GeodesicError {
 pub struct HeatStats {
     /// Vertices.
     pub vertices: usize,
-    /// Triangles.
+    /// Triangles the operators are built on (after flips across the boundary, a few more
+    /// than the mesh has).
     pub faces: usize,
-    /// Edge flips to the intrinsic Delaunay triangulation (0 when it is off).
+    /// Edge flips to the intrinsic Delaunay triangulation (0 when it is off; on the doubled
+    /// surface of a mesh with a boundary, the flips of both sheets).
     pub flips: usize,
     /// The heat flow's time `t`.
     pub time: f64,
-    /// Mean edge length `h`.
+    /// The length `h` of `t = m h²`: the mean side of the triangles the operators are built
+    /// on ([`HeatOptions::time_factor`]).
     pub mean_edge: f64,
     /// Whether the mesh has a boundary.
     pub has_boundary: bool,
+    /// How much intrinsic mollification lengthened every edge (0 when no triangle needed it).
+    pub mollified: f64,
     /// Nonzeros in the Cholesky factors (heat and Poisson, and the Dirichlet heat when used).
     pub factor_nnz: usize,
 }
@@ -163,6 +223,10 @@ impl System {
             .map(|&v| if with_mass { mass[v as usize] } else { 0.0 })
             .collect();
         for (i, j, w) in geometry.edge_weights() {
+            if i == j {
+                // An edge from a vertex to itself (on the doubled surface): w (u_i - u_i) = 0.
+                continue;
+            }
             let (ui, uj) = (index[i as usize], index[j as usize]);
             let w = scale * w;
             if ui != NONE {
@@ -216,16 +280,17 @@ pub struct HeatGeodesics {
     component: Vec<u32>,
     n_components: usize,
     stats: HeatStats,
-    /// Per-vertex heat, per-face field and per-vertex divergence, for `columns` queries.
+    /// Per-vertex heat and divergence of one field, and a per-face scratch.
     u: Vec<f64>,
-    x: Vec<[f64; 2]>,
+    grad: Vec<[f64; 2]>,
     div: Vec<f64>,
     /// Per component: the smallest potential at a source (for the shift).
     shift: Vec<f64>,
-    /// Per field: whether it has a source off the boundary (and so averages the Dirichlet
-    /// heat in).
+    /// Per field: whether it uses the Dirichlet heat (all its sources are off the boundary).
     averaged: Vec<bool>,
     boundary: Boundary,
+    /// Whether each vertex lies on the mesh's boundary.
+    on_boundary: Vec<bool>,
 }
 
 impl std::fmt::Debug for HeatGeodesics {
@@ -253,23 +318,59 @@ impl HeatGeodesics {
         if !(options.time_factor > 0.0 && options.time_factor.is_finite()) {
             return Err(GeodesicError::TimeFactor(options.time_factor));
         }
+        if !(options.mollify >= 0.0 && options.mollify.is_finite()) {
+            return Err(GeodesicError::Mollify(options.mollify));
+        }
+        if !(options.absorption >= 0.0 && options.absorption.is_finite()) {
+            return Err(GeodesicError::Absorption(options.absorption));
+        }
         let n = mesh.positions.len();
-        let mut tri = Intrinsic::from_mesh(&mesh.positions, &mesh.faces)?;
         let mean_edge = mean_edge_length(mesh);
+        let (mut tri, mollified) = Intrinsic::from_mesh_mollified(
+            &mesh.positions,
+            &mesh.faces,
+            options.mollify * mean_edge,
+        )?;
         let boundary = tri.boundary_vertices();
+        let boundary_edges = tri.boundary_edges();
         let has_boundary = boundary.iter().any(|&b| b);
         let flips = if options.intrinsic_delaunay {
+            if options.flip_boundary {
+                tri.double_across_boundary();
+            }
             tri.flip_to_delaunay()
         } else {
             0
         };
-        let geometry = FaceGeometry::new(&tri);
+        let faces = tri.weighted_faces();
+        // The mean side of the triangles (each side of the doubled surface once; a side
+        // shared by two triangles counts twice, one on the boundary once), as geometry-central
+        // does on the tufted cover.
+        let (sides, weights) = faces.iter().fold((0.0, 0.0), |(s, w), (_, l, weight)| {
+            (s + weight * (l[0] + l[1] + l[2]), w + 3.0 * weight)
+        });
+        let mean_edge = sides / weights;
+        let geometry = FaceGeometry::from_faces(&faces);
         let mass = geometry.vertex_areas(n);
         let (component, n_components) = components(n, &mesh.faces);
         let time = options.time_factor * mean_edge * mean_edge;
         let used = |v: usize| component[v] != NONE;
-        let heat = System::new("heat flow", &geometry, &mass, used, time, true)?;
-        let dirichlet = if has_boundary && options.boundary != Boundary::Neumann {
+        let heat = if options.boundary == Boundary::Robin && options.absorption > 0.0 {
+            // The boundary term t ∫ κ u v ds, lumped: t κ l / 2 from each boundary edge of
+            // length l to both its ends' diagonal entries, which hold the mass.
+            let kappa = options.absorption / time.sqrt();
+            let mut diagonal = mass.clone();
+            for &(a, b, l) in &boundary_edges {
+                diagonal[a as usize] += 0.5 * time * kappa * l;
+                diagonal[b as usize] += 0.5 * time * kappa * l;
+            }
+            System::new("heat flow", &geometry, &diagonal, used, time, true)?
+        } else {
+            System::new("heat flow", &geometry, &mass, used, time, true)?
+        };
+        let dirichlet = if has_boundary
+            && matches!(options.boundary, Boundary::Dirichlet | Boundary::Average)
+        {
             let interior = |v: usize| used(v) && !boundary[v];
             Some(System::new(
                 "heat flow (Dirichlet)",
@@ -307,17 +408,19 @@ impl HeatGeodesics {
             time,
             mean_edge,
             has_boundary,
+            mollified,
             factor_nnz: heat.chol.factor_nnz()
                 + poisson.chol.factor_nnz()
                 + dirichlet.as_ref().map_or(0, |d| d.chol.factor_nnz()),
         };
         Ok(HeatGeodesics {
             u: vec![0.0; n],
-            x: vec![[0.0; 2]; geometry.len()],
+            grad: Vec::with_capacity(geometry.len()),
             div: vec![0.0; n],
             shift: vec![0.0; n_components],
             averaged: Vec::with_capacity(16),
             boundary: options.boundary,
+            on_boundary: boundary,
             n_vertices: n,
             geometry,
             heat,
@@ -337,6 +440,18 @@ impl HeatGeodesics {
     /// Number of vertices.
     pub fn n_vertices(&self) -> usize {
         self.n_vertices
+    }
+
+    /// Whether vertex `v` lies on the mesh's boundary (false for a vertex out of range). With
+    /// [`Boundary::Dirichlet`] or [`Boundary::Average`], a field with such a source uses the
+    /// Neumann heat.
+    pub fn on_boundary(&self, v: u32) -> bool {
+        self.on_boundary.get(v as usize).copied().unwrap_or(false)
+    }
+
+    /// The boundary conditions the heat flows with.
+    pub fn boundary(&self) -> Boundary {
+        self.boundary
     }
 
     /// The distance of every vertex to the nearest of `sources`: zero at the sources,
@@ -421,12 +536,13 @@ impl HeatGeodesics {
             d.reserve(k);
             d.rhs.fill(0.0);
             for (c, group) in groups.iter().enumerate() {
-                for &s in *group {
-                    let i = d.index[s as usize];
-                    if i != NONE {
-                        let dd = d.dim();
-                        d.rhs[c * dd + i as usize] = 1.0;
-                        self.averaged[c] = true;
+                // A field with a source on the boundary (which has no Dirichlet unknown)
+                // keeps the Neumann heat alone.
+                if group.iter().all(|&s| d.index[s as usize] != NONE) {
+                    self.averaged[c] = true;
+                    let dd = d.dim();
+                    for &s in *group {
+                        d.rhs[c * dd + d.index[s as usize] as usize] = 1.0;
                     }
                 }
             }
@@ -455,8 +571,8 @@ impl HeatGeodesics {
                     self.u[v as usize] += add * d.rhs[c * dd + i];
                 }
             }
-            self.geometry.normalized_descent_into(&self.u, &mut self.x);
-            self.geometry.divergence_into(&self.x, &mut self.div);
+            self.geometry
+                .descent_divergence_into(&self.u, &mut self.grad, &mut self.div);
             let pd = self.poisson.dim();
             for (i, &v) in self.poisson.vertex.iter().enumerate() {
                 self.poisson.rhs[c * pd + i] = -self.div[v as usize];
@@ -500,7 +616,7 @@ impl HeatGeodesics {
     }
 }
 
-/// Mean length of the mesh's edges (each counted once).
+/// Mean length of the mesh's own edges (each counted once).
 fn mean_edge_length(mesh: &SurfaceMesh) -> f64 {
     let edges = crate::mesh::unique_edges(&mesh.faces);
     let total: f64 = edges

@@ -3,18 +3,24 @@
 //! once in [`HeatGeodesics::new`], and each query is a few back-substitutions and streaming
 //! passes over the triangles.
 //!
-//! 1. Heat flows from the sources for a short time `t = m h²` (`h` the mean edge length):
-//!    `(M + t Lc) u = δ`, one backward Euler step, with `M` the lumped vertex areas and `Lc`
-//!    the (positive semi-definite) cotan Laplacian.
+//! 1. Heat flows from the sources for a short time `t = m h²` (`h` the mean edge length of
+//!    the triangulation below): `(M + t Lc) u = δ`, one backward Euler step, with `M` the
+//!    lumped vertex areas and `Lc` the (positive semi-definite) cotan Laplacian. On a mesh
+//!    with a boundary, the boundary absorbs part of the heat by default ([`Boundary`]).
 //! 2. In each triangle, `X = −∇u / |∇u|`: unit vectors pointing away from the sources.
 //! 3. `Lc φ = −∇·X`, a Poisson problem whose solution has gradient closest to `X`; `φ`
 //!    shifted to zero at the sources is the distance.
 //!
 //! By default the Laplacian is built on the *intrinsic Delaunay triangulation* of the mesh
-//! (edge flips on the mesh's own metric, [`intrinsic`]), whose cotan weights are non-negative:
-//! on meshes with poor triangles this is markedly more accurate, and it costs a few
-//! milliseconds once. The gradient and divergence are computed on the same triangulation, in
-//! each triangle's own plane, so they stay consistent with the Laplacian.
+//! (edge flips on the mesh's own metric, [`intrinsic`]), whose cotan weights are non-negative,
+//! after *intrinsic mollification* (every edge lengthened just enough that each triangle
+//! meets the triangle inequality with a small margin, so degenerate triangles are accepted)
+//! and, on a mesh with a boundary, on the mesh glued to its mirror image so that flips may
+//! cross the boundary too: geometry-central's robust Laplacian (Sharp and Crane 2020). On
+//! meshes with poor triangles this is markedly more accurate; on some good meshes the plain
+//! cotan Laplacian is slightly more accurate (BENCHMARKS.md, "Geodesic distances"). It costs a
+//! few milliseconds once. The gradient and divergence are computed on the same triangulation,
+//! in each triangle's own plane, so they stay consistent with the Laplacian.
 //!
 //! `Lc` is singular (constants); it is made definite by *pinning* one vertex per connected
 //! component (removing its row and column). Since `−∇·X` sums to zero over each component,

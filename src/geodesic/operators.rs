@@ -7,7 +7,9 @@
 //! the same on a mesh's own triangles and on an intrinsic Delaunay triangulation of it, and
 //! the gradient and the divergence stay the adjoint pair the Laplacian is made of.
 
-use super::intrinsic::{cot_opposite, triangle_area, Intrinsic};
+#[cfg(test)]
+use super::intrinsic::Intrinsic;
+use super::intrinsic::{cot_opposite, triangle_area};
 
 /// Per-triangle constants, structure of arrays.
 #[derive(Clone, Debug)]
@@ -19,16 +21,26 @@ pub(crate) struct FaceGeometry {
     /// `c = (xc, yc)`.
     xc: Vec<f64>,
     yc: Vec<f64>,
-    /// Half the cotangent of the angle at each corner (the weight of the opposite edge).
+    /// Half the cotangent of the angle at each corner (the weight of the opposite edge),
+    /// times the face's weight.
     half_cot: Vec<[f64; 3]>,
-    /// Areas.
+    /// Areas, times the face's weight.
     pub area: Vec<f64>,
 }
 
 impl FaceGeometry {
-    /// The constants of every triangle of `tri`.
+    /// The constants of every triangle of `tri`, each weighted as
+    /// [`Intrinsic::weighted_faces`] says.
+    #[cfg(test)]
     pub fn new(tri: &Intrinsic) -> FaceGeometry {
-        let m = tri.n_faces();
+        FaceGeometry::from_faces(&tri.weighted_faces())
+    }
+
+    /// The constants of triangles given by their vertices `[a, b, c]`, edge lengths
+    /// `[|bc|, |ca|, |ab|]` and a weight that scales their contributions to the Laplacian,
+    /// the masses and the divergence.
+    pub fn from_faces(faces: &[([u32; 3], [f64; 3], f64)]) -> FaceGeometry {
+        let m = faces.len();
         let mut g = FaceGeometry {
             vertices: Vec::with_capacity(m),
             xb: Vec::with_capacity(m),
@@ -37,19 +49,19 @@ impl FaceGeometry {
             half_cot: Vec::with_capacity(m),
             area: Vec::with_capacity(m),
         };
-        for f in 0..m {
-            let (v, [la, lb, lc]) = tri.face(f);
+        for &(v, [la, lb, lc], weight) in faces {
             let area = triangle_area(la, lb, lc);
             g.vertices.push(v);
             g.xb.push(lc);
             g.xc.push((lc * lc + lb * lb - la * la) / (2.0 * lc));
             g.yc.push(2.0 * area / lc);
+            let w = 0.5 * weight;
             g.half_cot.push([
-                0.5 * cot_opposite(la, lb, lc),
-                0.5 * cot_opposite(lb, lc, la),
-                0.5 * cot_opposite(lc, la, lb),
+                w * cot_opposite(la, lb, lc),
+                w * cot_opposite(lb, lc, la),
+                w * cot_opposite(lc, la, lb),
             ]);
-            g.area.push(area);
+            g.area.push(weight * area);
         }
         g
     }
@@ -81,6 +93,7 @@ impl FaceGeometry {
     }
 
     /// `x[f] = -∇u / |∇u|` in each triangle's own frame (zero where `u` is flat).
+    #[cfg(test)]
     pub fn normalized_descent_into(&self, u: &[f64], x: &mut [[f64; 2]]) {
         for (f, out) in x.iter_mut().enumerate() {
             let [a, b, c] = self.vertices[f];
@@ -102,6 +115,7 @@ impl FaceGeometry {
     /// The integrated divergence of the per-triangle field `x` at each vertex:
     /// `½ Σ (cot θ₁ ⟨e₁, X⟩ + cot θ₂ ⟨e₂, X⟩)` over the vertex's triangles, `e₁`, `e₂` the
     /// edges leaving it and `θ₁`, `θ₂` the angles opposite them (Crane et al. 2013).
+    #[cfg(test)]
     pub fn divergence_into(&self, x: &[[f64; 2]], div: &mut [f64]) {
         div.fill(0.0);
         for (f, &[xx, xy]) in x.iter().enumerate() {
@@ -109,6 +123,51 @@ impl FaceGeometry {
             let [wa, wb, wc] = self.half_cot[f];
             let (xb, xc, yc) = (self.xb[f], self.xc[f], self.yc[f]);
             // ⟨e, X⟩ for the edges ab, ac and bc (the others are their negatives).
+            let ab = xb * xx;
+            let ac = xc * xx + yc * xy;
+            let bc = ac - ab;
+            div[a as usize] += wc * ab + wb * ac;
+            div[b as usize] += wa * bc - wc * ab;
+            div[c as usize] += -wb * ac - wa * bc;
+        }
+    }
+
+    /// The two passes of a query in one: the integrated divergence at each vertex of the unit
+    /// field `-∇u / |∇u|` (what [`FaceGeometry::divergence_into`] gives for the field of
+    /// [`FaceGeometry::normalized_descent_into`]), without storing the field.
+    pub fn descent_divergence_into(&self, u: &[f64], grad: &mut Vec<[f64; 2]>, div: &mut [f64]) {
+        let m = self.vertices.len();
+        grad.resize(m, [0.0; 2]);
+        // 1. The gradients (times 2A), gathering u.
+        for (((g, &[a, b, c]), (&xb, &xc)), &yc) in grad
+            .iter_mut()
+            .zip(&self.vertices)
+            .zip(self.xb.iter().zip(&self.xc))
+            .zip(&self.yc)
+        {
+            let (ua, ub, uc) = (u[a as usize], u[b as usize], u[c as usize]);
+            *g = [(ub - ua) * yc, ua * (xc - xb) - ub * xc + uc * xb];
+        }
+        // 2. Normalised and negated, with no gathers or scatters, so the square roots and
+        // divisions of neighbouring triangles overlap (and vectorise).
+        for g in grad.iter_mut() {
+            let norm2 = g[0] * g[0] + g[1] * g[1];
+            let scale = if norm2 > 0.0 {
+                -1.0 / norm2.sqrt()
+            } else {
+                0.0
+            };
+            *g = [g[0] * scale, g[1] * scale];
+        }
+        // 3. The divergence, scattered to the corners.
+        div.fill(0.0);
+        for ((((&[xx, xy], &[a, b, c]), (&xb, &xc)), &yc), &[wa, wb, wc]) in grad
+            .iter()
+            .zip(&self.vertices)
+            .zip(self.xb.iter().zip(&self.xc))
+            .zip(&self.yc)
+            .zip(&self.half_cot)
+        {
             let ab = xb * xx;
             let ac = xc * xx + yc * xy;
             let bc = ac - ab;
@@ -167,5 +226,14 @@ mod tests {
             rhs -= g.area[f] * (gx * xf[0] + gy * xf[1]);
         }
         assert!((lhs - rhs).abs() < 1e-12, "{lhs} vs {rhs}");
+        // The fused pass gives the divergence of the normalised descent of any function.
+        let mut x = vec![[0.0; 2]; 6];
+        g.normalized_descent_into(&phi, &mut x);
+        g.divergence_into(&x, &mut div);
+        let mut fused = vec![0.0; 7];
+        g.descent_divergence_into(&phi, &mut Vec::new(), &mut fused);
+        for (a, b) in div.iter().zip(&fused) {
+            assert!((a - b).abs() < 1e-14, "{a} vs {b}");
+        }
     }
 }

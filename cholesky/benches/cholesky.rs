@@ -6,7 +6,7 @@
 //!
 //! - `factorize/{own,faer}/<size>`: one numeric factorisation, supernodal;
 //! - `factorize/simplicial/<size>`: faer's column-by-column factorisation of the same matrix
-//!   (what [`Supernodal::Auto`] chose below its threshold);
+//!   (`Supernodal::Never`; `Auto` is supernodal);
 //! - `solve/{own,faer,simplicial}/<size>`: one solve with one right-hand side;
 //! - `solve4/{own,faer}/<size>`: one solve with four right-hand sides.
 //!

@@ -35,8 +35,16 @@ pub enum Ordering {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum Supernodal {
-    /// Supernodal when the factorisation's work per stored value of the factor is large
-    /// enough to pay for blocking (see [`AUTO_SUPERNODAL_THRESHOLD`]).
+    /// The engine's choice, today always supernodal. With faer's kernels on both sides,
+    /// simplicial was faster below about 3K unknowns on mesh matrices (faer's own default
+    /// keeps it up to about 15K); the engine's supernodal factorisation is faster from 36
+    /// unknowns up (Laplacians of grids with AMD, fastest of 40 runs: 0.005 against 0.007 ms
+    /// at 100 unknowns, 0.094 against 0.189 ms at 1K, 1.7 against 6.6-7.0 ms at 10K, 46
+    /// against 288-290 ms at 100K), and its solves are within a few microseconds of faer's
+    /// simplicial ones below 1K unknowns and faster at 10K (0.30 against 0.37 ms). Only
+    /// solve-bound uses of factors beyond about 50K unknowns would gain from a simplicial
+    /// factor, whose solves stream fewer stored values (at 100K, 7.1-7.5 against 9.1-9.5 ms;
+    /// the factorisation takes six times longer): ask for [`Supernodal::Never`] there.
     #[default]
     Auto,
     /// Always supernodal (but for a factor with nothing below its diagonal, such as a
@@ -45,13 +53,6 @@ pub enum Supernodal {
     /// Always simplicial.
     Never,
 }
-
-/// faer's measure for choosing a supernodal factorisation under [`Supernodal::Auto`]: it
-/// factors supernodally when its estimate of the factorisation's flops per stored value of `L`
-/// exceeds 40 times this. faer's own default is 1; with faer's kernels on both sides, 0.5 was
-/// the crossing on the morph's Hessians with AMD (at 10K unknowns, ratio 35, 6.6 ms against
-/// 9.9 ms per factorisation and solve).
-pub const AUTO_SUPERNODAL_THRESHOLD: f64 = 0.5;
 
 /// Estimated work of one numeric factorisation and of one solve with it (multiply-adds),
 /// from the factor's structure; the VM's cost model compares them.
@@ -101,8 +102,7 @@ impl Analysis {
             _ => SymmetricOrdering::Amd,
         };
         let threshold = match supernodal {
-            Supernodal::Auto => SupernodalThreshold(AUTO_SUPERNODAL_THRESHOLD),
-            Supernodal::Always => SupernodalThreshold::FORCE_SUPERNODAL,
+            Supernodal::Auto | Supernodal::Always => SupernodalThreshold::FORCE_SUPERNODAL,
             Supernodal::Never => SupernodalThreshold::FORCE_SIMPLICIAL,
         };
         let symbolic = factorize_symbolic_cholesky(

@@ -73,7 +73,7 @@ mod pattern;
 mod supernodes;
 mod triangular;
 
-pub use analysis::{FactorCost, Ordering, Supernodal, AUTO_SUPERNODAL_THRESHOLD};
+pub use analysis::{FactorCost, Ordering, Supernodal};
 pub use error::CholeskyError;
 pub use factor::{Cholesky, CholeskyOptions, FactorPrecision, SINGLE_FROM_VALUES};
 pub use pattern::LowerPattern;

@@ -14,7 +14,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Accum, Mat, Par, Side};
 
-use crate::numeric::SupernodalLlt;
+use crate::numeric::{Pivots, SupernodalLlt};
 use crate::supernodes::Supernodes;
 use crate::{CholeskyError, LowerPattern};
 
@@ -196,6 +196,17 @@ impl Analysis {
         }
         MemBuffer::try_new(StackReq::any_of(&req))
             .map_err(|e| CholeskyError::Symbolic(format!("workspace: {e:?}")))
+    }
+
+    /// The pivot rule of the engine's factorisation, writing the diagonal's reciprocals into
+    /// `inv_diag`.
+    pub fn pivots<'a>(&'a self, inv_diag: &'a mut [f64]) -> Pivots<'a> {
+        Pivots {
+            slot: &self.diag_slot,
+            scale: &self.pivot_scale,
+            floor: self.diag_at.len() as f64,
+            inv_diag,
+        }
     }
 
     /// The work of a factorisation and of a solve, estimated from the structure.

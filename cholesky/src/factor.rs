@@ -380,18 +380,28 @@ impl Cholesky {
     fn factorize_double(&mut self, values: &[f64], kernels: Kernels) -> Result<(), CholeskyError> {
         let len_val = self.factor_nnz();
         zeroed(&mut self.double, len_val);
-        match (&self.analysis.plan, kernels) {
-            (Some(plan), Kernels::Own) => {
-                plan.factorize(values, &mut self.double).map_err(failure)?
+        let Cholesky {
+            analysis,
+            double,
+            pattern,
+            workspace,
+            solver,
+            ..
+        } = self;
+        match (&analysis.plan, solver, kernels) {
+            (Some(plan), Some(solver), Kernels::Own) => plan
+                .factorize(values, double, &mut analysis.pivots(solver.inv_diag_mut()))
+                .map_err(failure),
+            (_, solver, _) => {
+                let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), values);
+                faer_llt(analysis, double, matrix, workspace)?;
+                check_pivots(analysis, values, double)?;
+                if let Some(solver) = solver {
+                    solver.prepare(double);
+                }
+                Ok(())
             }
-            _ => faer_llt(
-                &self.analysis,
-                &mut self.double,
-                SparseColMatRef::new(self.pattern.pattern.as_ref(), values),
-                &mut self.workspace,
-            )?,
         }
-        check_pivots(&self.analysis, values, &self.double)
     }
 
     /// The single-precision factorisation.
@@ -402,34 +412,36 @@ impl Cholesky {
             values32,
             pattern,
             workspace,
+            solver,
             ..
         } = self;
-        if let (Some(plan), Kernels::Own) = (&analysis.plan, kernels) {
-            plan.factorize(values, single).map_err(failure)?;
-        } else {
-            let mut finite = true;
-            for (s, v) in values32.iter_mut().zip(values) {
-                *s = *v as f32;
-                finite &= s.is_finite();
+        match (&analysis.plan, solver, kernels) {
+            (Some(plan), Some(solver), Kernels::Own) => plan
+                .factorize(values, single, &mut analysis.pivots(solver.inv_diag_mut()))
+                .map_err(failure),
+            (_, solver, _) => {
+                let mut finite = true;
+                for (s, v) in values32.iter_mut().zip(values) {
+                    *s = *v as f32;
+                    finite &= s.is_finite();
+                }
+                if !finite {
+                    return Err(CholeskyError::NonFinite { column: 0 });
+                }
+                let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), &values32[..]);
+                faer_llt(analysis, single, matrix, workspace)?;
+                check_pivots(analysis, values, single)?;
+                if let Some(solver) = solver {
+                    solver.prepare(single);
+                }
+                Ok(())
             }
-            if !finite {
-                return Err(CholeskyError::NonFinite { column: 0 });
-            }
-            let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), &values32[..]);
-            faer_llt(analysis, single, matrix, workspace)?;
         }
-        check_pivots(analysis, values, single)
     }
 
-    /// Records the ready factor's precision and prepares the supernodal solves for it.
+    /// Records the ready factor's precision (the supernodal solves were prepared for it by
+    /// the factorisation).
     fn mark_ready(&mut self, single: bool) {
-        if let Some(solver) = &mut self.solver {
-            if single {
-                solver.prepare(&self.single);
-            } else {
-                solver.prepare(&self.double);
-            }
-        }
         self.ready = Some(single);
     }
 
@@ -516,6 +528,9 @@ impl Cholesky {
     #[cfg(test)]
     pub(crate) fn set_double_factor(&mut self, values: Vec<f64>) {
         self.double = values;
+        if let Some(solver) = &mut self.solver {
+            solver.prepare(&self.double);
+        }
         self.mark_ready(false);
     }
 
@@ -546,6 +561,7 @@ fn zeroed<T: Clone + Default>(v: &mut Vec<T>, len: usize) {
 fn failure(f: Failure) -> CholeskyError {
     match f {
         Failure::Pivot(pivot) => CholeskyError::NotPositiveDefinite { pivot },
+        Failure::Singular(pivot, ratio) => CholeskyError::Singular { pivot, ratio },
         Failure::NonFinite(column) => CholeskyError::NonFinite { column },
     }
 }

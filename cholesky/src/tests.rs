@@ -101,8 +101,11 @@ fn the_portable_loops_match_the_vector_ones() {
     let mut fresh = vec![f64::NAN; chol.factor_nnz()];
     // NaN wherever the factorisation fails to write: every block is opened first.
     let mut portable = fresh.clone();
-    plan.factorize(&values, &mut fresh).expect("definite");
-    plan.factorize_portable(&values, &mut portable)
+    let mut inv = vec![0.0; chol.dim()];
+    let mut pivots = chol.analysis().pivots(&mut inv);
+    plan.factorize(&values, &mut fresh, &mut pivots)
+        .expect("definite");
+    plan.factorize_portable(&values, &mut portable, &mut pivots)
         .expect("definite");
     assert!(fresh.iter().chain(&portable).all(|v| v.is_finite()));
     let d = difference(&chol, &portable, &fresh);

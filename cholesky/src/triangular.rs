@@ -78,6 +78,12 @@ impl SupernodalSolve {
         }
     }
 
+    /// The reciprocals of the factor's diagonal, for the factorisation to write (see
+    /// [`crate::numeric::Pivots`]) instead of [`SupernodalSolve::prepare`].
+    pub fn inv_diag_mut(&mut self) -> &mut [f64] {
+        &mut self.inv_diag
+    }
+
     /// Reads the reciprocals of the diagonal of the factor `values`, which the solves with it
     /// multiply by: a division in their chain of dependent operations costs several times a
     /// multiplication. Call after every factorisation, before solving with it.

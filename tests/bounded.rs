@@ -117,9 +117,14 @@ fn the_newton_finish_lowers_what_projections_alone_leave() {
             .with_newton_finish(finish);
         let mut bd = BoundedDistortion::new(&mesh, &[], options).expect("set up");
         let report = bd.solve_with(&mut uv, |_, _| {}).expect("solve");
-        assert_eq!(
-            report.max_distortion,
-            largest(&mesh, &uv).max(report.max_distortion)
+        // The report's largest distortion is the map's (two computations of it, to
+        // rounding).
+        let measured = largest(&mesh, &uv);
+        assert!(
+            report.max_distortion == measured
+                || (report.max_distortion - measured).abs() <= 1e-12 * measured,
+            "{} vs {measured}",
+            report.max_distortion
         );
         report
     };

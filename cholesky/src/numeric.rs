@@ -659,8 +659,14 @@ fn panel<T: Real, const FMA: bool>(
             }
             let l = d.sqrt();
             col[k] = l;
-            checks.inv_diag[k] = 1.0 / l.to_f64();
             let inv = l.recip();
+            // In double precision `inv` is already `1 / L_jj`; in single precision the solves'
+            // reciprocal is taken in double precision.
+            checks.inv_diag[k] = if T::epsilon() > f64::EPSILON {
+                1.0 / l.to_f64()
+            } else {
+                inv.to_f64()
+            };
             for v in &mut col[k + 1..ld] {
                 *v *= inv;
             }

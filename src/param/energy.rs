@@ -24,6 +24,10 @@ pub enum Energy {
     Arap,
     /// MIPS (conformal) `σ₁/σ₂ + σ₂/σ₁` (2 for a similarity).
     Mips,
+    /// As-similar-as-possible `(σ₁ − σ₂)² / 2`: the squared distance `|F − S|²` from the
+    /// nearest similarity `S` (0 for a similarity), which local/global ASAP lowers. Finite
+    /// on degenerate and inverted triangles (`σ₂ < 0` there).
+    Asap,
     /// The excess of the conformal distortion over a bound: with `m = (σ₁/σ₂ + σ₂/σ₁) / 2`
     /// (half MIPS, `(D + 1/D) / 2` for the distortion `D = σ₁/σ₂`) and `c` the value of `m`
     /// at `D = bound`, `ε (m − 1) + max(0, m − c)²` with `ε` = [`EXCESS_CONFORMAL_WEIGHT`].
@@ -139,6 +143,7 @@ impl Energy {
                 s1 * s1 + s2 * s2 + 1.0 / (s1 * s1) + 1.0 / (s2 * s2)
             }
             Energy::Arap => (s1 - 1.0).powi(2) + (s2 - 1.0).powi(2),
+            Energy::Asap => 0.5 * (s1 - s2).powi(2),
             Energy::Mips => {
                 if s1 * s2 <= 0.0 {
                     return f64::INFINITY;
@@ -171,6 +176,7 @@ impl Energy {
                 [2.0 * s1 - 2.0 / s1.powi(3), 2.0 * s2 - 2.0 / s2.powi(3)]
             }
             Energy::Arap => [2.0 * (s1 - 1.0), 2.0 * (s2 - 1.0)],
+            Energy::Asap => [s1 - s2, s2 - s1],
             Energy::Mips => [1.0 / s2 - s2 / (s1 * s1), 1.0 / s1 - s1 / (s2 * s2)],
             Energy::Excess { bound } => {
                 let [d1, _] = excess_slopes(bound, 0.5 * (s1 / s2 + s2 / s1));
@@ -189,6 +195,7 @@ impl Energy {
         match self {
             Energy::SymmetricDirichlet => [2.0 + 6.0 / s1.powi(4), 0.0, 2.0 + 6.0 / s2.powi(4)],
             Energy::Arap => [2.0, 0.0, 2.0],
+            Energy::Asap => [1.0, -1.0, 1.0],
             Energy::Mips => [
                 2.0 * s2 / s1.powi(3),
                 -1.0 / (s1 * s1) - 1.0 / (s2 * s2),
@@ -234,6 +241,8 @@ impl Energy {
                 };
                 [twist, 2.0]
             }
+            // (Ψ₁ + Ψ₂) = 0 and (Ψ₁ − Ψ₂) = 2 (σ₁ − σ₂).
+            Energy::Asap => [0.0, 2.0],
             Energy::Mips => {
                 let p = s1 * s1 * s2 * s2;
                 [-(s1 - s2).powi(2) / p, (s1 + s2).powi(2) / p]

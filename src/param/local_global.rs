@@ -113,7 +113,7 @@ impl LocalGlobal {
     /// deformation gradient `J` (the cotangent-weighted fit of the edges is the same: for
     /// any triangle `Σ cot θₖ eₖ eₖᵀ = 2A I`, so the fit of `J`'s edges is `J`'s closest
     /// rotation or similarity); returns the method's energy of `uv` (ARAP
-    /// `2 (q − 1)² + 2 r²` or MIPS `2 (q² + r²) / (q² − r²)`, with `q`, `r` the norms of
+    /// `2 (q − 1)² + 2 r²` or ASAP `2 r²`, with `q`, `r` the norms of
     /// `J`'s similarity and anti-similarity parts), as an area-weighted mean.
     fn fit(&mut self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
         let mut energy = 0.0;
@@ -125,8 +125,8 @@ impl LocalGlobal {
             let q = q2.sqrt();
             let psi = match self.fit {
                 Fit::Rotation => 2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r2,
-                Fit::Similarity if q2 > r2 => 2.0 * (q2 + r2) / (q2 - r2),
-                Fit::Similarity => f64::INFINITY,
+                // |J - S|² for the nearest similarity S: the anti-conformal part.
+                Fit::Similarity => 2.0 * r2,
             };
             energy += frames.area[f] * psi;
             let (p, s) = match self.fit {
@@ -139,7 +139,7 @@ impl LocalGlobal {
         energy / frames.total_area
     }
 
-    /// One local step and one global step, in place; the method's energy (ARAP or MIPS,
+    /// One local step and one global step, in place; the method's energy (ARAP or ASAP,
     /// see [`LocalGlobal::fit`]) before and after. The fits for the next iteration are made
     /// in the same pass that measures the energy after.
     pub fn iterate(
@@ -234,7 +234,7 @@ mod tests {
         let n = uv.len();
         for (fit, energy) in [
             (Fit::Rotation, Energy::Arap),
-            (Fit::Similarity, Energy::Mips),
+            (Fit::Similarity, Energy::Asap),
         ] {
             let mut lg = LocalGlobal::new(&frames, n, 0, fit).expect("set up");
             let e = lg.fit(&frames, &uv);

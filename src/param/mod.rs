@@ -382,7 +382,8 @@ impl Parameterization {
             Method::Arap => Energy::Arap,
             Method::ArapNewton if barrier > 0.0 => Energy::ArapBarrier { weight: barrier },
             Method::ArapNewton => Energy::Arap,
-            Method::Mips | Method::Lscm | Method::Asap => Energy::Mips,
+            Method::Asap => Energy::Asap,
+            Method::Mips | Method::Lscm => Energy::Mips,
             Method::Tutte | Method::SymmetricDirichlet => Energy::SymmetricDirichlet,
         };
         let boundary = bdmorph_compiler::disk_boundary(mesh.positions.len(), &mesh.faces)?;
@@ -448,8 +449,8 @@ impl Parameterization {
 
     /// The method's own energy of the current map, the one its iterations lower: ARAP for
     /// `arap`, ARAP plus the collapse barrier for `arap-newton` ([`Energy::ArapBarrier`];
-    /// plain ARAP with a zero barrier weight), MIPS for `asap`, `mips`, `lscm`, symmetric
-    /// Dirichlet for `sd` and `tutte`.
+    /// plain ARAP with a zero barrier weight), ASAP for `asap`, MIPS for `mips` and `lscm`,
+    /// symmetric Dirichlet for `sd` and `tutte`.
     pub fn energy(&self) -> f64 {
         mean_energy(self.objective, &self.frames, &self.uv)
     }
@@ -520,9 +521,12 @@ impl Parameterization {
                 stop = Stop::Converged;
             } else if blocked_run >= STALL_ITERATIONS || (report.step == 0.0 && far) {
                 stop = Stop::Stalled;
-            } else if decrease <= self.options.tolerance * report.energy_after.abs()
+            } else if (decrease.is_finite()
+                && decrease.abs() <= self.options.tolerance * report.energy_after.abs())
                 || report.step == 0.0
             {
+                // (An energy that rose, to infinity or by more than the tolerance, is no
+                // convergence.)
                 // A negligible decrease from a tiny step with a large gradient is a stall
                 // that has not lasted long yet, not a minimum.
                 stop = if blocked {

@@ -452,7 +452,30 @@ impl Cholesky {
     /// room for that many columns ([`Cholesky::reserve_columns`]), and grows it otherwise.
     /// Fails with [`CholeskyError::NoFactor`] before a successful factorisation.
     pub fn solve_in_place(&mut self, rhs: &mut [f64], columns: usize) -> Result<(), CholeskyError> {
-        self.solve_by(rhs, columns, Kernels::Own)
+        self.solve_by(rhs, columns, Kernels::Own, None)
+    }
+
+    /// [`Cholesky::solve_in_place`] for right-hand sides that are zero outside the rows
+    /// `nonzero_rows` (in every column), such as the point sources of the heat method: the
+    /// forward solve then visits only the supernodes on the elimination-tree paths from
+    /// those rows, a small part of the factor (the backward solve is a full one). The same
+    /// result, to the last bit, as [`Cholesky::solve_in_place`]; a right-hand side with a
+    /// nonzero elsewhere is noticed and solved in full. Fails with
+    /// [`CholeskyError::Pattern`] for a row outside the matrix.
+    pub fn solve_in_place_sparse(
+        &mut self,
+        rhs: &mut [f64],
+        columns: usize,
+        nonzero_rows: &[u32],
+    ) -> Result<(), CholeskyError> {
+        if let Some(&r) = nonzero_rows.iter().find(|&&r| r as usize >= self.dim()) {
+            return Err(CholeskyError::Pattern(format!(
+                "row {r} is outside a {} by {} matrix",
+                self.dim(),
+                self.dim()
+            )));
+        }
+        self.solve_by(rhs, columns, Kernels::Own, Some(nonzero_rows))
     }
 
     /// [`Cholesky::solve_in_place`] by faer's general solve (its dense triangular solve and
@@ -463,7 +486,7 @@ impl Cholesky {
         rhs: &mut [f64],
         columns: usize,
     ) -> Result<(), CholeskyError> {
-        self.solve_by(rhs, columns, Kernels::Faer)
+        self.solve_by(rhs, columns, Kernels::Faer, None)
     }
 
     fn solve_by(
@@ -471,6 +494,7 @@ impl Cholesky {
         rhs: &mut [f64],
         columns: usize,
         kernels: Kernels,
+        nonzero_rows: Option<&[u32]>,
     ) -> Result<(), CholeskyError> {
         let Some(single) = self.ready else {
             return Err(CholeskyError::NoFactor);
@@ -485,10 +509,11 @@ impl Cholesky {
         }
         self.reserve_columns(columns)?;
         if let (Some(solver), Kernels::Own) = (&mut self.solver, kernels) {
-            if single {
-                solver.solve_many(&self.single, rhs, columns);
-            } else {
-                solver.solve_many(&self.double, rhs, columns);
+            match (single, nonzero_rows) {
+                (true, None) => solver.solve_many(&self.single, rhs, columns),
+                (false, None) => solver.solve_many(&self.double, rhs, columns),
+                (true, Some(rows)) => solver.solve_many_sparse(&self.single, rhs, columns, rows),
+                (false, Some(rows)) => solver.solve_many_sparse(&self.double, rhs, columns, rows),
             }
             return Ok(());
         }

@@ -51,18 +51,58 @@ pub(crate) struct SupernodalSolve {
     inv_diag: Vec<f64>,
     /// Right-hand sides the buffers hold room for at once (1 to [`BLOCK`]).
     width: usize,
+    /// Per permuted column, its supernode.
+    owner: Vec<u32>,
+    /// Per supernode, its parent in the supernodal elimination tree (the supernode of its
+    /// first row below the diagonal block), or [`NO_PARENT`] for a root.
+    parent: Vec<u32>,
+    /// Per original row, its permuted column.
+    inverse: Vec<u32>,
+    /// The supernodes a sparse right-hand side reaches (see
+    /// [`SupernodalSolve::solve_many_sparse`]), and a mark per supernode.
+    reached: Vec<u32>,
+    marked: Vec<bool>,
 }
+
+/// The parent of a root supernode.
+const NO_PARENT: u32 = u32::MAX;
 
 impl SupernodalSolve {
     /// Solves with factors of the checked `structure` (so they index only within its bounds),
     /// with room for one right-hand side at a time.
     pub fn new(structure: Arc<Supernodes>) -> SupernodalSolve {
         let n = structure.n();
+        let mut owner = vec![0u32; n];
+        for (k, s) in structure.list.iter().enumerate() {
+            owner[s.begin as usize..s.end()].fill(k as u32);
+        }
+        // Rows below a diagonal block lie in later supernodes (checked by `Supernodes`), so
+        // the parents point forwards and every path ends.
+        let parent = structure
+            .list
+            .iter()
+            .map(|s| {
+                structure
+                    .rows_of(s)
+                    .first()
+                    .map_or(NO_PARENT, |&r| owner[r as usize])
+            })
+            .collect();
+        let mut inverse = vec![0u32; n];
+        for (new, &old) in structure.perm.iter().enumerate() {
+            inverse[old as usize] = new as u32;
+        }
+        let supernodes = structure.list.len();
         SupernodalSolve {
             y: vec![0.0; n],
             below: vec![0.0; tallest(&structure)],
             inv_diag: vec![0.0; n],
             width: 1,
+            owner,
+            parent,
+            inverse,
+            reached: Vec::with_capacity(supernodes),
+            marked: vec![false; supernodes],
             structure,
         }
     }
@@ -108,6 +148,46 @@ impl SupernodalSolve {
     /// diagonal block's upper triangle unused), prepared by [`SupernodalSolve::prepare`]; in
     /// blocks of up to [`BLOCK`] (as many as [`SupernodalSolve::reserve`] made room for).
     pub fn solve_many<T: Copy + Into<f64>>(&mut self, values: &[T], x: &mut [f64], columns: usize) {
+        self.solve_columns(values, x, columns, false);
+    }
+
+    /// [`SupernodalSolve::solve_many`] for right-hand sides that are zero outside `rows`
+    /// (original numbering, each below `n`): the forward solve visits only the supernodes on
+    /// the elimination-tree paths from those rows to the roots, where the others only add
+    /// zeros (the same bits as the full solve). A right-hand side with a nonzero elsewhere is
+    /// noticed while it is gathered, and solved in full.
+    pub fn solve_many_sparse<T: Copy + Into<f64>>(
+        &mut self,
+        values: &[T],
+        x: &mut [f64],
+        columns: usize,
+        rows: &[u32],
+    ) {
+        self.reached.clear();
+        for &r in rows {
+            let mut s = self.owner[self.inverse[r as usize] as usize];
+            while s != NO_PARENT && !self.marked[s as usize] {
+                self.marked[s as usize] = true;
+                self.reached.push(s);
+                s = self.parent[s as usize];
+            }
+        }
+        self.reached.sort_unstable();
+        self.solve_columns(values, x, columns, true);
+        for &s in &self.reached {
+            self.marked[s as usize] = false;
+        }
+    }
+
+    /// The blocks of [`SupernodalSolve::solve_many`], with the forward solve over the
+    /// reached supernodes only when `sparse`.
+    fn solve_columns<T: Copy + Into<f64>>(
+        &mut self,
+        values: &[T],
+        x: &mut [f64],
+        columns: usize,
+        sparse: bool,
+    ) {
         let n = self.structure.n();
         assert_eq!(x.len(), n * columns, "n values per right-hand side");
         let mut done = 0;
@@ -119,9 +199,9 @@ impl SupernodalSolve {
             };
             let part = &mut x[done * n..(done + c) * n];
             match c {
-                4 => self.solve_block::<T, 4>(values, part),
-                2 => self.solve_block::<T, 2>(values, part),
-                _ => self.solve_block::<T, 1>(values, part),
+                4 => self.solve_block::<T, 4>(values, part, sparse),
+                2 => self.solve_block::<T, 2>(values, part, sparse),
+                _ => self.solve_block::<T, 1>(values, part, sparse),
             }
             done += c;
         }
@@ -130,7 +210,12 @@ impl SupernodalSolve {
     /// The solves for `C` right-hand sides at once (`x` holds them one after another), a
     /// row's `C` values side by side in the work buffers. Each lane's arithmetic is that of a
     /// single right-hand side, in the same order for every `C`.
-    fn solve_block<T: Copy + Into<f64>, const C: usize>(&mut self, values: &[T], x: &mut [f64]) {
+    fn solve_block<T: Copy + Into<f64>, const C: usize>(
+        &mut self,
+        values: &[T],
+        x: &mut [f64],
+        sparse: bool,
+    ) {
         let st = &*self.structure;
         let n = st.n();
         assert_eq!(values.len(), st.len_val, "a factor of this structure");
@@ -138,13 +223,25 @@ impl SupernodalSolve {
         assert!(C <= self.width, "room reserved for the block");
         let (y, _) = self.y[..n * C].as_chunks_mut::<C>();
         let (scratch, _) = self.below.as_chunks_mut::<C>();
-        for (yi, &p) in y.iter_mut().zip(&st.perm) {
+        let mut elsewhere = false;
+        for ((yi, &p), &owner) in y.iter_mut().zip(&st.perm).zip(&self.owner) {
             for (c, v) in yi.iter_mut().enumerate() {
                 *v = x[c * n + p as usize];
             }
+            if sparse && yi.iter().any(|&v| v != 0.0) {
+                elsewhere |= !self.marked[owner as usize];
+            }
         }
-        // Forward: L z = P x.
-        for s in &st.list {
+        // Forward: L z = P x, over the reached supernodes only when the right-hand sides
+        // are zero elsewhere.
+        let all = !sparse || elsewhere;
+        let count = if all {
+            st.list.len()
+        } else {
+            self.reached.len()
+        };
+        for i in 0..count {
+            let s = &st.list[if all { i } else { self.reached[i] as usize }];
             let (b, w, h) = (s.begin as usize, s.width as usize, s.height as usize);
             let ld = w + h;
             let block = &values[s.values_start..s.values_start + ld * w];

@@ -61,6 +61,8 @@ fn factorisations_and_solves_do_not_allocate() {
                 chol.solve_in_place(&mut x[..pattern.dim()], 1)
                     .expect("solve");
                 chol.solve_in_place(&mut x, 3).expect("solve");
+                chol.solve_in_place_sparse(&mut x, 3, &[0, 7, 500])
+                    .expect("solve");
                 chol.factorize_with_faer(&values).expect("definite");
                 chol.solve_with_faer(&mut x, 3).expect("solve");
                 assert!(chol.factorize(&negative).is_err());

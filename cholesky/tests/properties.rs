@@ -230,6 +230,48 @@ proptest! {
         }
     }
 
+    /// Right-hand sides that are zero but at a few rows (point sources): the solve that
+    /// visits only the supernodes those rows reach gives the full solve's bits, also when
+    /// the rows given miss a nonzero (which it notices, and solves in full).
+    #[test]
+    fn sparse_right_hand_sides_give_the_full_solves_bits(
+        kind in kinds(),
+        size in 1u32..400,
+        seed in any::<u64>(),
+        sn in supernodal(),
+        columns in 1usize..6,
+        sources in 1usize..4,
+        miss in any::<bool>(),
+    ) {
+        let m = matrix(kind, size, seed, 1e-3);
+        let (pattern, values) = m.assemble().expect("pattern");
+        let mut chol = Cholesky::with_options(&pattern, options(sn, None)).expect("analysed");
+        chol.factorize(&values).expect("positive definite");
+        let mut rng = Rng::new(seed ^ 77);
+        let rows: Vec<u32> = (0..sources).map(|_| rng.below(m.n as u32)).collect();
+        let mut b = vec![0.0; m.n * columns];
+        for c in 0..columns {
+            for &r in &rows {
+                b[c * m.n + r as usize] = rng.range(0.5, 2.0);
+            }
+        }
+        let given: &[u32] = if miss {
+            // A nonzero at a row not given (when there is another row to put it at).
+            let other = (rows[0] + 1) % m.n as u32;
+            if !rows.contains(&other) {
+                b[other as usize] = 1.0;
+            }
+            &rows[1..]
+        } else {
+            &rows
+        };
+        let mut full = b.clone();
+        chol.solve_in_place(&mut full, columns).expect("solve");
+        let mut sparse = b.clone();
+        chol.solve_in_place_sparse(&mut sparse, columns, given).expect("solve");
+        prop_assert_eq!(full, sparse);
+    }
+
     /// Single precision: a preconditioner-quality solve (the engine's in double arithmetic on
     /// the `f32` factor, faer's in `f32`), close to the exact solution, or a fallback to
     /// double precision when the matrix is too ill-conditioned for it.
@@ -423,6 +465,18 @@ fn refactoring_with_new_values_forgets_the_old_ones() {
             Err(CholeskyError::NoFactor)
         ));
     }
+}
+
+/// Rows outside the matrix are refused by the sparse solve.
+#[test]
+fn sparse_solves_check_their_rows() {
+    let (pattern, values) = fixtures::grid(4, 1, 1.0).assemble().expect("pattern");
+    let mut chol = Cholesky::new(&pattern).expect("analysed");
+    chol.factorize(&values).expect("definite");
+    assert!(matches!(
+        chol.solve_in_place_sparse(&mut [0.0; 16], 1, &[16]),
+        Err(CholeskyError::Pattern(_))
+    ));
 }
 
 /// Orderings that are not permutations are refused when analysing.

@@ -286,6 +286,8 @@ pub struct HeatGeodesics {
     div: Vec<f64>,
     /// Per component: the smallest potential at a source (for the shift).
     shift: Vec<f64>,
+    /// The unknowns of a query's sources in a heat system.
+    source_rows: Vec<u32>,
     /// Per field: whether it uses the Dirichlet heat (all its sources are off the boundary).
     averaged: Vec<bool>,
     boundary: Boundary,
@@ -418,6 +420,7 @@ impl HeatGeodesics {
             grad: Vec::with_capacity(geometry.len()),
             div: vec![0.0; n],
             shift: vec![0.0; n_components],
+            source_rows: Vec::new(),
             averaged: Vec::with_capacity(16),
             boundary: options.boundary,
             on_boundary: boundary,
@@ -508,14 +511,32 @@ impl HeatGeodesics {
     fn query(&mut self, groups: &[&[u32]], out: &mut [f64]) -> Result<(), GeodesicError> {
         let n = self.n_vertices;
         let k = groups.len();
+        let failed = |source| GeodesicError::Factorization {
+            system: "solve",
+            source,
+        };
         let solve = |system: &mut System| {
             system
                 .chol
                 .solve_in_place(&mut system.rhs, k)
-                .map_err(|source| GeodesicError::Factorization {
-                    system: "solve",
-                    source,
-                })
+                .map_err(failed)
+        };
+        // The heat systems' right-hand sides are zero but at the sources: their forward
+        // solves visit only the part of the factor the sources reach.
+        let solve_sources = |system: &mut System, rows: &mut Vec<u32>| {
+            rows.clear();
+            for group in groups {
+                rows.extend(
+                    group
+                        .iter()
+                        .map(|&s| system.index[s as usize])
+                        .filter(|&i| i != NONE),
+                );
+            }
+            system
+                .chol
+                .solve_in_place_sparse(&mut system.rhs, k, rows)
+                .map_err(failed)
         };
         // 1. Heat: δ at the sources, Neumann (and Dirichlet).
         self.heat.reserve(k);
@@ -529,7 +550,7 @@ impl HeatGeodesics {
                 }
             }
         }
-        solve(&mut self.heat)?;
+        solve_sources(&mut self.heat, &mut self.source_rows)?;
         self.averaged.clear();
         self.averaged.resize(k, false);
         if let Some(d) = self.dirichlet.as_mut() {
@@ -546,7 +567,7 @@ impl HeatGeodesics {
                     }
                 }
             }
-            solve(d)?;
+            solve_sources(d, &mut self.source_rows)?;
         }
         // 2-3. Per field: the unit field X and its divergence, the Poisson right-hand side.
         self.poisson.reserve(k);

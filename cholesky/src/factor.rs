@@ -388,20 +388,9 @@ impl Cholesky {
             solver,
             ..
         } = self;
-        match (&analysis.plan, solver, kernels) {
-            (Some(plan), Some(solver), Kernels::Own) => plan
-                .factorize(values, double, &mut analysis.pivots(solver.inv_diag_mut()))
-                .map_err(failure),
-            (_, solver, _) => {
-                let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), values);
-                faer_llt(analysis, double, matrix, workspace)?;
-                check_pivots(analysis, values, double)?;
-                if let Some(solver) = solver {
-                    solver.prepare(double);
-                }
-                Ok(())
-            }
-        }
+        factor_into(
+            analysis, solver, kernels, pattern, workspace, values, double, values,
+        )
     }
 
     /// The single-precision factorisation.
@@ -415,28 +404,18 @@ impl Cholesky {
             solver,
             ..
         } = self;
-        match (&analysis.plan, solver, kernels) {
-            (Some(plan), Some(solver), Kernels::Own) => plan
-                .factorize(values, single, &mut analysis.pivots(solver.inv_diag_mut()))
-                .map_err(failure),
-            (_, solver, _) => {
-                let mut finite = true;
-                for (s, v) in values32.iter_mut().zip(values) {
-                    *s = *v as f32;
-                    finite &= s.is_finite();
-                }
-                if !finite {
-                    return Err(CholeskyError::NonFinite { column: 0 });
-                }
-                let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), &values32[..]);
-                faer_llt(analysis, single, matrix, workspace)?;
-                check_pivots(analysis, values, single)?;
-                if let Some(solver) = solver {
-                    solver.prepare(single);
-                }
-                Ok(())
+        if !own_kernels(analysis, solver, kernels) {
+            // faer factors the matrix's values rounded to single precision.
+            for (s, v) in values32.iter_mut().zip(values) {
+                *s = *v as f32;
+            }
+            if !values32.iter().all(|s| s.is_finite()) {
+                return Err(CholeskyError::NonFinite { column: 0 });
             }
         }
+        factor_into(
+            analysis, solver, kernels, pattern, workspace, values, single, values32,
+        )
     }
 
     /// Records the ready factor's precision (the supernodal solves were prepared for it by
@@ -562,6 +541,42 @@ impl Cholesky {
     #[cfg(test)]
     pub(crate) fn analysis(&self) -> &Analysis {
         &self.analysis
+    }
+}
+
+/// Whether a factorisation by `kernels` runs the engine's own plan.
+fn own_kernels(analysis: &Analysis, solver: &Option<SupernodalSolve>, kernels: Kernels) -> bool {
+    analysis.plan.is_some() && solver.is_some() && kernels == Kernels::Own
+}
+
+/// Factors `values` into `factor` (of either precision): by the engine's plan, which checks
+/// the pivots and writes the solves' reciprocal diagonal as it goes, or by faer on
+/// `faer_values` (`values` in `T`), followed by the same pivot check and the solves'
+/// preparation.
+#[allow(clippy::too_many_arguments)]
+fn factor_into<T: Real + ComplexField + Into<f64>>(
+    analysis: &Analysis,
+    solver: &mut Option<SupernodalSolve>,
+    kernels: Kernels,
+    pattern: &LowerPattern,
+    workspace: &mut MemBuffer,
+    values: &[f64],
+    factor: &mut [T],
+    faer_values: &[T],
+) -> Result<(), CholeskyError> {
+    match (&analysis.plan, solver, kernels) {
+        (Some(plan), Some(solver), Kernels::Own) => plan
+            .factorize(values, factor, &mut analysis.pivots(solver.inv_diag_mut()))
+            .map_err(failure),
+        (_, solver, _) => {
+            let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), faer_values);
+            faer_llt(analysis, factor, matrix, workspace)?;
+            check_pivots(analysis, values, factor)?;
+            if let Some(solver) = solver {
+                solver.prepare(factor);
+            }
+            Ok(())
+        }
     }
 }
 

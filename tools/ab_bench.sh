@@ -52,7 +52,7 @@ for round in $(seq "$rounds"); do
         echo "== $1 ($(basename "$2")) round $round"
         # shellcheck disable=SC2086
         (cd "$2" && "./$bench" --bench "$filter" $args 2>&1 |
-            awk '/^[A-Za-z_]/ { name = $1 } /time:/ { print "  " name ": " $(NF-3) " " $(NF-2) }')
+            awk '/^[A-Za-z_]/ { name = $1 } /time: *\[/ { print "  " name ": " $(NF-3) " " $(NF-2) }')
     done
 done
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -187,3 +187,12 @@ fn values_beyond_single_range_fall_back_to_double() {
     assert_eq!(chol.precision(), FactorPrecision::Single);
     assert!(!chol.is_ready());
 }
+
+/// The factorisation can move to another thread (the systems that own one, and the Python
+/// bindings that release the interpreter's lock around solves, rely on it).
+#[test]
+fn a_factorisation_is_send() {
+    fn send<T: Send>() {}
+    send::<Cholesky>();
+    send::<crate::LowerPattern>();
+}

@@ -3,7 +3,8 @@
 //!
 //! ```sh
 //! cargo run --release --example geodesic_fields -- MESH --sources 0,17,523 --out fields.f64 \
-//!     [--time-factor M] [--boundary robin|neumann|dirichlet|average] [--absorption R] \
+//!     [--time-factor M] [--time-scale mean-edge|spacing] [--anchor sources|one-ring] \
+//!     [--boundary robin|neumann|dirichlet|average] [--absorption R] [--boundary-source-absorption R] [--absorb-at-cuts] \
 //!     [--no-intrinsic-delaunay] [--no-flip-boundary] [--mollify DELTA] [--repeats R]
 //! ```
 //!
@@ -16,7 +17,7 @@
 use std::io::Write as _;
 use std::time::Instant;
 
-use bdmorph::geodesic::{Boundary, HeatGeodesics, HeatOptions};
+use bdmorph::geodesic::{Anchor, Boundary, HeatGeodesics, HeatOptions, TimeScale};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -40,7 +41,8 @@ fn value<'a>(args: &'a [String], flag: &str) -> Option<&'a str> {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let usage = "usage: geodesic_fields MESH --sources V1,V2,... --out FILE [--time-factor M] \
-                 [--boundary robin|neumann|dirichlet|average] [--absorption R] [--no-intrinsic-delaunay] [--no-flip-boundary] \
+                 [--time-scale mean-edge|spacing] [--anchor sources|one-ring] \
+                 [--boundary robin|neumann|dirichlet|average] [--absorption R] [--boundary-source-absorption R] [--absorb-at-cuts] [--no-intrinsic-delaunay] [--no-flip-boundary] \
                  [--mollify DELTA] [--repeats R]";
     let path = args.first().ok_or(usage)?;
     let sources: Vec<u32> = value(&args, "--sources")
@@ -52,7 +54,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats: usize = value(&args, "--repeats").unwrap_or("20").parse()?;
     let mut options = HeatOptions::default()
         .with_intrinsic_delaunay(!args.iter().any(|a| a == "--no-intrinsic-delaunay"))
-        .with_flip_boundary(!args.iter().any(|a| a == "--no-flip-boundary"));
+        .with_flip_boundary(!args.iter().any(|a| a == "--no-flip-boundary"))
+        .with_absorb_at_cuts(args.iter().any(|a| a == "--absorb-at-cuts"));
     if let Some(r) = value(&args, "--absorption") {
         options = options.with_absorption(r.parse()?);
     }
@@ -61,6 +64,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Some(m) = value(&args, "--time-factor") {
         options = options.with_time_factor(m.parse()?);
+    }
+    if let Some(scale) = value(&args, "--time-scale") {
+        options = options.with_time_scale(match scale {
+            "mean-edge" => TimeScale::MeanEdge,
+            "spacing" => TimeScale::Spacing,
+            other => return Err(format!("unknown time scale '{other}'").into()),
+        });
+    }
+    if let Some(r) = value(&args, "--boundary-source-absorption") {
+        options = options.with_boundary_source_absorption(r.parse()?);
+    }
+    if let Some(anchor) = value(&args, "--anchor") {
+        options = options.with_anchor(match anchor {
+            "sources" => Anchor::Sources,
+            "one-ring" => Anchor::OneRing,
+            other => return Err(format!("unknown anchor '{other}'").into()),
+        });
     }
     if let Some(b) = value(&args, "--boundary") {
         options = options.with_boundary(match b {
@@ -100,8 +120,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let stats = heat.stats();
     writeln!(
         std::io::stdout().lock(),
-        "{{\"vertices\":{n},\"coordinate_sum\":{coordinate_sum:e},\"flips\":{},\"factor_nnz\":{},\"setup_seconds\":{:e},\"query_seconds\":{:e}}}",
+        "{{\"vertices\":{n},\"coordinate_sum\":{coordinate_sum:e},\"flips\":{},\"mean_edge\":{:e},\"spacing\":{:e},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"query_seconds\":{:e}}}",
         stats.flips,
+        stats.mean_edge,
+        stats.spacing,
+        stats.time,
         stats.factor_nnz,
         median(setup),
         median(query)

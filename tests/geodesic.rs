@@ -6,7 +6,7 @@ mod common;
 
 use bdmorph::generate;
 use bdmorph::geodesic::intrinsic::TriangulationError;
-use bdmorph::geodesic::{Boundary, GeodesicError, HeatGeodesics, HeatOptions};
+use bdmorph::geodesic::{Anchor, Boundary, GeodesicError, HeatGeodesics, HeatOptions, TimeScale};
 use bdmorph::SurfaceMesh;
 use std::f64::consts::FRAC_1_SQRT_2;
 
@@ -235,11 +235,12 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
     };
     // (mesh, source, exact distances, the best peer's error, its name, our bar). The peers'
     // errors were measured by tools/geodesic_compare.py in one run with ours (potpourri3d
-    // 1.4.0 robust and plain, libigl 2.6.3); ours then: Isis 0.0155 and 0.0219, Nefertiti
-    // 0.0166 and 0.0380, camel head 0.0137. The bars leave about 2% for round-off across
-    // platforms; Nefertiti from 206 and the camel head are where a peer is better (libigl's
-    // Neumann-Dirichlet average there, potpourri3d's robust mode by 0.4%), and the bars hold
-    // our own accuracy.
+    // 1.4.0 robust and plain, libigl 2.6.3); ours now: Isis 0.00882 and 0.02206, Nefertiti
+    // 0.01348 and 0.01834, camel head 0.01360 (with the defaults before issue 23's
+    // measurements: 0.0155, 0.0219, 0.0166, 0.0380, 0.0137, where libigl's Neumann-Dirichlet
+    // average was better from Nefertiti's 206 and potpourri3d's robust mode on the camel
+    // head). The bars leave about 2% for round-off across platforms and hold our accuracy;
+    // every case must also be at least as accurate as the best peer.
     let cases = [
         (
             "disk3d/ustc-cg/Isis_dABF.obj",
@@ -247,7 +248,7 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
             include_str!("data/isis_exact_0.txt"),
             0.01583,
             "pp3d robust",
-            0.0159,
+            0.0090,
         ),
         (
             "disk3d/ustc-cg/Isis_dABF.obj",
@@ -255,7 +256,7 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
             include_str!("data/isis_exact_53.txt"),
             0.03255,
             "pp3d robust",
-            0.0224,
+            0.0225,
         ),
         (
             "disk3d/ustc-cg/Nefertiti_face.obj",
@@ -263,7 +264,7 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
             include_str!("data/nefertiti_exact_0.txt"),
             0.02061,
             "libigl",
-            0.0170,
+            0.0138,
         ),
         (
             "disk3d/ustc-cg/Nefertiti_face.obj",
@@ -271,7 +272,7 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
             include_str!("data/nefertiti_exact_206.txt"),
             0.02375,
             "libigl",
-            0.0388,
+            0.0187,
         ),
         (
             "disk3d/libigl/camelhead.off",
@@ -279,7 +280,7 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
             include_str!("data/camelhead_exact_0.txt"),
             0.01369,
             "pp3d robust",
-            0.0140,
+            0.0139,
         ),
     ];
     for (rel, source, text, peer, peer_name, bar) in cases {
@@ -297,10 +298,9 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
             "{rel} from {source}: {err:.5} (neumann {neumann:.5}; best peer {peer_name} {peer:.5})"
         );
         assert!(err <= bar, "{rel} from {source}: {err} > {bar}");
-        // The Robin boundary gains most of it, and is never more than 1% worse than zero flux.
         assert!(
-            err <= 1.01 * neumann,
-            "{rel} from {source}: {err} vs neumann {neumann}"
+            err <= peer,
+            "{rel} from {source}: {err} vs {peer_name} {peer}"
         );
     }
 }
@@ -449,15 +449,20 @@ fn robin_boundary_is_more_accurate_than_zero_flux_or_zero_heat() {
             err(Boundary::Average),
         );
         eprintln!("{name}: robin {robin:.5}, neumann {neumann:.5}, dirichlet {dirichlet:.5}, average {average:.5}");
-        // Measured: centre 0.0141 for all four (the boundary is met head-on); off centre
-        // 0.0131 / 0.0214 / 0.0311 / 0.0137; hemisphere 0.0088 / 0.0115 / 0.0317 / 0.0141.
-        assert!(
-            robin <= 1.01 * neumann.min(dirichlet).min(average),
-            "{name}"
-        );
-        assert!(robin < 0.015, "{name}: {robin}");
+        // Measured (robin / neumann / dirichlet / average): centre 0.00278 / 0.00288 /
+        // 0.00273 / 0.00276 (the boundary is met head-on); off centre 0.00925 / 0.01103 /
+        // 0.02402 / 0.01140; hemisphere 0.00683 / 0.00541 / 0.02431 / 0.00901. The default
+        // absorption for a source off the boundary (0.7) was chosen on the shared meshes,
+        // where it beats zero flux (BENCHMARKS.md); on this hemisphere zero flux is better
+        // and absorption 0.2 better still (0.00323).
+        let best = neumann.min(dirichlet).min(average);
+        assert!(robin <= 1.3 * best, "{name}");
+        assert!(robin < 0.01, "{name}: {robin}");
         if name != "flat disk, centre" {
-            assert!(robin < 0.8 * neumann && robin < 0.5 * dirichlet, "{name}");
+            assert!(robin < 0.5 * dirichlet, "{name}");
+        }
+        if name == "flat disk, off centre" {
+            assert!(robin < 0.9 * neumann.min(average), "{name}");
         }
     }
 }
@@ -539,9 +544,11 @@ fn flips_across_the_boundary_repair_obtuse_boundary_triangles() {
             error_with(&strip, off, source, &exact),
         );
         eprintln!("comb strip from {target:?}: across the boundary {e_on:.5}, inside {e_off:.5}");
-        // Measured: 0.0194 / 0.0221, 0.0293 / 0.0315, 0.0260 / 0.0579, 0.0210 / 0.0217.
+        // Measured: 0.0347 / 0.0481, 0.0211 / 0.0454, 0.0401 / 0.0480, 0.0455 / 0.0549.
+        // (This long strip of slivers is where the default absorption 0.7 of a source off
+        // the boundary does worst: with absorption 0.2, 0.0222 and 0.0256 from the last two.)
         assert!(e_on < 0.97 * e_off, "from {target:?}: {e_on} vs {e_off}");
-        assert!(e_on < 0.032, "from {target:?}: {e_on}");
+        assert!(e_on < 0.047, "from {target:?}: {e_on}");
     }
 }
 
@@ -635,22 +642,35 @@ fn mollification_accepts_a_triangle_of_zero_area() {
 
 #[test]
 fn the_time_step_uses_the_intrinsic_triangulations_edges() {
-    // Flips shorten edges: t = h^2 with h the mean edge of the triangulation the operators
-    // are built on.
+    // Flips shorten edges: t = m h^2 with h measured on the triangulation the operators are
+    // built on: by default its area-weighted vertex spacing, m = 0.5.
     let strip = sliver_strip(40, 8);
-    let idt = HeatGeodesics::new(&strip, HeatOptions::default().with_time_factor(0.5))
+    let mean_edge = HeatOptions::default()
+        .with_time_factor(1.0)
+        .with_time_scale(TimeScale::MeanEdge);
+    let idt = HeatGeodesics::new(&strip, mean_edge)
         .expect("set up")
         .stats();
-    let plain = HeatGeodesics::new(
-        &strip,
-        HeatOptions::default().with_intrinsic_delaunay(false),
-    )
-    .expect("set up")
-    .stats();
+    let plain = HeatGeodesics::new(&strip, mean_edge.with_intrinsic_delaunay(false))
+        .expect("set up")
+        .stats();
     assert!(idt.flips > 0);
     assert!(idt.mean_edge < 0.95 * plain.mean_edge, "{idt:?} {plain:?}");
-    assert!((idt.time - 0.5 * idt.mean_edge * idt.mean_edge).abs() < 1e-15);
+    assert!((idt.time - idt.mean_edge * idt.mean_edge).abs() < 1e-15);
     assert!((plain.time - plain.mean_edge * plain.mean_edge).abs() < 1e-15);
+    let default = HeatGeodesics::new(&strip, HeatOptions::default())
+        .expect("set up")
+        .stats();
+    assert!((default.time - 0.5 * default.spacing * default.spacing).abs() < 1e-15);
+    // On a uniform mesh the spacing is the side of its triangles: equilateral triangles of
+    // side 1 on a sphere of many vertices come close (every vertex owns √3/2 of area).
+    let sphere = HeatGeodesics::new(&generate::icosphere(4), HeatOptions::default())
+        .expect("set up")
+        .stats();
+    assert!(
+        (sphere.spacing / sphere.mean_edge - 1.0).abs() < 0.05,
+        "{sphere:?}"
+    );
 }
 
 #[test]
@@ -768,4 +788,170 @@ fn the_command_line_notes_when_dirichlet_or_average_falls_back_at_a_boundary_sou
         "{help}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A tube of `nx` by `ny` squares of about side 1 around the z axis, cut open along one generator:
+/// the first and last columns of vertices lie at the same places. Its geodesics cannot cross
+/// the cut, so the exact distances are those of the unrolled rectangle (convex): planar.
+fn cut_tube(nx: usize, ny: usize) -> (SurfaceMesh, Vec<[f64; 2]>) {
+    let radius = nx as f64 / std::f64::consts::TAU;
+    let mut positions = Vec::new();
+    let mut unrolled = Vec::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let angle = i as f64 / radius;
+            let angle = if i == nx { 0.0 } else { angle };
+            positions.push([radius * angle.cos(), radius * angle.sin(), j as f64]);
+            // The polyhedral tube's columns are a chord apart, not an arc.
+            let chord = 2.0 * radius * (std::f64::consts::PI / nx as f64).sin();
+            unrolled.push([i as f64 * chord, j as f64]);
+        }
+    }
+    let at = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let mut faces = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            faces.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            faces.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    let mesh = SurfaceMesh {
+        positions,
+        faces,
+        texcoords: None,
+    };
+    (mesh, unrolled)
+}
+
+#[test]
+fn cuts_reflect_heat_unless_asked_to_absorb() {
+    // The cut tube's boundary: its two rims (open, absorbing) and the cut's two sides
+    // (coincident, zero flux by default).
+    let (tube, unrolled) = cut_tube(24, 6);
+    let source = (3 * 25 + 2) as u32; // two squares from the cut, half-way up
+    let exact: Vec<f64> = unrolled
+        .iter()
+        .map(|p| {
+            let q = unrolled[source as usize];
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt()
+        })
+        .collect();
+    let error = |options: HeatOptions| {
+        let mut heat = HeatGeodesics::new(&tube, options).expect("set up");
+        mean_relative_error(&heat.distance(&[source]).expect("query"), &exact)
+    };
+    let (reflect, absorb) = (
+        error(HeatOptions::default()),
+        error(HeatOptions::default().with_absorb_at_cuts(true)),
+    );
+    eprintln!("cut tube: cuts reflect {reflect:.5}, absorb {absorb:.5}");
+    assert!(reflect < absorb, "{reflect} vs {absorb}");
+    // Measured 0.0446 and 0.0463 (right triangles all one way, on a coarse tube).
+    assert!(reflect < 0.046, "{reflect}");
+    // A mesh whose whole boundary is cuts has nothing to absorb: Robin is Neumann there.
+    let (mut closed_tube, _) = cut_tube(24, 6);
+    // Close the rims with a fan to a vertex each, leaving only the cut open.
+    let (nx, ny) = (24usize, 6usize);
+    for (j, z) in [(0usize, -1.0), (ny, ny as f64 + 1.0)] {
+        let apex = closed_tube.positions.len() as u32;
+        closed_tube.positions.push([0.0, 0.0, z]);
+        for i in 0..nx {
+            let (a, b) = ((j * (nx + 1) + i) as u32, (j * (nx + 1) + i + 1) as u32);
+            closed_tube
+                .faces
+                .push(if j == 0 { [b, a, apex] } else { [a, b, apex] });
+        }
+    }
+    let mut robin = HeatGeodesics::new(&closed_tube, HeatOptions::default()).expect("set up");
+    let mut neumann = HeatGeodesics::new(
+        &closed_tube,
+        HeatOptions::default().with_boundary(Boundary::Neumann),
+    )
+    .expect("set up");
+    assert_eq!(
+        robin.distance(&[source]).expect("query"),
+        neumann.distance(&[source]).expect("query")
+    );
+    assert_eq!(robin.stats().factor_nnz, neumann.stats().factor_nnz);
+}
+
+#[test]
+fn boundary_sources_use_their_own_absorption() {
+    let cap = generate::sphere_cap(4, 0.0);
+    let rim = (0..cap.positions.len())
+        .min_by(|&a, &b| cap.positions[a][2].total_cmp(&cap.positions[b][2]))
+        .expect("vertices") as u32;
+    let top = nearest(&cap, [0.0, 0.0, 1.0]) as u32;
+    let mut both = HeatGeodesics::new(&cap, HeatOptions::default()).expect("set up");
+    assert!(both.on_boundary(rim) && !both.on_boundary(top));
+    let defaults = HeatOptions::default();
+    let mut interior = HeatGeodesics::new(
+        &cap,
+        defaults.with_boundary_source_absorption(defaults.absorption),
+    )
+    .expect("set up");
+    let mut boundary = HeatGeodesics::new(
+        &cap,
+        defaults.with_absorption(defaults.boundary_source_absorption),
+    )
+    .expect("set up");
+    // Two heat systems only when the absorptions differ.
+    assert!(both.stats().factor_nnz > interior.stats().factor_nnz);
+    assert_eq!(interior.stats().factor_nnz, boundary.stats().factor_nnz);
+    let from_top = both.distance(&[top]).expect("query");
+    assert_eq!(from_top, interior.distance(&[top]).expect("query"));
+    let from_rim = both.distance(&[rim]).expect("query");
+    assert_eq!(from_rim, boundary.distance(&[rim]).expect("query"));
+    assert_ne!(from_rim, interior.distance(&[rim]).expect("query"));
+    // A field with both kinds of source is a boundary source's, and one batch can mix them.
+    assert_eq!(
+        both.distance(&[top, rim]).expect("query"),
+        boundary.distance(&[top, rim]).expect("query")
+    );
+    let each = both.distances_each(&[rim, top]).expect("queries");
+    assert_eq!(each, vec![from_rim, from_top]);
+    // A negative absorption is refused, whichever.
+    assert!(matches!(
+        HeatGeodesics::new(&cap, defaults.with_boundary_source_absorption(-0.1)),
+        Err(GeodesicError::Absorption(_))
+    ));
+}
+
+#[test]
+fn the_one_ring_anchor_makes_the_neighbours_exact_on_average() {
+    // The distance to a mesh neighbour is the edge's length; the default anchor fits the
+    // additive constant to the source's neighbours, the paper's puts zero at the source.
+    let disk = flat(&generate::disk(12, 0.2));
+    let source = nearest(&disk, [0.1, 0.05, 0.0]);
+    let exact = euclidean(&disk, source);
+    let mut ring: Vec<usize> = disk
+        .faces
+        .iter()
+        .filter(|f| f.contains(&(source as u32)))
+        .flat_map(|f| f.iter().map(|&v| v as usize))
+        .filter(|&v| v != source)
+        .collect();
+    ring.sort_unstable();
+    ring.dedup();
+    let mut fitted = HeatGeodesics::new(&disk, HeatOptions::default()).expect("set up");
+    let d = fitted.distance(&[source as u32]).expect("query");
+    let misfit: f64 = ring.iter().map(|&v| d[v] - exact[v]).sum::<f64>() / ring.len() as f64;
+    assert!(misfit.abs() < 1e-12, "{misfit}");
+    assert_eq!(d[source], 0.0);
+    let mut paper = HeatGeodesics::new(&disk, HeatOptions::default().with_anchor(Anchor::Sources))
+        .expect("set up");
+    let p = paper.distance(&[source as u32]).expect("query");
+    // The same field but for the constant (away from the source, where nothing is clamped).
+    let shift = d[ring[0]] - p[ring[0]];
+    for v in 0..d.len() {
+        if v != source && p[v] > 0.0 && d[v] > 0.0 {
+            assert!((d[v] - p[v] - shift).abs() < 1e-9, "vertex {v}");
+        }
+    }
+    let (e_fit, e_paper) = (
+        mean_relative_error(&d, &exact),
+        mean_relative_error(&p, &exact),
+    );
+    eprintln!("flat disk: one-ring anchor {e_fit:.5}, zero at the source {e_paper:.5}");
+    assert!(e_fit < e_paper, "{e_fit} vs {e_paper}");
 }

@@ -17,7 +17,7 @@ farthest-point sampling in 3D (Euclidean) starting from vertex 0, so they are sp
 mesh (on meshes with a boundary some end up on it; the table counts them);
 `--skip-sources 10` takes the next 10 of the same sequence, an independent set.
 
-Methods, each with its default time `t = h^2` (`h` the mean edge length):
+Methods, each with its defaults (the peers: `t = h^2`, `h` the mean edge length):
   exact       pygeodesic 0.1.11 (MMP, exact polyhedral distances); cached as .npy files in
               `--cache` (default `target/geodesic_compare/`, which git ignores)
   pp3d-robust potpourri3d 1.4.0 `MeshHeatMethodDistanceSolver(V, F, use_robust=True)`

@@ -5,10 +5,10 @@ use std::io::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use bdmorph::geodesic::{Boundary, HeatGeodesics, HeatOptions};
+use bdmorph::geodesic::{Anchor, Boundary, HeatGeodesics, HeatOptions, TimeScale};
 use bdmorph::render::{html, raster, surface, Image};
 
-use super::{BoundaryArg, GeodesicArgs};
+use super::{AnchorArg, BoundaryArg, GeodesicArgs, TimeScaleArg};
 
 /// What `-o` asks for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,6 +72,16 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
             BoundaryArg::Average => Boundary::Average,
         })
         .with_absorption(args.absorption)
+        .with_boundary_source_absorption(args.boundary_source_absorption)
+        .with_absorb_at_cuts(args.absorb_at_cuts)
+        .with_time_scale(match args.time_scale {
+            TimeScaleArg::Spacing => TimeScale::Spacing,
+            TimeScaleArg::MeanEdge => TimeScale::MeanEdge,
+        })
+        .with_anchor(match args.anchor {
+            AnchorArg::OneRing => Anchor::OneRing,
+            AnchorArg::Sources => Anchor::Sources,
+        })
         .with_intrinsic_delaunay(!args.no_intrinsic_delaunay)
         .with_flip_boundary(!args.no_flip_boundary)
         .with_mollify(args.mollify);

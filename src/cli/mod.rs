@@ -308,19 +308,35 @@ struct GeodesicArgs {
     /// Output: .txt (distances), .png or .html (pictures).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
-    /// The heat flows for t = M h^2, h the mean edge length of the (intrinsic Delaunay)
-    /// triangulation.
-    #[arg(long, value_name = "M", default_value_t = 1.0)]
+    /// The heat flows for t = M h^2, h measured on the (intrinsic Delaunay) triangulation as
+    /// --time-scale says.
+    #[arg(long, value_name = "M", default_value_t = 0.5)]
     time_factor: f64,
+    /// The length h of t = M h^2: spacing (the area-weighted vertex spacing, which follows
+    /// the coarse parts of a mesh of varying resolution) or mean-edge (the paper's).
+    #[arg(long, value_enum, value_name = "H", default_value = "spacing")]
+    time_scale: TimeScaleArg,
+    /// How the distance's additive constant is fixed: one-ring (fitted to the exact
+    /// distances of the sources' neighbours, the edges' lengths) or sources (zero at the
+    /// sources, the paper's).
+    #[arg(long, value_enum, value_name = "A", default_value = "one-ring")]
+    anchor: AnchorArg,
     /// Boundary conditions of the heat flow on meshes with a boundary. With dirichlet or
     /// average, a field with a source on the boundary uses neumann (a note on stderr says
     /// so): zero heat on the boundary would contradict that source.
     #[arg(long, value_enum, value_name = "BC", default_value = "robin")]
     boundary: BoundaryArg,
-    /// The absorption r of --boundary robin: the boundary absorbs heat at the rate
-    /// kappa = r / sqrt(t) (0 is neumann).
-    #[arg(long, value_name = "R", default_value_t = 0.2)]
+    /// The absorption r of --boundary robin, for fields whose sources are all off the
+    /// boundary: the boundary absorbs heat at the rate kappa = r / sqrt(t) (0 is neumann).
+    #[arg(long, value_name = "R", default_value_t = 0.7)]
     absorption: f64,
+    /// The absorption of --boundary robin for fields with a source on the boundary.
+    #[arg(long, value_name = "R", default_value_t = 0.2)]
+    boundary_source_absorption: f64,
+    /// Let --boundary robin absorb along cuts too (boundary edges lying on another boundary
+    /// edge, the two sides of a seam); by default cuts have zero flux.
+    #[arg(long)]
+    absorb_at_cuts: bool,
     /// Build the operators on the mesh's own triangles, not its intrinsic Delaunay
     /// triangulation (less accurate on poor triangles).
     #[arg(long)]
@@ -343,6 +359,24 @@ struct GeodesicArgs {
     /// Print nothing but errors (and --stats).
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// The time scale, on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TimeScaleArg {
+    /// The area-weighted vertex spacing; the default.
+    Spacing,
+    /// The mean edge length.
+    MeanEdge,
+}
+
+/// The anchor of the distance, on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum AnchorArg {
+    /// Fitted to the sources' neighbours; the default.
+    OneRing,
+    /// Zero at the sources.
+    Sources,
 }
 
 /// Boundary conditions, on the command line.

@@ -11,18 +11,22 @@ use crate::io::SurfaceMesh;
 /// and ignore this).
 ///
 /// The default is [`Boundary::Robin`], chosen by measurement against exact polyhedral
-/// distances on the shared meshes with a boundary (BENCHMARKS.md, "Geodesic distances"): from
-/// 90 sources on 9 meshes it was more accurate than zero flux on 50 of the 67 interior
-/// sources and 12 of the 23 boundary sources (geometric mean of the error ratios 0.95 and
-/// 0.98), where the paper's average was better on 38 of 67 and up to 1.8 times worse on the
-/// cut-open cow; and it needs no second heat system.
+/// distances on the shared meshes with a boundary (BENCHMARKS.md, "Geodesic distances"):
+/// from 40 sources on each of 9 meshes, absorption 0.7 for fields whose sources are off the
+/// boundary and 0.2 for the others was at least as accurate as the best peer on every mesh
+/// and source set, where zero flux everywhere (geometry-central's choice) was up to 2 times
+/// less accurate than the best peer on the Nefertiti face, and the paper's average of zero
+/// flux and zero heat up to 1.07 times on the cut-open cow. Cuts (seams) do not absorb
+/// ([`HeatOptions::absorb_at_cuts`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Boundary {
     /// Partly absorbing (Robin): `∂u/∂n = −κ u` on the boundary, with `κ = r / √t`, `r` the
-    /// [`HeatOptions::absorption`] (default 0.2) and `√t` the distance heat spreads in the
-    /// time `t`. Between zero flux, which bends the directions near the boundary along it,
-    /// and zero heat, which bends them across it. A source on the boundary is handled like
-    /// any other. One heat system, as for Neumann.
+    /// [`HeatOptions::absorption`] (default 0.7; [`HeatOptions::boundary_source_absorption`],
+    /// default 0.2, for a field with a source on the boundary) and `√t` the distance heat
+    /// spreads in the time `t`. Between zero flux, which bends the directions near the
+    /// boundary along it, and zero heat, which bends them across it. One heat system per
+    /// absorption (two by default on a mesh with an absorbing boundary); a query
+    /// back-substitutes with the one its sources need.
     #[default]
     Robin,
     /// Zero flux through the boundary: the cotan Laplacian as it is.
@@ -40,20 +44,75 @@ pub enum Boundary {
     Average,
 }
 
+/// The length `h` of the heat flow's time `t = m h²` ([`HeatOptions::time_scale`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TimeScale {
+    /// The mean side of the triangles the operators are built on (a side shared by two
+    /// triangles counts twice): the paper's `h`, and geometry-central's.
+    MeanEdge,
+    /// The area-weighted vertex spacing `h = √(2/√3 · Σ A_v² / Σ A_v)`, `A_v` the lumped
+    /// vertex areas: the side of the equilateral triangles whose vertices own, on average
+    /// over the surface's area, as much area as the mesh's. It equals the mean side on a
+    /// uniform mesh; where the resolution varies it follows the coarse parts, which hold most
+    /// of the area and most of a geodesic's length, where the mean side follows the fine
+    /// parts, which hold most of the edges. The default.
+    #[default]
+    Spacing,
+}
+
+/// How the additive constant of the distance is fixed ([`HeatOptions::anchor`]). The heat
+/// method finds the distance up to a constant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Anchor {
+    /// Zero at the sources (the paper's choice). The computed field is smoothed over about
+    /// `√t` around a source, so near it the distances come out short, by about a tenth of an
+    /// edge on the shared meshes, and the whole field inherits the shift.
+    Sources,
+    /// The constant that fits, in the least-squares sense, the exact distances of the
+    /// sources' neighbours: a mesh edge `sv` is a path on the surface and no path is shorter
+    /// than the straight segment, so the distance from a source `s` to its neighbour `v` is
+    /// exactly `|sv|` (with several sources, the nearest adjacent one's). The sources stay at
+    /// zero and every distance at zero or more. A component whose sources have no
+    /// neighbours but sources falls back to [`Anchor::Sources`]. The default.
+    #[default]
+    OneRing,
+}
+
 /// Options of [`HeatGeodesics`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct HeatOptions {
-    /// The heat flows for `t = time_factor · h²`, `h` the mean side of the triangles the
-    /// operators are built on (a side shared by two triangles counts twice): the intrinsic
-    /// Delaunay ones by default, whose sides are shorter than the mesh's where it flipped, as
-    /// geometry-central does. Default 1, the paper's choice.
+    /// The heat flows for `t = time_factor · h²`, `h` given by [`HeatOptions::time_scale`],
+    /// measured on the triangles the operators are built on (the intrinsic Delaunay ones by
+    /// default, whose sides are shorter than the mesh's where it flipped, as
+    /// geometry-central does). Default 0.5 with [`TimeScale::Spacing`], chosen by
+    /// measurement (BENCHMARKS.md, "Geodesic distances"); the paper's is 1 with
+    /// [`TimeScale::MeanEdge`].
     pub time_factor: f64,
+    /// Which length `h` the time `t = m h²` scales with (default [`TimeScale::Spacing`]).
+    pub time_scale: TimeScale,
+    /// How the additive constant of the distance is fixed (default [`Anchor::OneRing`]).
+    pub anchor: Anchor,
     /// Boundary conditions (default [`Boundary::Robin`]).
     pub boundary: Boundary,
-    /// The absorption `r = κ √t` of [`Boundary::Robin`] (default 0.2; 0 is Neumann). It
-    /// is relative to the heat's spread `√t`, so it means the same on any mesh size and scale.
+    /// The absorption `r = κ √t` of [`Boundary::Robin`] for fields whose sources are all
+    /// off the boundary (default 0.7; 0 is Neumann). It is relative to the heat's spread
+    /// `√t`, so it means the same on any mesh size and scale.
     pub absorption: f64,
+    /// The absorption of [`Boundary::Robin`] for fields with a source on the boundary
+    /// (default 0.2). Measured, such fields want less absorption than the others (heat
+    /// absorbed right beside the source bends its directions); when the two differ and the
+    /// mesh has an absorbing boundary, the set-up factors a second heat system, and each
+    /// query back-substitutes with the one its sources need.
+    pub boundary_source_absorption: f64,
+    /// Whether [`Boundary::Robin`] absorbs along cuts too (default false). A cut is a
+    /// boundary edge that lies on another boundary edge (both ends at the same positions):
+    /// the two sides of a seam along which a closed surface was cut open, as a UV-unwrapped
+    /// mesh has. By default cuts have zero flux, as if the surface were not cut there, and
+    /// only the open boundary absorbs: on the cut-open cow (333 coincident boundary vertex
+    /// pairs, boundary 10 times the square root of the area) absorbing along the cuts was
+    /// less accurate than zero flux from 29 of 30 sources.
+    pub absorb_at_cuts: bool,
     /// Build the operators on the intrinsic Delaunay triangulation (default true).
     pub intrinsic_delaunay: bool,
     /// On a mesh with a boundary, let the intrinsic Delaunay flips cross the boundary: flip on
@@ -73,9 +132,13 @@ pub struct HeatOptions {
 impl Default for HeatOptions {
     fn default() -> Self {
         HeatOptions {
-            time_factor: 1.0,
+            time_factor: 0.5,
+            time_scale: TimeScale::Spacing,
+            anchor: Anchor::OneRing,
             boundary: Boundary::Robin,
-            absorption: 0.2,
+            absorption: 0.7,
+            boundary_source_absorption: 0.2,
+            absorb_at_cuts: false,
             intrinsic_delaunay: true,
             flip_boundary: true,
             mollify: 1e-5,
@@ -89,14 +152,35 @@ impl HeatOptions {
         self.time_factor = m;
         self
     }
+    /// Sets the length `h` of `t = m h²`.
+    pub fn with_time_scale(mut self, scale: TimeScale) -> Self {
+        self.time_scale = scale;
+        self
+    }
+    /// Sets how the distance's additive constant is fixed.
+    pub fn with_anchor(mut self, anchor: Anchor) -> Self {
+        self.anchor = anchor;
+        self
+    }
     /// Sets the boundary conditions.
     pub fn with_boundary(mut self, boundary: Boundary) -> Self {
         self.boundary = boundary;
         self
     }
-    /// Sets the absorption `r` of [`Boundary::Robin`].
+    /// Sets whether [`Boundary::Robin`] absorbs along cuts ([`HeatOptions::absorb_at_cuts`]).
+    pub fn with_absorb_at_cuts(mut self, absorb: bool) -> Self {
+        self.absorb_at_cuts = absorb;
+        self
+    }
+    /// Sets the absorption `r` of [`Boundary::Robin`] (fields with no source on the
+    /// boundary).
     pub fn with_absorption(mut self, r: f64) -> Self {
         self.absorption = r;
+        self
+    }
+    /// Sets the absorption of [`Boundary::Robin`] for fields with a source on the boundary.
+    pub fn with_boundary_source_absorption(mut self, r: f64) -> Self {
+        self.boundary_source_absorption = r;
         self
     }
     /// Turns the intrinsic Delaunay triangulation on or off.
@@ -175,9 +259,11 @@ pub struct HeatStats {
     pub flips: usize,
     /// The heat flow's time `t`.
     pub time: f64,
-    /// The length `h` of `t = m h²`: the mean side of the triangles the operators are built
-    /// on ([`HeatOptions::time_factor`]).
+    /// The mean side of the triangles the operators are built on (a side shared by two
+    /// triangles counts twice; [`TimeScale::MeanEdge`]).
     pub mean_edge: f64,
+    /// Their area-weighted vertex spacing ([`TimeScale::Spacing`]).
+    pub spacing: f64,
     /// Whether the mesh has a boundary.
     pub has_boundary: bool,
     /// How much intrinsic mollification lengthened every edge (0 when no triangle needed it).
@@ -275,6 +361,10 @@ pub struct HeatGeodesics {
     geometry: FaceGeometry,
     heat: System,
     dirichlet: Option<System>,
+    /// [`Boundary::Robin`]'s heat with [`HeatOptions::boundary_source_absorption`], for the
+    /// fields with a source on the boundary (when that differs from the absorption and the
+    /// mesh has an absorbing boundary).
+    boundary_source_heat: Option<System>,
     poisson: System,
     /// Connected component of each vertex ([`NONE`] for a vertex in no triangle).
     component: Vec<u32>,
@@ -284,12 +374,27 @@ pub struct HeatGeodesics {
     u: Vec<f64>,
     grad: Vec<[f64; 2]>,
     div: Vec<f64>,
-    /// Per component: the smallest potential at a source (for the shift).
+    /// Per component: the shift that anchors the potential.
     shift: Vec<f64>,
+    /// Per component: the sum and count of the 1-ring misfits (for [`Anchor::OneRing`]).
+    misfit: Vec<(f64, u32)>,
+    anchor: Anchor,
+    /// The mesh's edges by vertex (compressed rows): `ring_start[v]..ring_start[v + 1]`
+    /// indexes `ring` (neighbour, 3D length). Empty unless [`Anchor::OneRing`].
+    ring_start: Vec<u32>,
+    ring: Vec<(u32, f64)>,
+    /// Per vertex, the exact distance to the nearest adjacent source of the query, or a
+    /// marker (scratch of [`Anchor::OneRing`]; infinite between queries).
+    nearest: Vec<f64>,
+    /// The vertices whose `nearest` a query set.
+    touched: Vec<u32>,
     /// The unknowns of a query's sources in a heat system.
     source_rows: Vec<u32>,
     /// Per field: whether it uses the Dirichlet heat (all its sources are off the boundary).
     averaged: Vec<bool>,
+    /// Per field: whether it uses `boundary_source_heat`, and whether `heat`.
+    from_boundary_source: Vec<bool>,
+    from_heat: Vec<bool>,
     boundary: Boundary,
     /// Whether each vertex lies on the mesh's boundary.
     on_boundary: Vec<bool>,
@@ -323,8 +428,10 @@ impl HeatGeodesics {
         if !(options.mollify >= 0.0 && options.mollify.is_finite()) {
             return Err(GeodesicError::Mollify(options.mollify));
         }
-        if !(options.absorption >= 0.0 && options.absorption.is_finite()) {
-            return Err(GeodesicError::Absorption(options.absorption));
+        for r in [options.absorption, options.boundary_source_absorption] {
+            if !(r >= 0.0 && r.is_finite()) {
+                return Err(GeodesicError::Absorption(r));
+            }
         }
         let n = mesh.positions.len();
         let mean_edge = mean_edge_length(mesh);
@@ -354,22 +461,52 @@ impl HeatGeodesics {
         let mean_edge = sides / weights;
         let geometry = FaceGeometry::from_faces(&faces);
         let mass = geometry.vertex_areas(n);
+        let (area, area2) = mass
+            .iter()
+            .fold((0.0, 0.0), |(a, a2), &m| (a + m, a2 + m * m));
+        let spacing = (2.0 / 3f64.sqrt() * area2 / area).sqrt();
         let (component, n_components) = components(n, &mesh.faces);
-        let time = options.time_factor * mean_edge * mean_edge;
-        let used = |v: usize| component[v] != NONE;
-        let heat = if options.boundary == Boundary::Robin && options.absorption > 0.0 {
-            // The boundary term t ∫ κ u v ds, lumped: t κ l / 2 from each boundary edge of
-            // length l to both its ends' diagonal entries, which hold the mass.
-            let kappa = options.absorption / time.sqrt();
-            let mut diagonal = mass.clone();
-            for &(a, b, l) in &boundary_edges {
-                diagonal[a as usize] += 0.5 * time * kappa * l;
-                diagonal[b as usize] += 0.5 * time * kappa * l;
-            }
-            System::new("heat flow", &geometry, &diagonal, used, time, true)?
-        } else {
-            System::new("heat flow", &geometry, &mass, used, time, true)?
+        let h = match options.time_scale {
+            TimeScale::MeanEdge => mean_edge,
+            TimeScale::Spacing => spacing,
         };
+        let time = options.time_factor * h * h;
+        let used = |v: usize| component[v] != NONE;
+        let cut = if options.absorb_at_cuts {
+            vec![false; boundary_edges.len()]
+        } else {
+            cut_edges(&mesh.positions, &boundary_edges)
+        };
+        let absorbing = options.boundary == Boundary::Robin && cut.iter().any(|&c| !c);
+        // The heat system with absorption r: the boundary term t ∫ κ u v ds, lumped: t κ l / 2
+        // from each absorbing boundary edge of length l to both its ends' diagonal entries,
+        // which hold the mass.
+        let robin = |name, r: f64| {
+            let mut diagonal = mass.clone();
+            if absorbing && r > 0.0 {
+                let kappa = r / time.sqrt();
+                for (&(a, b, l), _) in boundary_edges.iter().zip(&cut).filter(|(_, &c)| !c) {
+                    diagonal[a as usize] += 0.5 * time * kappa * l;
+                    diagonal[b as usize] += 0.5 * time * kappa * l;
+                }
+            }
+            System::new(name, &geometry, &diagonal, used, time, true)
+        };
+        let robin_absorption = if options.boundary == Boundary::Robin {
+            options.absorption
+        } else {
+            0.0
+        };
+        let heat = robin("heat flow", robin_absorption)?;
+        let boundary_source_heat =
+            if absorbing && options.boundary_source_absorption != options.absorption {
+                Some(robin(
+                    "heat flow (boundary sources)",
+                    options.boundary_source_absorption,
+                )?)
+            } else {
+                None
+            };
         let dirichlet = if has_boundary
             && matches!(options.boundary, Boundary::Dirichlet | Boundary::Average)
         {
@@ -409,19 +546,41 @@ impl HeatGeodesics {
             flips,
             time,
             mean_edge,
+            spacing,
             has_boundary,
             mollified,
             factor_nnz: heat.chol.factor_nnz()
                 + poisson.chol.factor_nnz()
-                + dirichlet.as_ref().map_or(0, |d| d.chol.factor_nnz()),
+                + dirichlet.as_ref().map_or(0, |d| d.chol.factor_nnz())
+                + boundary_source_heat
+                    .as_ref()
+                    .map_or(0, |d| d.chol.factor_nnz()),
+        };
+        let (ring_start, ring) = match options.anchor {
+            Anchor::OneRing => one_rings(mesh),
+            Anchor::Sources => (Vec::new(), Vec::new()),
         };
         Ok(HeatGeodesics {
+            misfit: vec![(0.0, 0); n_components],
+            anchor: options.anchor,
+            nearest: if ring.is_empty() {
+                Vec::new()
+            } else {
+                vec![f64::INFINITY; n]
+            },
+            // At most every vertex: no query grows it.
+            touched: Vec::with_capacity(if ring.is_empty() { 0 } else { n }),
+            ring_start,
+            ring,
             u: vec![0.0; n],
             grad: Vec::with_capacity(geometry.len()),
             div: vec![0.0; n],
             shift: vec![0.0; n_components],
             source_rows: Vec::new(),
             averaged: Vec::with_capacity(16),
+            from_boundary_source: Vec::with_capacity(16),
+            from_heat: Vec::with_capacity(16),
+            boundary_source_heat,
             boundary: options.boundary,
             on_boundary: boundary,
             n_vertices: n,
@@ -523,59 +682,70 @@ impl HeatGeodesics {
         };
         // The heat systems' right-hand sides are zero but at the sources: their forward
         // solves visit only the part of the factor the sources reach.
-        let solve_sources = |system: &mut System, rows: &mut Vec<u32>| {
-            rows.clear();
-            for group in groups {
-                rows.extend(
-                    group
-                        .iter()
-                        .map(|&s| system.index[s as usize])
-                        .filter(|&i| i != NONE),
-                );
-            }
+        let solve_rows = |system: &mut System, rows: &[u32]| {
             system
                 .chol
                 .solve_in_place_sparse(&mut system.rhs, k, rows)
                 .map_err(failed)
         };
-        // 1. Heat: δ at the sources, Neumann (and Dirichlet).
-        self.heat.reserve(k);
-        self.heat.rhs.fill(0.0);
-        for (c, group) in groups.iter().enumerate() {
-            for &s in *group {
-                let i = self.heat.index[s as usize];
-                if i != NONE {
-                    let hd = self.heat.dim();
-                    self.heat.rhs[c * hd + i as usize] = 1.0;
-                }
-            }
-        }
-        solve_sources(&mut self.heat, &mut self.source_rows)?;
-        self.averaged.clear();
-        self.averaged.resize(k, false);
-        if let Some(d) = self.dirichlet.as_mut() {
-            d.reserve(k);
-            d.rhs.fill(0.0);
-            for (c, group) in groups.iter().enumerate() {
-                // A field with a source on the boundary (which has no Dirichlet unknown)
-                // keeps the Neumann heat alone.
-                if group.iter().all(|&s| d.index[s as usize] != NONE) {
-                    self.averaged[c] = true;
-                    let dd = d.dim();
-                    for &s in *group {
-                        d.rhs[c * dd + d.index[s as usize] as usize] = 1.0;
+        // 1. Heat: δ at the sources, Neumann or Robin (and Dirichlet). Each system solves
+        // the fields that use it (`wanted`), or none.
+        let load = |system: &mut System, wanted: &[bool], rows: &mut Vec<u32>| {
+            system.reserve(k);
+            system.rhs.fill(0.0);
+            rows.clear();
+            let d = system.dim();
+            for (c, group) in groups.iter().enumerate().filter(|&(c, _)| wanted[c]) {
+                for &s in *group {
+                    let i = system.index[s as usize];
+                    if i != NONE {
+                        system.rhs[c * d + i as usize] = 1.0;
+                        rows.push(i);
                     }
                 }
             }
-            solve_sources(d, &mut self.source_rows)?;
+        };
+        self.from_boundary_source.clear();
+        for group in groups {
+            let on_boundary = |&s: &u32| self.on_boundary[s as usize];
+            self.from_boundary_source
+                .push(self.boundary_source_heat.is_some() && group.iter().any(on_boundary));
+        }
+        self.from_heat.clear();
+        self.from_heat
+            .extend(self.from_boundary_source.iter().map(|&b| !b));
+        if self.from_heat.iter().any(|&b| b) {
+            load(&mut self.heat, &self.from_heat, &mut self.source_rows);
+            solve_rows(&mut self.heat, &self.source_rows)?;
+        }
+        if let Some(heat) = self.boundary_source_heat.as_mut() {
+            if self.from_boundary_source.iter().any(|&b| b) {
+                load(heat, &self.from_boundary_source, &mut self.source_rows);
+                solve_rows(heat, &self.source_rows)?;
+            }
+        }
+        self.averaged.clear();
+        self.averaged.resize(k, false);
+        if let Some(d) = self.dirichlet.as_mut() {
+            // A field with a source on the boundary (which has no Dirichlet unknown) keeps
+            // the Neumann heat alone.
+            for (c, group) in groups.iter().enumerate() {
+                self.averaged[c] = group.iter().all(|&s| d.index[s as usize] != NONE);
+            }
+            load(d, &self.averaged, &mut self.source_rows);
+            solve_rows(d, &self.source_rows)?;
         }
         // 2-3. Per field: the unit field X and its divergence, the Poisson right-hand side.
         self.poisson.reserve(k);
         for c in 0..k {
             self.u.fill(0.0);
-            let hd = self.heat.dim();
-            for (i, &v) in self.heat.vertex.iter().enumerate() {
-                self.u[v as usize] = self.heat.rhs[c * hd + i];
+            let heat = match (&self.boundary_source_heat, self.from_boundary_source[c]) {
+                (Some(h), true) => h,
+                _ => &self.heat,
+            };
+            let hd = heat.dim();
+            for (i, &v) in heat.vertex.iter().enumerate() {
+                self.u[v as usize] = heat.rhs[c * hd + i];
             }
             if let (Some(d), true) = (self.dirichlet.as_ref(), self.averaged[c]) {
                 // Average: half of each; Dirichlet alone: the Dirichlet heat (zero on the
@@ -620,6 +790,9 @@ impl HeatGeodesics {
                     *sh = sh.min(field[s as usize]);
                 }
             }
+            if self.anchor == Anchor::OneRing {
+                self.fit_one_rings(group, field);
+            }
             for (v, phi) in field.iter_mut().enumerate() {
                 let comp = self.component[v];
                 *phi = if comp == NONE || self.shift[comp as usize].is_infinite() {
@@ -635,6 +808,110 @@ impl HeatGeodesics {
         debug_assert_eq!(self.shift.len(), self.n_components);
         Ok(())
     }
+
+    /// [`Anchor::OneRing`]: per component with a source, replaces the shift by the mean of
+    /// `φ(v) − |sv|` over the sources' neighbours `v` that are not sources themselves (`s`
+    /// the nearest adjacent source), when there are any.
+    fn fit_one_rings(&mut self, group: &[u32], field: &[f64]) {
+        const SOURCE: f64 = -1.0;
+        for &s in group {
+            if self.nearest[s as usize] != SOURCE {
+                self.nearest[s as usize] = SOURCE;
+                self.touched.push(s);
+            }
+        }
+        for &s in group {
+            let (a, b) = (
+                self.ring_start[s as usize] as usize,
+                self.ring_start[s as usize + 1] as usize,
+            );
+            for &(v, len) in &self.ring[a..b] {
+                let near = &mut self.nearest[v as usize];
+                if *near == SOURCE {
+                    continue;
+                }
+                if near.is_infinite() {
+                    self.touched.push(v);
+                }
+                *near = near.min(len);
+            }
+        }
+        self.misfit.fill((0.0, 0));
+        for &v in &self.touched {
+            let near = self.nearest[v as usize];
+            let comp = self.component[v as usize];
+            if near != SOURCE && comp != NONE {
+                let m = &mut self.misfit[comp as usize];
+                m.0 += field[v as usize] - near;
+                m.1 += 1;
+            }
+        }
+        for (shift, &(sum, count)) in self.shift.iter_mut().zip(&self.misfit) {
+            if count > 0 && shift.is_finite() {
+                *shift = sum / f64::from(count);
+            }
+        }
+        for &v in &self.touched {
+            self.nearest[v as usize] = f64::INFINITY;
+        }
+        self.touched.clear();
+    }
+}
+
+/// The mesh's edges by vertex with their 3D lengths, in compressed rows (see
+/// [`HeatGeodesics`]'s `ring_start`).
+fn one_rings(mesh: &SurfaceMesh) -> (Vec<u32>, Vec<(u32, f64)>) {
+    let n = mesh.positions.len();
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(6 * mesh.faces.len());
+    for f in &mesh.faces {
+        for (a, b) in [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])] {
+            pairs.push((a, b));
+            pairs.push((b, a));
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in &pairs {
+        start[a as usize + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let ring = pairs
+        .iter()
+        .map(|&(a, b)| {
+            let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+            let len =
+                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            (b, len)
+        })
+        .collect();
+    (start, ring)
+}
+
+/// Which boundary edges are cuts ([`HeatOptions::absorb_at_cuts`]): those whose two ends'
+/// positions are, bit for bit, those of another boundary edge's two ends.
+fn cut_edges(positions: &[[f64; 3]], edges: &[(u32, u32, f64)]) -> Vec<bool> {
+    let key = |v: u32| positions[v as usize].map(f64::to_bits);
+    let mut ends: Vec<([[u64; 3]; 2], usize)> = edges
+        .iter()
+        .enumerate()
+        .map(|(i, &(a, b, _))| {
+            let (p, q) = (key(a), key(b));
+            (if p <= q { [p, q] } else { [q, p] }, i)
+        })
+        .collect();
+    ends.sort_unstable();
+    let mut cut = vec![false; edges.len()];
+    for run in ends.chunk_by(|x, y| x.0 == y.0) {
+        if run.len() > 1 {
+            for &(_, i) in run {
+                cut[i] = true;
+            }
+        }
+    }
+    cut
 }
 
 /// Mean length of the mesh's own edges (each counted once).

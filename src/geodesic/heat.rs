@@ -492,12 +492,9 @@ impl HeatGeodesics {
             }
             System::new(name, &geometry, &diagonal, used, time, true)
         };
-        let robin_absorption = if options.boundary == Boundary::Robin {
-            options.absorption
-        } else {
-            0.0
-        };
-        let heat = robin("heat flow", robin_absorption)?;
+        // `robin` absorbs nothing unless the boundary is Robin's: for the other conditions
+        // this is the Neumann heat.
+        let heat = robin("heat flow", options.absorption)?;
         let boundary_source_heat =
             if absorbing && options.boundary_source_absorption != options.absorption {
                 Some(robin(

@@ -48,7 +48,10 @@ pub struct RestShape {
 
 impl RestShape {
     /// Prepares `faces` (indices into `rest`) over the rest positions `rest`. A degenerate
-    /// rest triangle (or an index out of range) gets an infinite distortion in every frame.
+    /// rest triangle (or an index out of range) gets an infinite distortion in every frame;
+    /// an inverted (clockwise) one is measured against its mirror image, the
+    /// counter-clockwise triangle with the same sides (a keyframe with a few inverted
+    /// triangles morphs through their side lengths).
     pub fn new(rest: &[[f64; 2]], faces: &[[u32; 3]]) -> RestShape {
         let inverse = faces
             .iter()
@@ -57,9 +60,16 @@ impl RestShape {
                 let (Some(p0), Some(p1), Some(p2)) = (p(0), p(1), p(2)) else {
                     return [[f64::NAN; 2]; 2];
                 };
-                let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+                let (mut e1, mut e2) = (sub(p1, p0), sub(p2, p0));
                 // Edge matrix M = [e1 e2] (columns); M^-1 = [[e2y, -e2x], [-e1y, e1x]] / det.
-                let det = e1[0] * e2[1] - e2[0] * e1[1];
+                let mut det = e1[0] * e2[1] - e2[0] * e1[1];
+                if det < 0.0 {
+                    // An inverted rest triangle: measured against its mirror image, the
+                    // counter-clockwise triangle with the same sides.
+                    e1[1] = -e1[1];
+                    e2[1] = -e2[1];
+                    det = -det;
+                }
                 if det == 0.0 || !det.is_finite() {
                     return [[f64::NAN; 2]; 2];
                 }

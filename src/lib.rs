@@ -37,19 +37,16 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod blend;
 pub mod distortion;
 pub mod generate;
 pub mod geodesic;
 pub mod info;
 pub mod io;
-mod keyframes;
 pub mod located;
 pub mod mesh;
 pub mod morph;
+pub use morph::{blend, path};
 pub mod param;
-pub mod path;
-mod predictor;
 pub mod reference;
 pub mod render;
 

@@ -285,7 +285,12 @@ impl Locate for MeshError {
             MeshError::IndexOutOfRange { face, .. }
             | MeshError::Degenerate { face, .. }
             | MeshError::Clockwise { face, .. }
-            | MeshError::FaceMismatch { face, .. } => vec![Element::Face(*face)],
+            | MeshError::FaceMissing { face, .. }
+            | MeshError::FaceReversed { face, .. } => vec![Element::Face(*face)],
+            MeshError::FaceRepeated { face, first } => {
+                vec![Element::Face(*face), Element::Face(*first)]
+            }
+            MeshError::Inverted { faces, .. } => faces.iter().map(|&f| Element::Face(f)).collect(),
             MeshError::Mirrored {
                 first_counter_clockwise,
                 ..

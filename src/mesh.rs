@@ -95,15 +95,49 @@ pub enum MeshError {
         /// Count in the target.
         target_count: usize,
     },
-    /// Source and target have different triangles.
-    #[error("source and target differ at face {face}: vertices {source_face:?} vs {target_face:?} (0-based); both meshes need the same triangles")]
-    FaceMismatch {
-        /// The face.
+    /// A later keyframe (the target) has a triangle the first (the source) does not have.
+    /// Triangles may be listed in any order and with their corners rotated (`a b c` as
+    /// `c a b`); see [`PlanarMesh::match_faces`].
+    #[error("face {face} (0-based; vertices {} {} {}) is not a triangle of the first mesh; both meshes need the same triangles (in any order)", target_face[0], target_face[1], target_face[2])]
+    FaceMissing {
+        /// The face, in the target's order.
         face: usize,
-        /// Its vertices in the source.
-        source_face: [u32; 3],
-        /// Its vertices in the target.
+        /// Its vertices.
         target_face: [u32; 3],
+    },
+    /// A later keyframe (the target) lists a triangle of the first one with the opposite
+    /// orientation (`a c b` for `a b c`).
+    #[error("face {face} (0-based; vertices {} {} {}) is face {source_face} of the first mesh reversed ({} {} {}); a triangle must keep its corners' cyclic order", target_face[0], target_face[1], target_face[2], source_corners[0], source_corners[1], source_corners[2])]
+    FaceReversed {
+        /// The face, in the target's order.
+        face: usize,
+        /// Its vertices.
+        target_face: [u32; 3],
+        /// The same triangle's index in the first mesh.
+        source_face: usize,
+        /// Its vertices there.
+        source_corners: [u32; 3],
+    },
+    /// A later keyframe (the target) lists a triangle twice.
+    #[error("face {first} and face {face} (0-based) are the same triangle (duplicate face)")]
+    FaceRepeated {
+        /// The repeat, in the target's order.
+        face: usize,
+        /// Its first listing.
+        first: usize,
+    },
+    /// Several triangles are clockwise (inverted), but fewer than the counter-clockwise ones
+    /// (otherwise the mesh is [`MeshError::Mirrored`]). A keyframe with a few inverted
+    /// triangles can still be morphed when asked for
+    /// ([`crate::MorphOptions::allow_inverted`]).
+    #[error("{}", InvertedText { faces, count: *.count, total: *.total })]
+    Inverted {
+        /// The first [`INVERTED_LISTED`] of them, in face order (0-based).
+        faces: Vec<usize>,
+        /// How many there are.
+        count: usize,
+        /// Triangles in all.
+        total: usize,
     },
     /// The connectivity cannot be compiled (not a manifold, consistently oriented, connected
     /// disk).
@@ -120,6 +154,38 @@ impl std::fmt::Display for NotPlanarText {
         write!(
             f,
             "vertex {vertex} (0-based) has z = {z}; a planar mesh (z = 0) is required"
+        )
+    }
+}
+
+/// How many inverted triangles [`MeshError::Inverted`] names.
+pub const INVERTED_LISTED: usize = 10;
+
+/// The message of [`MeshError::Inverted`].
+struct InvertedText<'a> {
+    faces: &'a [usize],
+    count: usize,
+    total: usize,
+}
+
+impl std::fmt::Display for InvertedText<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of {} triangles are clockwise (inverted): face",
+            self.count, self.total
+        )?;
+        for (i, face) in self.faces.iter().enumerate() {
+            let sep = if i == 0 { " " } else { ", " };
+            write!(f, "{sep}{face}")?;
+        }
+        if self.count > self.faces.len() {
+            write!(f, " and {} more", self.count - self.faces.len())?;
+        }
+        write!(
+            f,
+            " (0-based); triangles must be counter-clockwise (a keyframe with a few inverted \
+             triangles morphs with --allow-inverted)"
         )
     }
 }
@@ -262,6 +328,26 @@ impl PlanarMesh {
     /// y pointing down), and one fix mends it. Otherwise the first degenerate or clockwise
     /// triangle is named.
     pub fn validate(&self) -> Result<(), MeshError> {
+        let inverted = self.validate_allowing_inverted()?;
+        match inverted.len() {
+            0 => Ok(()),
+            1 => Err(MeshError::Clockwise {
+                face: inverted[0],
+                area: self.signed_area(&self.faces[inverted[0]]),
+            }),
+            count => Err(MeshError::Inverted {
+                faces: inverted[..count.min(INVERTED_LISTED)].to_vec(),
+                count,
+                total: self.faces.len(),
+            }),
+        }
+    }
+
+    /// As [`PlanarMesh::validate`], but a few clockwise (inverted) triangles are allowed:
+    /// returns them, in face order. A mesh with more clockwise triangles than
+    /// counter-clockwise ones is still refused as [`MeshError::Mirrored`], and degenerate
+    /// triangles as [`MeshError::Degenerate`].
+    pub fn validate_allowing_inverted(&self) -> Result<Vec<usize>, MeshError> {
         if let Some(vertex) = self
             .positions
             .iter()
@@ -280,34 +366,110 @@ impl PlanarMesh {
             }
         }
         let eps = 1e-14 * self.diameter().powi(2);
-        let (mut clockwise, mut counter_clockwise) = (0, 0);
+        let mut counter_clockwise = 0;
         let mut first_counter_clockwise = None;
-        let mut first_error = None;
+        let mut degenerate = None;
+        let mut inverted = Vec::new();
         for (face, f) in self.faces.iter().enumerate() {
             let area = self.signed_area(f);
             if area.abs() <= eps {
-                first_error.get_or_insert(MeshError::Degenerate { face, area });
+                degenerate.get_or_insert(MeshError::Degenerate { face, area });
             } else if area < 0.0 {
-                clockwise += 1;
-                first_error.get_or_insert(MeshError::Clockwise { face, area });
+                inverted.push(face);
             } else {
                 counter_clockwise += 1;
                 first_counter_clockwise.get_or_insert(face);
             }
         }
-        if clockwise > counter_clockwise {
+        if inverted.len() > counter_clockwise {
             return Err(MeshError::Mirrored {
-                clockwise,
+                clockwise: inverted.len(),
                 faces: self.faces.len(),
                 counter_clockwise,
                 first_counter_clockwise,
             });
         }
-        first_error.map_or(Ok(()), Err)
+        // Inverted triangles have a metric; degenerate ones do not.
+        match degenerate {
+            Some(e) => Err(e),
+            None => Ok(inverted),
+        }
     }
 
-    /// Checks that `target` can be morphed with `self`: same counts, same triangles, both
-    /// geometrically valid.
+    /// For each face of `other` (a keyframe listing the same triangles as `self`, in any
+    /// order, each triangle's corners possibly rotated: `a b c` as `b c a` or `c a b`), the
+    /// index of the same triangle in `self`. Refuses a triangle that `self` does not have
+    /// ([`MeshError::FaceMissing`]), one with its corners reversed
+    /// ([`MeshError::FaceReversed`]) and one listed twice ([`MeshError::FaceRepeated`]),
+    /// naming it by its index in `other`; counts must agree ([`MeshError::CountMismatch`]).
+    ///
+    /// ```
+    /// use bdmorph::PlanarMesh;
+    /// let a = PlanarMesh {
+    ///     positions: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+    ///     faces: vec![[0, 1, 2], [0, 2, 3]],
+    /// };
+    /// let mut b = a.clone();
+    /// b.faces = vec![[3, 0, 2], [1, 2, 0]];
+    /// assert_eq!(a.match_faces(&b.faces)?, [1, 0]);
+    /// b.faces[0] = [0, 3, 2];
+    /// assert!(a.match_faces(&b.faces).is_err());
+    /// # Ok::<(), bdmorph::MeshError>(())
+    /// ```
+    pub fn match_faces(&self, other: &[[u32; 3]]) -> Result<Vec<usize>, MeshError> {
+        if self.faces.len() != other.len() {
+            return Err(MeshError::CountMismatch {
+                what: "face count",
+                source_count: self.faces.len(),
+                target_count: other.len(),
+            });
+        }
+        // The same listing: nothing to look up.
+        if self.faces == other {
+            return Ok((0..other.len()).collect());
+        }
+        let canonical = |f: [u32; 3]| {
+            // Rotate the smallest corner first: equal for rotations, different for reversals.
+            let k = (0..3).min_by_key(|&i| f[i]).unwrap_or(0);
+            [f[k], f[(k + 1) % 3], f[(k + 2) % 3]]
+        };
+        let mut index = std::collections::HashMap::with_capacity(self.faces.len());
+        for (i, &f) in self.faces.iter().enumerate() {
+            index.insert(canonical(f), i);
+        }
+        let mut seen = vec![usize::MAX; self.faces.len()];
+        let mut map = Vec::with_capacity(other.len());
+        for (face, &f) in other.iter().enumerate() {
+            let Some(&i) = index.get(&canonical(f)) else {
+                let reversed = canonical([f[0], f[2], f[1]]);
+                return Err(match index.get(&reversed) {
+                    Some(&i) => MeshError::FaceReversed {
+                        face,
+                        target_face: f,
+                        source_face: i,
+                        source_corners: self.faces[i],
+                    },
+                    None => MeshError::FaceMissing {
+                        face,
+                        target_face: f,
+                    },
+                });
+            };
+            if seen[i] != usize::MAX {
+                return Err(MeshError::FaceRepeated {
+                    face,
+                    first: seen[i],
+                });
+            }
+            seen[i] = face;
+            map.push(i);
+        }
+        Ok(map)
+    }
+
+    /// Checks that `target` can be morphed with `self`: same counts, the same triangles (in
+    /// any order, corners rotated or not: [`PlanarMesh::match_faces`]), both geometrically
+    /// valid.
     pub fn validate_pair(&self, target: &PlanarMesh) -> Result<(), MeshError> {
         for (what, s, t) in [
             ("vertex count", self.positions.len(), target.positions.len()),
@@ -321,13 +483,7 @@ impl PlanarMesh {
                 });
             }
         }
-        if let Some(face) = (0..self.faces.len()).find(|&i| self.faces[i] != target.faces[i]) {
-            return Err(MeshError::FaceMismatch {
-                face,
-                source_face: self.faces[face],
-                target_face: target.faces[face],
-            });
-        }
+        self.match_faces(&target.faces)?;
         self.validate()?;
         target.validate()
     }
@@ -365,12 +521,20 @@ mod tests {
         mesh.faces[2].swap(0, 1);
         let err = mesh.validate().unwrap_err();
         assert!(matches!(err, MeshError::Clockwise { face: 2, .. }), "{err}");
-        // Two of four: no majority, still the first one.
+        // Two of four: no majority, both named.
         mesh.faces[0].swap(0, 1);
-        assert!(matches!(
-            mesh.validate(),
-            Err(MeshError::Clockwise { face: 0, .. })
-        ));
+        let err = mesh.validate().unwrap_err();
+        assert!(
+            matches!(&err, MeshError::Inverted { faces, count: 2, total: 4 } if faces == &[0, 2]),
+            "{err}"
+        );
+        assert_eq!(
+            err.to_string(),
+            "2 of 4 triangles are clockwise (inverted): face 0, 2 (0-based); triangles must be \
+             counter-clockwise (a keyframe with a few inverted triangles morphs with \
+             --allow-inverted)"
+        );
+        assert_eq!(mesh.validate_allowing_inverted().unwrap(), [0, 2]);
         // Three of four: mirrored, and the counter-clockwise one would be wrong after the fix.
         mesh.faces[1].swap(0, 1);
         let err = mesh.validate().unwrap_err();

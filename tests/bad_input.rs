@@ -60,9 +60,14 @@ impl Failure {
             Failure::Read(e) => e.line(),
             Failure::Check(e) => e.line,
             Failure::Morph(e, files) => match (e, *files) {
-                (MorphError::Mesh(e @ MeshError::FaceMismatch { .. }), [_, target]) => {
-                    target.locate(e).line
-                }
+                (
+                    MorphError::Mesh(
+                        e @ (MeshError::FaceMissing { .. }
+                        | MeshError::FaceReversed { .. }
+                        | MeshError::FaceRepeated { .. }),
+                    ),
+                    [_, target],
+                ) => target.locate(e).line,
                 (e, [source, _]) => source.locate(e).line,
             },
         }
@@ -480,17 +485,6 @@ fn cases() -> Vec<Case> {
             }),
         },
         Case {
-            name: "several components",
-            source: ("two.obj", b"v 0 0\nv 1 0\nv 0 1\nv 3 0\nv 4 0\nv 3 1\nf 1 2 3\nf 4 5 6\n"),
-            target: Some(("two2.obj", b"v 0 0\nv 1 0\nv 0 1\nv 3 0\nv 5 0\nv 3 1\nf 1 2 3\nf 4 5 6\n")),
-            message: "the mesh is not connected: face 1 (0-based) cannot be reached from face 0",
-            is: topology,
-            line: Some(8),
-            cli: "{source}:8: the mesh is not connected: face 1 (0-based) cannot be reached \
-                  from face 0; face 1 is line 8, face 0 is line 7",
-            compile: Some(CompileError::Disconnected { face: FaceId(1) }),
-        },
-        Case {
             name: "vertex count mismatch",
             source: ("square.obj", SQUARE.as_bytes()),
             target: Some((
@@ -522,19 +516,35 @@ fn cases() -> Vec<Case> {
             compile: None,
         },
         Case {
-            name: "face mismatch",
+            name: "face reversed",
             source: ("square.obj", SQUARE.as_bytes()),
             target: Some((
                 "other.obj",
-                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\n# reordered\nf 1 2 5\nf 2 3 5\nf 4 1 5\nf 3 4 5\n",
+                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.5 1.5\n# reordered; one folded over and listed reversed\nf 2 3 5\nf 5 1 2\nf 3 5 4\nf 4 1 5\n",
             )),
-            message: "source and target differ at face 2: vertices [2, 3, 4] vs [3, 0, 4] \
-                      (0-based); both meshes need the same triangles",
-            is: |f| mesh_error(f, |e| matches!(e, MeshError::FaceMismatch { face: 2, .. })),
+            message: "face 2 (0-based; vertices 2 4 3) is face 2 of the first mesh reversed (2 3 4); \
+                      a triangle must keep its corners' cyclic order",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::FaceReversed { face: 2, source_face: 2, .. })),
             line: Some(9),
-            cli: "{target}:9: source and target differ at face 2: vertices [2, 3, 4] vs \
-                  [3, 0, 4] (0-based); both meshes need the same triangles (compared with \
-                  {source}:8)",
+            cli: "{target}:9: face 2 (0-based; vertices 2 4 3) is face 2 of the first mesh \
+                  reversed (2 3 4); a triangle must keep its corners' cyclic order (compared \
+                  with {source}:8)",
+            compile: None,
+        },
+        Case {
+            name: "face missing",
+            source: ("square.obj", SQUARE.as_bytes()),
+            target: Some((
+                "other.obj",
+                b"v 0 0\nv 1 0\nv 1 1\nv 0 1\nv 0.6 0.4\nf 1 2 4\nf 2 3 5\nf 3 4 5\nf 4 1 5\n",
+            )),
+            message: "face 0 (0-based; vertices 0 1 3) is not a triangle of the first mesh; both \
+                      meshes need the same triangles (in any order)",
+            is: |f| mesh_error(f, |e| matches!(e, MeshError::FaceMissing { face: 0, .. })),
+            line: Some(6),
+            cli: "{target}:6: face 0 (0-based; vertices 0 1 3) is not a triangle of the first \
+                  mesh; both meshes need the same triangles (in any order) (compared with \
+                  {source})",
             compile: None,
         },
     ]

@@ -27,11 +27,13 @@ mod error;
 mod ids;
 mod iteration;
 mod ordering;
+mod pieces;
 mod topology;
 
 pub use error::CompileError;
 pub use ids::{FaceId, VertexId};
 pub use ordering::{nested_dissection, LEAF_SIZE};
+pub use pieces::{pieces, Piece};
 pub use topology::disk_boundary;
 
 use bdmorph_isa::{Program, ProgramParts};

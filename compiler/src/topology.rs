@@ -45,8 +45,17 @@ pub(crate) fn prev(he: u32) -> u32 {
 }
 
 impl Topology {
-    /// Builds and checks the connectivity of `faces` over `n_vertices` vertices.
+    /// Builds and checks the connectivity of `faces` over `n_vertices` vertices: a
+    /// connected disk.
     pub fn new(n_vertices: usize, faces: &[[u32; 3]]) -> Result<Topology, CompileError> {
+        let topo = Topology::manifold(n_vertices, faces)?;
+        topo.check_disk()?;
+        Ok(topo)
+    }
+
+    /// Builds and checks the connectivity of `faces` over `n_vertices` vertices: a manifold,
+    /// consistently oriented, every vertex used, of any number of pieces and boundary loops.
+    pub fn manifold(n_vertices: usize, faces: &[[u32; 3]]) -> Result<Topology, CompileError> {
         if faces.is_empty() {
             return Err(CompileError::NoFaces);
         }
@@ -179,7 +188,6 @@ impl Topology {
                 });
             }
         }
-        topo.check_disk()?;
         Ok(topo)
     }
 

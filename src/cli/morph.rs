@@ -133,7 +133,7 @@ impl Inputs {
     pub(super) fn setup_error(&self, e: MorphError) -> String {
         let pair = |k: usize, e: MeshError| {
             let first = match e {
-                MeshError::FaceMismatch { face, .. } => self.lines[0].face_line(face),
+                MeshError::FaceReversed { source_face, .. } => self.lines[0].face_line(source_face),
                 _ => None,
             };
             let first = match first {
@@ -145,7 +145,11 @@ impl Inputs {
         match e {
             MorphError::Keyframe { index, source } => pair(index, source),
             // Morph::new compares its target with its source.
-            MorphError::Mesh(e @ MeshError::FaceMismatch { .. }) => pair(1, e),
+            MorphError::Mesh(
+                e @ (MeshError::FaceMissing { .. }
+                | MeshError::FaceReversed { .. }
+                | MeshError::FaceRepeated { .. }),
+            ) => pair(1, e),
             // Each mesh was checked when read: what is left is the first one's compilation.
             MorphError::Mesh(e @ MeshError::Topology(_)) => self.locate(0, e).to_string(),
             e @ MorphError::ProgramMismatch { .. } => self.locate(0, e).to_string(),

@@ -12,8 +12,8 @@
 use bdmorph_vm::{Program, VmError};
 
 use crate::distortion::RestShape;
-use crate::mesh::{MeshError, PlanarMesh};
-use crate::predictor::{predictor_weights, useful_nodes, NODES};
+use crate::mesh::PlanarMesh;
+use crate::morph::predictor::{predictor_weights, useful_nodes, NODES};
 
 use crate::morph::{FrameAt, FrameStats, MorphError, MorphOptions};
 use bdmorph_vm::FactorPrecision;
@@ -77,17 +77,6 @@ struct Solved {
     /// `du/ds` at the solution, when `has_du` (empty unless the options predict with tangents).
     du: Vec<f64>,
     has_du: bool,
-}
-
-/// Checks that every keyframe has the first one's triangles and is valid; on failure, the
-/// index of the offending keyframe and why.
-pub(crate) fn validate(keyframes: &[PlanarMesh]) -> Result<(), (usize, MeshError)> {
-    let first = &keyframes[0];
-    first.validate().map_err(|e| (0, e))?;
-    for (index, k) in keyframes.iter().enumerate().skip(1) {
-        first.validate_pair(k).map_err(|e| (index, e))?;
-    }
-    Ok(())
 }
 
 /// The shared solver.
@@ -169,10 +158,12 @@ impl SlotLookup {
 
 impl Engine {
     /// Prepares the solver for already validated keyframes (at least one) from a program
-    /// compiled for their connectivity.
+    /// compiled for their connectivity. The first `visible` faces are the user's (their
+    /// distortion is measured); any after them are hidden ones filling holes.
     pub(crate) fn new(
         program: Program,
         keyframes: &[PlanarMesh],
+        visible: usize,
         unwrap: Unwrap,
         options: MorphOptions,
     ) -> Result<Engine, MorphError> {
@@ -219,8 +210,8 @@ impl Engine {
         let n_vertices = keyframes[0].positions.len();
         let n_slots = squared[0].len();
         Ok(Engine {
-            rest: RestShape::new(&keyframes[0].positions, &faces),
-            distortion: vec![1.0; faces.len()],
+            rest: RestShape::new(&keyframes[0].positions, &faces[..visible.min(faces.len())]),
+            distortion: vec![1.0; visible.min(faces.len())],
             metric: vec![0.0; n_slots],
             base: vec![0.0; keyframes.len()],
             anchors: keyframes.iter().map(|k| k.positions[p0]).collect(),
@@ -280,7 +271,8 @@ impl Engine {
         &self.positions
     }
 
-    /// The last frame's conformal distortion per triangle, relative to the first keyframe.
+    /// The last frame's conformal distortion per visible triangle, relative to the first
+    /// keyframe.
     pub(crate) fn distortion(&self) -> &[f64] {
         &self.distortion
     }
@@ -438,7 +430,7 @@ impl Engine {
     /// on the straight way from the nearest weights inside the simplex (the negative weights
     /// set to zero, the rest rescaled) to `weights`, and where it breaks. Allocates only
     /// when it fails.
-    fn check_extrapolation(
+    pub(crate) fn check_extrapolation(
         &mut self,
         weights: &[f64],
         time: Option<f64>,

@@ -2,8 +2,9 @@
 
 use bdmorph_vm::Program;
 
-use crate::keyframes::{self, Engine, Unwrap};
-use crate::mesh::{MeshError, PlanarMesh};
+use crate::mesh::PlanarMesh;
+use crate::morph::engine::Unwrap;
+use crate::morph::solver::{Solver, Structure};
 use crate::morph::{Frame, FrameStats, MorphError, MorphOptions};
 
 /// A compiled blend of keyframes (planar meshes with the same triangles).
@@ -40,7 +41,7 @@ use crate::morph::{Frame, FrameStats, MorphError, MorphOptions};
 /// # Ok::<(), bdmorph::MorphError>(())
 /// ```
 pub struct Blend {
-    engine: Engine,
+    engine: Solver,
 }
 
 impl std::fmt::Debug for Blend {
@@ -63,8 +64,9 @@ impl Blend {
         keyframes: &[PlanarMesh],
         options: MorphOptions,
     ) -> Result<Blend, MorphError> {
-        let program = compile_keyframes(keyframes)?;
-        Blend::with_program(program, keyframes, options)
+        check_count(keyframes)?;
+        let engine = Solver::new(keyframes, Unwrap::FromFirst, options)?;
+        Ok(Blend { engine })
     }
 
     /// Prepares a blend from an already compiled program (made for the first keyframe's
@@ -74,8 +76,8 @@ impl Blend {
         keyframes: &[PlanarMesh],
         options: MorphOptions,
     ) -> Result<Blend, MorphError> {
-        check_keyframes(keyframes)?;
-        let engine = Engine::new(program, keyframes, Unwrap::FromFirst, options)?;
+        check_count(keyframes)?;
+        let engine = Solver::with_program(program, keyframes, Unwrap::FromFirst, options)?;
         Ok(Blend { engine })
     }
 
@@ -84,7 +86,12 @@ impl Blend {
         self.engine.keyframes()
     }
 
-    /// The compiled program.
+    /// What the blend found in the keyframes: pieces, holes, inverted triangles.
+    pub fn structure(&self) -> &Structure {
+        self.engine.structure()
+    }
+
+    /// The compiled program (the first piece's, for a mesh of several).
     pub fn program(&self) -> &Program {
         self.engine.program()
     }
@@ -131,23 +138,13 @@ impl Blend {
     }
 }
 
-/// Checks keyframes: at least two, each valid, all with the first one's triangles.
-pub(crate) fn check_keyframes(keyframes: &[PlanarMesh]) -> Result<(), MorphError> {
+/// Refuses fewer than two keyframes.
+pub(crate) fn check_count(keyframes: &[PlanarMesh]) -> Result<(), MorphError> {
     if keyframes.len() < 2 {
         return Err(MorphError::TooFewKeyframes {
             needed: 2,
             got: keyframes.len(),
         });
     }
-    keyframes::validate(keyframes).map_err(|(index, source)| match index {
-        0 => MorphError::Mesh(source),
-        index => MorphError::Keyframe { index, source },
-    })
-}
-
-/// Checks keyframes and compiles the first one's connectivity.
-pub(crate) fn compile_keyframes(keyframes: &[PlanarMesh]) -> Result<Program, MorphError> {
-    check_keyframes(keyframes)?;
-    let first = &keyframes[0];
-    Ok(bdmorph_compiler::compile(&first.positions, &first.faces).map_err(MeshError::from)?)
+    Ok(())
 }

@@ -2,7 +2,17 @@
 
 use bdmorph_vm::{FactorPrecision, NewtonOptions, Program, TriangleReport, VmError};
 
-use crate::keyframes::{Engine, Line, Unwrap};
+pub mod blend;
+pub(crate) mod engine;
+mod holes;
+pub mod path;
+mod predictor;
+mod solver;
+
+pub use solver::{PieceInfo, Structure};
+
+use crate::morph::engine::{Line, Unwrap};
+use crate::morph::solver::Solver;
 
 use crate::mesh::{MeshError, PlanarMesh};
 
@@ -34,6 +44,12 @@ pub struct MorphOptions {
     /// factorisations and solves a fifth to a third faster; conjugate gradients refine its
     /// steps and the tolerance is unchanged). See [`bdmorph_vm::Vm::set_factor_precision`].
     pub factor_precision: FactorPrecision,
+    /// Accept keyframes with a few inverted (clockwise) triangles (default false: they are
+    /// refused, listing them, [`MeshError::Inverted`]). Their side lengths enter the metric
+    /// as they are; at such a keyframe the frame is the flat shape nearest those lengths and
+    /// differs from the given pose around them (it reproduces the pose only where no
+    /// triangle is inverted). A mesh mostly clockwise is still refused as mirrored.
+    pub allow_inverted: bool,
 }
 
 impl Default for MorphOptions {
@@ -44,6 +60,7 @@ impl Default for MorphOptions {
             extrapolate: true,
             tangents: false,
             factor_precision: FactorPrecision::Auto,
+            allow_inverted: false,
         }
     }
 }
@@ -52,6 +69,11 @@ impl MorphOptions {
     /// Sets the gradient-norm tolerance of Newton's method.
     pub fn with_tolerance(mut self, tolerance: f64) -> Self {
         self.newton = self.newton.with_tolerance(tolerance);
+        self
+    }
+    /// Accepts keyframes with a few inverted triangles ([`MorphOptions::allow_inverted`]).
+    pub fn with_allow_inverted(mut self, allow_inverted: bool) -> Self {
+        self.allow_inverted = allow_inverted;
         self
     }
     /// Sets the iteration limit of Newton's method.
@@ -292,6 +314,20 @@ pub enum MorphError {
         /// The triangles closest to breaking the triangle inequality where the solver failed.
         worst: Vec<TriangleReport>,
     },
+    /// A hole cannot be filled with triangles that are counter-clockwise in every keyframe
+    /// (see [`crate::morph`]'s notes on holes).
+    #[error("{}", HoleText { piece: *.piece, vertex: *.vertex, boundary_vertices: *.boundary_vertices, keyframes })]
+    HoleUnfillable {
+        /// The piece (0-based, in the order of its first face).
+        piece: usize,
+        /// A vertex on the hole's boundary (0-based).
+        vertex: u32,
+        /// Vertices on the hole's boundary.
+        boundary_vertices: usize,
+        /// The keyframes where the hole's outline, taken alone, cannot be filled (it crosses
+        /// itself or runs clockwise); empty when each can be alone but no filling suits all.
+        keyframes: Vec<usize>,
+    },
     /// The output buffer has the wrong length.
     #[error("output buffer holds {got} positions, the mesh has {expected} vertices")]
     OutputLength {
@@ -300,6 +336,40 @@ pub enum MorphError {
         /// Buffer length.
         got: usize,
     },
+}
+
+/// The message of [`MorphError::HoleUnfillable`].
+struct HoleText<'a> {
+    piece: usize,
+    vertex: u32,
+    boundary_vertices: usize,
+    keyframes: &'a [usize],
+}
+
+impl std::fmt::Display for HoleText<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the hole at vertex {} (0-based; piece {}, {} vertices around it) cannot be filled \
+             for the solve: ",
+            self.vertex, self.piece, self.boundary_vertices
+        )?;
+        match self.keyframes {
+            [] => write!(
+                f,
+                "its outline changes too much between keyframes for one triangulation without \
+                 inner points to suit them all"
+            ),
+            [k] => write!(f, "its outline crosses itself in keyframe {k} (0-based)"),
+            ks => {
+                write!(f, "its outline crosses itself in keyframes")?;
+                for (i, k) in ks.iter().enumerate() {
+                    write!(f, "{}{k}", if i == 0 { " " } else { ", " })?;
+                }
+                write!(f, " (0-based)")
+            }
+        }
+    }
 }
 
 /// How many of a failed frame's worst triangles its message shows.
@@ -340,7 +410,7 @@ impl std::fmt::Display for Worst<'_> {
 /// # Ok::<(), bdmorph::MorphError>(())
 /// ```
 pub struct Morph {
-    engine: Engine,
+    engine: Solver,
 }
 
 impl std::fmt::Debug for Morph {
@@ -353,31 +423,42 @@ impl std::fmt::Debug for Morph {
 
 impl Morph {
     /// Checks the pair, compiles it and prepares the solver.
+    ///
+    /// The target may list the source's triangles in any order, corners rotated or not
+    /// ([`PlanarMesh::match_faces`]); frames follow the source's. A mesh of several pieces
+    /// morphs each piece alone (each with its own rigid motion), and holes are filled with
+    /// hidden triangles for the solve ([`crate::morph`]'s notes); [`Morph::structure`] says
+    /// what was found.
     pub fn new(
         source: &PlanarMesh,
         target: &PlanarMesh,
         options: MorphOptions,
     ) -> Result<Morph, MorphError> {
-        source.validate_pair(target)?;
-        let program =
-            bdmorph_compiler::compile(&source.positions, &source.faces).map_err(MeshError::from)?;
-        Morph::with_program(program, source, target, options)
+        let keyframes = [source.clone(), target.clone()];
+        let engine = Solver::new(&keyframes, Unwrap::FromFirst, options).map_err(as_pair)?;
+        Ok(Morph { engine })
     }
 
-    /// Prepares a morph from an already compiled program (made for `source`'s connectivity).
+    /// Prepares a morph from an already compiled program (made for `source`'s connectivity,
+    /// which must be one disk: program files hold one).
     pub fn with_program(
         program: Program,
         source: &PlanarMesh,
         target: &PlanarMesh,
         options: MorphOptions,
     ) -> Result<Morph, MorphError> {
-        source.validate_pair(target)?;
         let keyframes = [source.clone(), target.clone()];
-        let engine = Engine::new(program, &keyframes, Unwrap::FromFirst, options)?;
+        let engine = Solver::with_program(program, &keyframes, Unwrap::FromFirst, options)
+            .map_err(as_pair)?;
         Ok(Morph { engine })
     }
 
-    /// The compiled program.
+    /// What the morph found in the meshes: pieces, holes, inverted triangles.
+    pub fn structure(&self) -> &Structure {
+        self.engine.structure()
+    }
+
+    /// The compiled program (the first piece's, for a mesh of several).
     pub fn program(&self) -> &Program {
         self.engine.program()
     }
@@ -387,7 +468,8 @@ impl Morph {
         self.engine.faces()
     }
 
-    /// The log scale factors of the last frame, one per interior vertex.
+    /// The log scale factors of the last frame, one per interior vertex (of the first piece,
+    /// for a mesh of several; hole boundaries are interior to a filled piece).
     pub fn scale_factors(&self) -> &[f64] {
         self.engine.scale_factors()
     }
@@ -437,6 +519,14 @@ impl Morph {
         self.engine
             .frame_into(&[1.0 - t, t], Some(t), Some(on_line(t)), out)
             .map_err(|e| in_time(e, t))
+    }
+}
+
+/// A morph's errors about its target are the pair's, as they always were: mesh errors.
+fn as_pair(e: MorphError) -> MorphError {
+    match e {
+        MorphError::Keyframe { source, .. } => MorphError::Mesh(source),
+        other => other,
     }
 }
 

@@ -2,9 +2,10 @@
 
 use bdmorph_vm::Program;
 
-use crate::blend::{check_keyframes, compile_keyframes};
-use crate::keyframes::{Engine, Line, Unwrap};
 use crate::mesh::PlanarMesh;
+use crate::morph::blend::check_count;
+use crate::morph::engine::{Line, Unwrap};
+use crate::morph::solver::{Solver, Structure};
 use crate::morph::{Frame, FrameStats, MorphError, MorphOptions};
 
 /// How a segment's local time maps to its blend weight: `t = easing(s)` for `s` in [0, 1],
@@ -185,7 +186,7 @@ impl PathOptions {
 /// # Ok::<(), bdmorph::MorphError>(())
 /// ```
 pub struct Path {
-    engine: Engine,
+    engine: Solver,
     /// When each keyframe is reached: 0 first, 1 last.
     knots: Vec<f64>,
     easings: Vec<Easing>,
@@ -215,8 +216,9 @@ impl Path {
         options: PathOptions,
     ) -> Result<Path, MorphError> {
         check_path_options(keyframes.len(), &options)?;
-        let program = compile_keyframes(keyframes)?;
-        Path::with_program(program, keyframes, options)
+        check_count(keyframes)?;
+        let engine = Solver::new(keyframes, Unwrap::Cumulative, options.morph)?;
+        Ok(Path::assemble(engine, keyframes.len(), &options))
     }
 
     /// Prepares a path from an already compiled program (made for the first keyframe's
@@ -227,15 +229,21 @@ impl Path {
         options: PathOptions,
     ) -> Result<Path, MorphError> {
         check_path_options(keyframes.len(), &options)?;
-        check_keyframes(keyframes)?;
-        let segments = keyframes.len() - 1;
+        check_count(keyframes)?;
+        let engine = Solver::with_program(program, keyframes, Unwrap::Cumulative, options.morph)?;
+        Ok(Path::assemble(engine, keyframes.len(), &options))
+    }
+
+    /// The path's knots and easings around its solver.
+    fn assemble(engine: Solver, keyframes: usize, options: &PathOptions) -> Path {
+        let segments = keyframes - 1;
         let durations = if options.durations.is_empty() {
             vec![1.0; segments]
         } else {
             options.durations.clone()
         };
         let total: f64 = durations.iter().sum();
-        let mut knots = Vec::with_capacity(keyframes.len());
+        let mut knots = Vec::with_capacity(keyframes);
         let mut acc = 0.0;
         knots.push(0.0);
         for d in &durations[..segments - 1] {
@@ -248,13 +256,17 @@ impl Path {
             1 => vec![options.easings[0]; segments],
             _ => options.easings.clone(),
         };
-        let engine = Engine::new(program, keyframes, Unwrap::Cumulative, options.morph)?;
-        Ok(Path {
-            weights: vec![0.0; keyframes.len()],
+        Path {
+            weights: vec![0.0; keyframes],
             engine,
             knots,
             easings,
-        })
+        }
+    }
+
+    /// What the path found in the keyframes: pieces, holes, inverted triangles.
+    pub fn structure(&self) -> &Structure {
+        self.engine.structure()
     }
 
     /// Forgets the solutions kept for warm starts: later frames are predicted only from

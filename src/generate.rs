@@ -239,20 +239,30 @@ pub fn figure_outline() -> Vec<[f64; 2]> {
 /// triangles of area at most `max_area` (in units of the outline, see [`figure_outline`]) and
 /// no angle below 25 degrees. `max_area = 0.01` gives about 900 vertices.
 pub fn figure(max_area: f64) -> PlanarMesh {
+    polygons(&[figure_outline()], max_area)
+}
+
+/// Closed polygons (each a list of corners, either orientation) triangulated by a refined
+/// constrained Delaunay triangulation (spade): the region of odd winding number (inside an
+/// outline and outside the holes in it), triangles of area at most `max_area` and no angle
+/// below 25 degrees, counter-clockwise. Disjoint outlines give several pieces. The polygons
+/// must be simple and not cross each other; otherwise the mesh is empty.
+pub fn polygons(loops: &[Vec<[f64; 2]>], max_area: f64) -> PlanarMesh {
     use spade::{
         AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
     };
-    let outline = figure_outline();
+    let empty = PlanarMesh {
+        positions: Vec::new(),
+        faces: Vec::new(),
+    };
     let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
-    // The outline is simple and finite, so insertion cannot fail; an error leaves an empty mesh.
-    if cdt
-        .add_constraint_edges(outline.iter().map(|p| Point2::new(p[0], p[1])), true)
-        .is_err()
-    {
-        return PlanarMesh {
-            positions: Vec::new(),
-            faces: Vec::new(),
-        };
+    for outline in loops {
+        if cdt
+            .add_constraint_edges(outline.iter().map(|p| Point2::new(p[0], p[1])), true)
+            .is_err()
+        {
+            return empty;
+        }
     }
     let result = cdt.refine(
         RefinementParameters::<f64>::new()
@@ -287,6 +297,39 @@ pub fn figure(max_area: f64) -> PlanarMesh {
         }
     }
     mesh
+}
+
+/// A circle of `n` corners, radius `r`, centre `c`, counter-clockwise.
+pub fn circle(c: [f64; 2], r: f64, n: usize) -> Vec<[f64; 2]> {
+    (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            [c[0] + r * a.cos(), c[1] + r * a.sin()]
+        })
+        .collect()
+}
+
+/// An annulus: the unit disk with a hole of radius 0.4 in the middle, triangles of area at
+/// most `max_area` (`0.005` gives about 500 vertices).
+pub fn annulus(max_area: f64) -> PlanarMesh {
+    polygons(
+        &[circle([0.0, 0.0], 1.0, 48), circle([0.0, 0.0], 0.4, 20)],
+        max_area,
+    )
+}
+
+/// A plate, 3 by 1.2, with two round holes, triangles of area at most `max_area` (`0.005`
+/// gives about 600 vertices).
+pub fn plate_with_two_holes(max_area: f64) -> PlanarMesh {
+    let plate = vec![[-1.5, -0.6], [1.5, -0.6], [1.5, 0.6], [-1.5, 0.6]];
+    polygons(
+        &[
+            plate,
+            circle([-0.75, 0.0], 0.3, 16),
+            circle([0.75, 0.05], 0.25, 14),
+        ],
+        max_area,
+    )
 }
 
 fn mesh_signed_area(p: &[[f64; 2]], f: &[u32; 3]) -> f64 {

@@ -102,22 +102,68 @@ impl MeshInfo {
     }
 }
 
+/// What the morph makes of a mesh that it accepts: its pieces and their holes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Morphable {
+    /// Pieces (faces connected through edges); each morphs alone, with its own rigid motion.
+    pub pieces: usize,
+    /// Holes, in all pieces; each is filled with hidden triangles for the solve.
+    pub holes: usize,
+}
+
+impl std::fmt::Display for Morphable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.pieces, self.holes) {
+            (1, 0) => write!(f, "a counter-clockwise planar disk"),
+            (pieces, holes) => {
+                let plural =
+                    |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+                write!(
+                    f,
+                    "counter-clockwise and planar, {} with {}",
+                    plural(pieces, "piece"),
+                    plural(holes, "hole")
+                )?;
+                if pieces > 1 {
+                    write!(f, "; each piece morphs alone, with its own rigid motion")?;
+                }
+                if holes > 0 {
+                    write!(
+                        f,
+                        "; each hole is filled with hidden triangles for the solve"
+                    )?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
 /// Whether `mesh` can be a morph's source or target: planar, geometrically valid (finite,
-/// counter-clockwise, no degenerate triangle) and a compilable disk. The error says why not.
-pub fn check_morphable(mesh: &SurfaceMesh, path: &Path) -> Result<(), String> {
+/// counter-clockwise, no degenerate triangle) and manifold pieces, each a disk with any
+/// number of holes. The error says why not.
+pub fn check_morphable(mesh: &SurfaceMesh, path: &Path) -> Result<Morphable, String> {
     let planar = PlanarMesh::from_surface(mesh.clone(), path).map_err(|e| e.to_string())?;
     planar.validate().map_err(|e| e.to_string())?;
-    bdmorph_compiler::compile(&planar.positions, &planar.faces).map_err(|e| e.to_string())?;
-    Ok(())
+    let pieces = bdmorph_compiler::pieces(planar.positions.len(), &planar.faces)
+        .map_err(|e| e.to_string())?;
+    Ok(summary(&pieces))
 }
 
 /// As [`check_morphable`], for a mesh read from a file: the error is typed and names the
 /// file, and the line of the face or vertex at fault (as `bdmorph morph` reports it).
-pub fn morphable(file: &MeshFile) -> Result<(), Located<MeshError>> {
+pub fn morphable(file: &MeshFile) -> Result<Morphable, Located<MeshError>> {
     let planar = file.planar()?;
-    bdmorph_compiler::compile(&planar.positions, &planar.faces)
+    let pieces = bdmorph_compiler::pieces(planar.positions.len(), &planar.faces)
         .map_err(|e| file.locate(MeshError::Topology(e)))?;
-    Ok(())
+    Ok(summary(&pieces))
+}
+
+fn summary(pieces: &[bdmorph_compiler::Piece]) -> Morphable {
+    Morphable {
+        pieces: pieces.len(),
+        holes: pieces.iter().map(|p| p.loops.len() - 1).sum(),
+    }
 }
 
 #[cfg(test)]

@@ -53,7 +53,7 @@ pub mod render;
 /// The sparse Cholesky engine every system factors and solves with.
 pub use bdmorph_cholesky as cholesky;
 pub use bdmorph_cholesky::CholeskyError;
-pub use bdmorph_compiler::{compile, CompileError, FaceId, VertexId};
+pub use bdmorph_compiler::{compile, pieces, CompileError, FaceId, Piece, VertexId};
 pub use bdmorph_isa::{disassemble, LoadError, MeshKey, Program};
 pub use bdmorph_vm::{
     FactorPrecision, NewtonOptions, TriangleReport, Vm, VmError, SINGLE_FROM_VALUES,

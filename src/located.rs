@@ -211,13 +211,23 @@ impl MeshFile {
     /// ([`PlanarMesh::from_surface`], then [`PlanarMesh::validate`]: z = 0, finite, every
     /// triangle counter-clockwise and not degenerate), with its errors located.
     pub fn planar(&self) -> Result<PlanarMesh, Located<MeshError>> {
+        let planar = self.planar_allowing_inverted()?;
+        planar.validate().map_err(|e| self.locate(e))?;
+        Ok(planar)
+    }
+
+    /// As [`MeshFile::planar`], but a few inverted (clockwise) triangles are allowed (see
+    /// [`PlanarMesh::validate_allowing_inverted`]).
+    pub fn planar_allowing_inverted(&self) -> Result<PlanarMesh, Located<MeshError>> {
         let surface = SurfaceMesh {
             positions: self.mesh.positions.clone(),
             faces: self.mesh.faces.clone(),
             texcoords: None,
         };
         let planar = PlanarMesh::from_surface(surface, &self.path).map_err(|e| self.locate(e))?;
-        planar.validate().map_err(|e| self.locate(e))?;
+        planar
+            .validate_allowing_inverted()
+            .map_err(|e| self.locate(e))?;
         Ok(planar)
     }
 }
@@ -455,7 +465,7 @@ mod tests {
         assert_eq!(
             far.to_string(),
             "square.obj: the mesh is not connected: face 9 (0-based) cannot be reached from \
-             face 0; face 0 is line 7"
+             face 0, and a compiled program holds one piece; face 0 is line 7"
         );
         assert!(std::error::Error::source(&far).is_some());
     }

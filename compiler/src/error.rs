@@ -95,8 +95,9 @@ pub enum CompileError {
         /// The vertex.
         vertex: VertexId,
     },
-    /// The mesh has several connected components.
-    #[error("the mesh is not connected: {face} (0-based) cannot be reached from face 0")]
+    /// The mesh has several connected components: one program holds one piece (a morph
+    /// compiles each piece alone; program files hold one).
+    #[error("the mesh is not connected: {face} (0-based) cannot be reached from face 0, and a compiled program holds one piece")]
     Disconnected {
         /// A face of another component.
         face: FaceId,
@@ -107,8 +108,9 @@ pub enum CompileError {
         /// Its Euler characteristic.
         euler: i64,
     },
-    /// The mesh has holes; only disks are supported so far.
-    #[error("the mesh has {loops} boundary loops (Euler characteristic {euler}); meshes with holes are not supported yet, only disks")]
+    /// The mesh has holes: one program holds one disk (a morph fills holes before compiling,
+    /// see `bdmorph::morph`; program files hold disks only).
+    #[error("the mesh has {loops} boundary loops (Euler characteristic {euler}): it has holes, and a compiled program holds one disk")]
     HasHoles {
         /// Boundary loops.
         loops: usize,

@@ -4,7 +4,7 @@ use std::io::Write;
 
 use bdmorph::Blend;
 
-use super::morph::{check_options, morph_options, read_inputs, write_frames};
+use super::morph::{check_options, listed, max_distance, morph_options, read_inputs, write_frames};
 use super::output::{self, Plan};
 use super::BlendArgs;
 
@@ -24,7 +24,7 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
     if plan.as_ref().is_some_and(|p| p.format.is_animation()) && !args.out.quiet {
         eprintln!("bdmorph: warning: a blend is one frame; the animation will hold only it");
     }
-    let inputs = read_inputs(&args.meshes, &args.out, plan.as_ref())?;
+    let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
     let options = morph_options(&args.solver);
     let blend = match &args.solver.program {
         Some(path) => {
@@ -34,6 +34,7 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
         None => Blend::with_options(&inputs.keyframes, options),
     };
     let mut blend = blend.map_err(|e| inputs.setup_error(e))?;
+    let inverted = blend.structure().inverted.clone();
     let frame = blend
         .frame_weights(&args.weights)
         .map_err(|e| inputs.frame_error(e))?;
@@ -47,6 +48,21 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
             1,
         );
         writeln!(std::io::stdout().lock(), "{json}").map_err(|e| e.to_string())?;
+    }
+    // Weights that pick one keyframe with inverted triangles: the frame is not that pose.
+    let picked = args.weights.iter().position(|&w| w == 1.0);
+    if let Some(k) = picked.filter(|&k| !inverted[k].is_empty()) {
+        if !args.out.quiet {
+            let deviation = max_distance(frame.positions, &inputs.keyframes[k].positions);
+            eprintln!(
+                "bdmorph: note: the weights pick keyframe {k} ({}), which has {} inverted \
+                 triangles (face {}, 0-based): the frame is the flat shape nearest its side \
+                 lengths, not that pose; it differs from it by up to {deviation:.3e}",
+                inputs.paths[k].display(),
+                inverted[k].len(),
+                listed(&inverted[k]),
+            );
+        }
     }
     if frame.stats.flipped_triangles > 0 && !args.out.quiet {
         eprintln!(

@@ -29,7 +29,7 @@ pub(super) fn run(args: InfoArgs) -> Result<(), String> {
     );
     // Said as `morph` would say it, with the file and the line.
     match morphable(&file) {
-        Ok(()) => println!("  morphable: yes (a counter-clockwise planar disk)"),
+        Ok(what) => println!("  morphable: yes ({what})"),
         Err(why) => println!("  morphable: no: {why}"),
     }
     Ok(())

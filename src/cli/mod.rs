@@ -288,6 +288,12 @@ struct SolverArgs {
     /// Newton's iteration limit per frame.
     #[arg(long, value_name = "N", default_value_t = 50)]
     max_iterations: u32,
+    /// Accept keyframes with a few inverted (clockwise) triangles, as a pose drawn by hand
+    /// may have: their side lengths are morphed as they are, and at such a keyframe the
+    /// frame is the flat shape nearest them, not the pose (a note on stderr, and
+    /// `keyframe_deviation` in --stats, say how far). Without it they are refused, listed.
+    #[arg(long)]
+    allow_inverted: bool,
 }
 
 fn parse_easing(text: &str) -> Result<Easing, String> {

@@ -18,8 +18,21 @@ use super::{times, MorphArgs, OutputArgs, SolverArgs};
 pub(super) fn read(
     path: &std::path::Path,
 ) -> Result<(PlanarMesh, Option<TexCoords>, LineMap), String> {
+    read_keyframe(path, false)
+}
+
+/// As [`read`], allowing a few inverted triangles when asked.
+pub(super) fn read_keyframe(
+    path: &std::path::Path,
+    allow_inverted: bool,
+) -> Result<(PlanarMesh, Option<TexCoords>, LineMap), String> {
     let file = MeshFile::read(path).map_err(|e| e.to_string())?;
-    let mesh = file.planar().map_err(|e| e.to_string())?;
+    let mesh = if allow_inverted {
+        file.planar_allowing_inverted()
+    } else {
+        file.planar()
+    }
+    .map_err(|e| e.to_string())?;
     let MeshFile {
         mesh: surface,
         lines,
@@ -62,13 +75,14 @@ pub(super) fn check_options(out: &OutputArgs, solver: &SolverArgs) -> Result<(),
 pub(super) fn read_inputs(
     meshes: &[PathBuf],
     out: &OutputArgs,
+    solver: &SolverArgs,
     plan: Option<&Plan>,
 ) -> Result<Inputs, String> {
     let mut keyframes = Vec::with_capacity(meshes.len());
     let mut lines = Vec::with_capacity(meshes.len());
     let mut texcoords = None;
     for (i, path) in meshes.iter().enumerate() {
-        let (mesh, tex, map) = read(path)?;
+        let (mesh, tex, map) = read_keyframe(path, solver.allow_inverted)?;
         if i == 0 {
             texcoords = tex;
         }
@@ -114,6 +128,7 @@ pub(super) fn morph_options(solver: &SolverArgs) -> MorphOptions {
     MorphOptions::default()
         .with_tolerance(solver.tolerance)
         .with_max_iterations(solver.max_iterations)
+        .with_allow_inverted(solver.allow_inverted)
 }
 
 impl Inputs {
@@ -193,6 +208,22 @@ impl Animation {
             Animation::Path(p) => p.faces(),
         }
     }
+
+    /// Per keyframe, its inverted triangles (allowed by --allow-inverted).
+    fn inverted(&self) -> &[Vec<usize>] {
+        match self {
+            Animation::Morph(m) => &m.structure().inverted,
+            Animation::Path(p) => &p.structure().inverted,
+        }
+    }
+
+    /// The time of each keyframe.
+    fn keyframe_times(&self) -> Vec<f64> {
+        match self {
+            Animation::Morph(_) => vec![0.0, 1.0],
+            Animation::Path(p) => p.keyframe_times().to_vec(),
+        }
+    }
 }
 
 pub(super) fn run(args: MorphArgs) -> Result<(), String> {
@@ -217,7 +248,7 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         Some(path) => Some(Plan::new(path, args.out.format, times.len())?),
         None => None,
     };
-    let inputs = read_inputs(&args.meshes, &args.out, plan.as_ref())?;
+    let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
     let options = morph_options(&args.solver);
     let program = match &args.solver.program {
         Some(path) => Some(super::compile::load(
@@ -249,6 +280,15 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let mut animation = animation.map_err(|e| inputs.setup_error(e))?;
 
     let colour = args.out.color_by.is_some();
+    // Keyframes with inverted triangles (--allow-inverted), by the time they are at.
+    let inverted = animation.inverted().to_vec();
+    let folded: Vec<(f64, usize)> = animation
+        .keyframe_times()
+        .into_iter()
+        .enumerate()
+        .filter(|&(k, _)| !inverted[k].is_empty())
+        .map(|(k, t)| (t, k))
+        .collect();
     let bar = progress_bar(times.len(), args.out.quiet, "morphing");
     let mut frames = Vec::with_capacity(if plan.is_some() { times.len() } else { 0 });
     let mut stdout = std::io::stdout().lock();
@@ -270,8 +310,37 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
                 continue;
             }
         };
+        let at_folded = folded.iter().find(|&&(at, _)| at == t).map(|&(_, k)| {
+            let deviation = max_distance(frame.positions, &inputs.keyframes[k].positions);
+            (k, deviation)
+        });
         if args.out.stats {
-            writeln!(stdout, "{}", frame.stats.to_json()).map_err(|e| e.to_string())?;
+            let mut json = frame.stats.to_json();
+            if let Some((k, deviation)) = at_folded {
+                json.pop();
+                json += &format!(
+                    ",\"keyframe\":{k},\"inverted_triangles\":{},\"keyframe_deviation\":{deviation:e}}}",
+                    inverted[k].len()
+                );
+            }
+            writeln!(stdout, "{json}").map_err(|e| e.to_string())?;
+        }
+        if let (Some((k, deviation)), false) = (at_folded, args.out.quiet) {
+            let size = inputs.keyframes[k].diameter();
+            let inverted = &inverted[k];
+            bar.suspend(|| {
+                eprintln!(
+                    "bdmorph: note: t = {t} is keyframe {k} ({}), which has {} inverted \
+                     triangle{} (face {}, 0-based): the frame is the flat shape nearest its side \
+                     lengths, not that pose; it differs from it by up to {deviation:.3e} ({:.2}% \
+                     of its size)",
+                    inputs.paths[k].display(),
+                    inverted.len(),
+                    if inverted.len() == 1 { "" } else { "s" },
+                    listed(inverted),
+                    100.0 * deviation / size.max(f64::MIN_POSITIVE)
+                );
+            });
         }
         if frame.stats.flipped_triangles > 0 && !args.out.quiet {
             bar.suspend(|| {
@@ -365,6 +434,24 @@ pub(super) fn write_frames(
         }
     }
     Ok(())
+}
+
+/// Largest distance between corresponding positions.
+pub(super) fn max_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+        .fold(0.0, f64::max)
+}
+
+/// The first few of `faces`, comma-separated, with how many more.
+pub(super) fn listed(faces: &[usize]) -> String {
+    const SHOWN: usize = 10;
+    let mut text: Vec<String> = faces.iter().take(SHOWN).map(usize::to_string).collect();
+    if faces.len() > SHOWN {
+        text.push(format!("and {} more", faces.len() - SHOWN));
+    }
+    text.join(", ")
 }
 
 /// Escapes a message for a JSON string.

@@ -52,8 +52,9 @@ pub struct PieceInfo {
     pub faces: usize,
     /// Its holes (boundary loops besides the outer one).
     pub holes: usize,
-    /// The hidden triangles that fill its holes for the solve.
-    pub hidden_triangles: usize,
+    /// The hidden triangles that fill its holes for the solve (vertices of the mesh,
+    /// counter-clockwise in every keyframe).
+    pub hidden: Vec<[u32; 3]>,
     /// Its anchor vertex (0-based, in the mesh): the frame places it, and the direction of
     /// its first edge, by blending the keyframes' rigid motions.
     pub anchor: u32,
@@ -233,7 +234,6 @@ impl Solver {
                     faces.extend(hidden);
                 }
             }
-            let hidden = faces.len() - visible;
             let local_meshes: Vec<PlanarMesh> = local_keyframes
                 .into_iter()
                 .map(|positions| PlanarMesh {
@@ -251,7 +251,10 @@ impl Solver {
                 vertices: piece.vertices.len(),
                 faces: visible,
                 holes,
-                hidden_triangles: hidden,
+                hidden: faces[visible..]
+                    .iter()
+                    .map(|f| f.map(|v| piece.vertices[v as usize]))
+                    .collect(),
                 anchor,
             });
             pieces.push(PieceSolver {
@@ -308,7 +311,7 @@ impl Solver {
                     vertices: n,
                     faces: first.faces.len(),
                     holes: 0,
-                    hidden_triangles: 0,
+                    hidden: Vec::new(),
                     anchor,
                 }],
                 inverted,

@@ -230,7 +230,13 @@ mod tests {
         assert_eq!(info.boundary_loops, 2);
         // Two pieces morph, each alone.
         let found = check_morphable(&s, Path::new("x.obj")).unwrap();
-        assert_eq!(found, Morphable { pieces: 2, holes: 0 });
+        assert_eq!(
+            found,
+            Morphable {
+                pieces: 2,
+                holes: 0
+            }
+        );
         s.faces[0].swap(1, 2);
         assert!(check_morphable(&s, Path::new("x.obj")).is_err());
     }

@@ -41,8 +41,11 @@ enum Command {
     /// Morph between two planar meshes with the same triangles, or along a path of several.
     ///
     /// Inputs: OBJ or OFF files with z = 0 (or two coordinates per `v` line). Faces must be
-    /// triangles (quads and polygons are refused, not triangulated), counter-clockwise,
-    /// forming one disk; every mesh must list the first one's triangles.
+    /// triangles (quads and polygons are refused, not triangulated), counter-clockwise
+    /// (--allow-inverted accepts a few clockwise ones in a keyframe). A mesh may have holes
+    /// (filled with hidden triangles for the solve, never drawn or written) and several
+    /// pieces (each morphs alone). Every mesh must have the first one's triangles, in any
+    /// order, corners rotated or not; frames follow the first one's order.
     ///
     /// With more than two meshes (or with --easing or --durations) the frames walk a path
     /// through them in order, keyframe k reached at t = k / n (or after the first k
@@ -67,6 +70,7 @@ enum Command {
     ///   bdmorph morph man.obj man2.obj man3.obj man.obj --frames 90 --easing ease-in-out -o loop.gif
     ///   bdmorph morph a.obj b.obj c.obj --frames 40 --durations 1,3 -o frames/
     ///   bdmorph morph man.obj man2.obj --frames 30 --color-by distortion -o viewer.html
+    ///   bdmorph morph rest.obj drawn.obj --frames 30 --allow-inverted -o frames/
     #[command(verbatim_doc_comment)]
     Morph(MorphArgs),
     /// Blend any number of keyframes with weights: one frame.

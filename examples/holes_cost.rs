@@ -56,6 +56,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         m.frame(0.05 + 0.045 * f64::from(i))?;
         times.push(started.elapsed().as_secs_f64() * 1e3);
     }
-    println!("disk | {} | 0 | {setup:.1} | {:.2}", d.positions.len(), median(times));
+    println!(
+        "disk | {} | 0 | {setup:.1} | {:.2}",
+        d.positions.len(),
+        median(times)
+    );
     Ok(())
 }

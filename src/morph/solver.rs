@@ -26,6 +26,7 @@
 
 use std::collections::HashSet;
 
+use bdmorph_compiler::CompileError;
 use bdmorph_vm::{FactorPrecision, Program, TriangleReport};
 
 use crate::mesh::{MeshError, PlanarMesh};
@@ -102,12 +103,9 @@ fn keyframe_error(index: usize, source: MeshError) -> MorphError {
 }
 
 /// Checks every keyframe (geometry, and the first one's triangles in any listing) and
-/// returns each one's inverted triangles (empty unless allowed) and the keyframes with the
-/// first one's faces.
-fn check(
-    keyframes: &[PlanarMesh],
-    allow_inverted: bool,
-) -> Result<(Vec<PlanarMesh>, Vec<Vec<usize>>), MorphError> {
+/// returns each one's inverted triangles (empty unless allowed). Only the first keyframe's
+/// faces are used after this; the others' positions.
+fn check(keyframes: &[PlanarMesh], allow_inverted: bool) -> Result<Vec<Vec<usize>>, MorphError> {
     let first = &keyframes[0];
     let geometry = |k: &PlanarMesh| {
         if allow_inverted {
@@ -117,7 +115,6 @@ fn check(
         }
     };
     let mut inverted = vec![geometry(first).map_err(|e| keyframe_error(0, e))?];
-    let mut canonical = vec![first.clone()];
     for (index, k) in keyframes.iter().enumerate().skip(1) {
         if k.positions.len() != first.positions.len() {
             return Err(keyframe_error(
@@ -144,12 +141,8 @@ fn check(
             .match_faces(&k.faces)
             .map_err(|e| keyframe_error(index, e))?;
         inverted.push(geometry(k).map_err(|e| keyframe_error(index, e))?);
-        canonical.push(PlanarMesh {
-            positions: k.positions.clone(),
-            faces: first.faces.clone(),
-        });
     }
-    Ok((canonical, inverted))
+    Ok(inverted)
 }
 
 /// Twice the signed area of the polygon through `loop_`'s vertices.
@@ -174,9 +167,17 @@ impl Solver {
         unwrap: Unwrap,
         options: MorphOptions,
     ) -> Result<Solver, MorphError> {
-        let (keyframes, inverted) = check(keyframes, options.allow_inverted)?;
+        let inverted = check(keyframes, options.allow_inverted)?;
         let first = &keyframes[0];
         let n = first.positions.len();
+        // One disk, the common case: compiled as it is, with no second look at its topology.
+        match bdmorph_compiler::compile(&first.positions, &first.faces) {
+            Ok(program) => {
+                return Solver::disk(program, keyframes, inverted, unwrap, options);
+            }
+            Err(CompileError::Disconnected { .. } | CompileError::HasHoles { .. }) => {}
+            Err(e) => return Err(MeshError::Topology(e).into()),
+        }
         let topology = bdmorph_compiler::pieces(n, &first.faces).map_err(MeshError::from)?;
         let mut pieces = Vec::with_capacity(topology.len());
         let mut infos = Vec::with_capacity(topology.len());
@@ -287,10 +288,21 @@ impl Solver {
         unwrap: Unwrap,
         options: MorphOptions,
     ) -> Result<Solver, MorphError> {
-        let (keyframes, inverted) = check(keyframes, options.allow_inverted)?;
+        // The program holds one disk; a face it does not have is refused when the solver
+        // looks up the face's edges ([`MorphError::ProgramMismatch`]).
+        let inverted = check(keyframes, options.allow_inverted)?;
+        Solver::disk(program, keyframes, inverted, unwrap, options)
+    }
+
+    /// The solver of one disk, from its program.
+    fn disk(
+        program: Program,
+        keyframes: &[PlanarMesh],
+        inverted: Vec<Vec<usize>>,
+        unwrap: Unwrap,
+        options: MorphOptions,
+    ) -> Result<Solver, MorphError> {
         let first = &keyframes[0];
-        bdmorph_compiler::disk_boundary(first.positions.len(), &first.faces)
-            .map_err(MeshError::from)?;
         let n = first.positions.len();
         let anchor = program.embed_root().p0;
         let engine = Engine::new(program, &keyframes, first.faces.len(), unwrap, options)?;

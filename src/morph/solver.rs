@@ -305,7 +305,7 @@ impl Solver {
         let first = &keyframes[0];
         let n = first.positions.len();
         let anchor = program.embed_root().p0;
-        let engine = Engine::new(program, &keyframes, first.faces.len(), unwrap, options)?;
+        let engine = Engine::new(program, keyframes, first.faces.len(), unwrap, options)?;
         Ok(Solver {
             direct: true,
             positions: Vec::new(),

@@ -46,6 +46,7 @@ pub mod io;
 mod keyframes;
 pub mod located;
 pub mod mesh;
+pub mod meshing;
 pub mod morph;
 pub mod param;
 pub mod path;

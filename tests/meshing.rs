@@ -555,3 +555,47 @@ fn poly_errors_name_their_line() {
         "squares.poly:12: segment 1 crosses segment 5 (line 16) near (2, 0)"
     );
 }
+
+#[test]
+fn only_a_sharper_corner_of_the_outline_keeps_smaller_angles() {
+    // A wedge with a 15 degree tip at the origin and a round back of radius 100: no
+    // triangulation can have angles above 15 degrees at the tip, and refinement leaves the
+    // few triangles nearest it alone.
+    let half = 7.5f64.to_radians();
+    let mut wedge = vec![[0.0, 0.0]];
+    wedge.extend((0..=20).map(|i| {
+        let a = -half + 2.0 * half * f64::from(i) / 20.0;
+        [100.0 * a.cos(), 100.0 * a.sin()]
+    }));
+    let outline = meshing::Outline::from_loops(&[wedge]);
+    for n in [200, 2000] {
+        let m = meshing::mesh_outline(&outline, &MeshOptions::default().with_vertices(n))
+            .expect("meshes");
+        let skinny: Vec<&[u32; 3]> = m
+            .mesh
+            .faces
+            .iter()
+            .filter(|f| {
+                let one = PlanarMesh {
+                    positions: f.map(|v| m.mesh.positions[v as usize]).to_vec(),
+                    faces: vec![[0, 1, 2]],
+                };
+                meshing::min_angle(&one) < meshing::DEFAULT_MIN_ANGLE
+            })
+            .collect();
+        assert!(
+            !skinny.is_empty() && skinny.len() <= 4,
+            "{} skinny",
+            skinny.len()
+        );
+        for f in skinny {
+            let near = f
+                .iter()
+                .map(|&v| m.mesh.positions[v as usize][0].hypot(m.mesh.positions[v as usize][1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(near < 10.0, "a skinny triangle {near} from the tip");
+        }
+        assert!(m.stats.min_angle > 14.0, "{}", m.stats.min_angle);
+        assert!(m.mesh.faces.iter().all(|f| m.mesh.signed_area(f) > 0.0));
+    }
+}

@@ -182,7 +182,8 @@ enum Command {
     ///   bdmorph mesh drawing.png --threshold 0.5 --stats -o drawing.obj
     ///   bdmorph mesh logo.svg --vertices 3000 -o logo.obj
     ///   bdmorph mesh part.poly --min-angle 30 -o part.obj
-    ///   bdmorph mesh cat.png -o cat.obj && bdmorph deform cat.obj --pin 0:10,20 --pin 40:300,200 --max-distortion 3 -o posed.obj
+    ///   then, with vertex numbers read from cat.obj:
+    ///   bdmorph deform cat.obj --pin 12:40,300 --pin 815:420,360 --max-distortion 3 -o posed.obj
     ///   bdmorph morph cat.obj posed.obj --frames 30 --texture cat.png -o cat.gif
     #[command(verbatim_doc_comment)]
     Mesh(MeshArgs),

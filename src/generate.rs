@@ -15,6 +15,7 @@ use std::f64::consts::TAU;
 
 use crate::io::SurfaceMesh;
 use crate::mesh::PlanarMesh;
+use crate::render::Image;
 
 /// A number in [-1, 1) from an integer, by a fixed hash (SplitMix64).
 fn hash_unit(i: u64) -> f64 {
@@ -531,6 +532,68 @@ pub fn finger(around: u32, rings: u32, spacing: f64) -> SurfaceMesh {
 fn normalize(p: [f64; 3]) -> [f64; 3] {
     let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
     [p[0] / n, p[1] / n, p[2] / n]
+}
+
+/// A picture made in code, for meshing: `width` x `height` pixels, opaque where
+/// `distance(x, y)` (a signed distance in pixels, negative inside; `x` from the left and `y`
+/// from the top of the picture, sampled at pixel centres) is negative and transparent
+/// elsewhere, with a one-pixel anti-aliased edge (opacity `0.5 - distance`, clamped). The
+/// colours vary so that a texture shows its orientation: a hue ramp from left to right,
+/// lighter towards the top, and a checkerboard with 8 squares across.
+pub fn picture(width: u32, height: u32, distance: impl Fn(f64, f64) -> f64) -> Image {
+    let mut rgba = Vec::with_capacity(4 * width as usize * height as usize);
+    let side = f64::from(width.max(1)) / 8.0;
+    for py in 0..height {
+        for px in 0..width {
+            let (x, y) = (f64::from(px) + 0.5, f64::from(py) + 0.5);
+            let alpha = (0.5 - distance(x, y)).clamp(0.0, 1.0);
+            let u = x / f64::from(width);
+            let light = 1.0 - 0.5 * y / f64::from(height);
+            let check = if ((x / side) as i64 + (y / side) as i64) % 2 == 0 {
+                1.0
+            } else {
+                0.8
+            };
+            let shade = |c: f64| (255.0 * (c * light * check).clamp(0.0, 1.0)).round() as u8;
+            rgba.extend([
+                shade(0.3 + 0.7 * u),
+                shade(0.6 - 0.3 * u),
+                shade(1.0 - 0.8 * u),
+                (255.0 * alpha).round() as u8,
+            ]);
+        }
+    }
+    Image {
+        width,
+        height,
+        rgba,
+    }
+}
+
+/// The signed distance from `p` to the segment `ab`, less `radius`: a capsule.
+pub fn capsule_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2], radius: f64) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy) - radius
+}
+
+/// The meshing benchmark's subject on a `size` x `size` [`picture`]: a round body with a
+/// hole and an arm, and a separate disk (two pieces, one hole).
+pub fn picture_subject(size: u32) -> Image {
+    let s = f64::from(size);
+    picture(size, size, |x, y| {
+        let p = [x / s, y / s];
+        let body = capsule_distance(p, [0.45, 0.55], [0.45, 0.55], 0.3);
+        let arm = capsule_distance(p, [0.6, 0.45], [0.9, 0.15], 0.04);
+        let hole = capsule_distance(p, [0.4, 0.6], [0.4, 0.6], 0.1);
+        let disk = capsule_distance(p, [0.82, 0.8], [0.82, 0.8], 0.1);
+        s * body.min(arm).max(-hole).min(disk)
+    })
 }
 
 #[cfg(test)]

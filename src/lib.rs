@@ -44,6 +44,7 @@ pub mod info;
 pub mod io;
 pub mod located;
 pub mod mesh;
+pub mod meshing;
 pub mod morph;
 pub use morph::{blend, path};
 pub mod param;

@@ -5,6 +5,7 @@ mod compile;
 mod demo;
 mod geodesic;
 mod info;
+mod mesh;
 mod morph;
 mod output;
 mod param;
@@ -155,6 +156,41 @@ enum Command {
     ///   bdmorph deform man.obj --pin 0:0,0 --pin 120:1.5,2 --max-distortion 3 -o posed.obj
     #[command(verbatim_doc_comment)]
     Deform(DeformArgs),
+    /// Mesh a picture's subject, or an outline, into triangles ready to morph.
+    ///
+    /// INPUT is a picture (PNG or JPEG) or an outline (Triangle's .poly, or SVG: <path>,
+    /// <polygon>, <polyline>, <rect>, <circle>, <ellipse>, with transforms; curves flattened
+    /// to --tolerance). A picture's subject is its opaque pixels; for a picture without
+    /// transparency give --background COLOR (#rrggbb, a name, or auto for the colour of the
+    /// picture's border) or --threshold L (the pixels darker than L). Its outlines are traced,
+    /// simplified to --tolerance pixels (outlines smaller than that are left out), and
+    /// triangulated with their holes, however many pieces: a constrained Delaunay
+    /// triangulation refined until no angle is below --min-angle (except at sharper corners
+    /// of the outline itself) and about --vertices vertices are placed.
+    ///
+    /// -o OUT.obj writes `v x y 0` lines (y up, counter-clockwise triangles) and one `vt` per
+    /// vertex. From a picture, positions are in pixels from its bottom-left corner and
+    /// vt = (x / width, y / height): the picture textures the mesh upright (`morph --texture
+    /// picture.png` with no further flags). From an outline, vt spans the SVG's viewBox (or
+    /// width and height), else the outline's bounding box as a square. .svg or .png draw the
+    /// mesh (a picture's mesh textured by it).
+    ///
+    /// Errors (nothing is written): a picture that is fully transparent or holds no subject,
+    /// outlines that cross or touch themselves or each other (the segments and where), an
+    /// outline too small for the tolerance, a .poly segment naming a missing vertex.
+    ///
+    /// Examples:
+    ///   bdmorph mesh cat.png -o cat.obj
+    ///   bdmorph mesh cat.png --vertices 5000 --tolerance 0.5 -o cat.obj
+    ///   bdmorph mesh scan.jpg --background white -o scan.obj
+    ///   bdmorph mesh drawing.png --threshold 0.5 --stats -o drawing.obj
+    ///   bdmorph mesh logo.svg --vertices 3000 -o logo.obj
+    ///   bdmorph mesh part.poly --min-angle 30 -o part.obj
+    ///   then, with vertex numbers read from cat.obj:
+    ///   bdmorph deform cat.obj --pin 12:40,300 --pin 815:420,360 --max-distortion 3 -o posed.obj
+    ///   bdmorph morph cat.obj posed.obj --frames 30 --texture cat.png -o cat.gif
+    #[command(verbatim_doc_comment)]
+    Mesh(MeshArgs),
     /// Compile a mesh's triangles once into a program file, for `morph --program`.
     ///
     /// SOURCE is read and checked as `morph` does, and its connectivity is compiled into the
@@ -510,6 +546,50 @@ struct DeformArgs {
 }
 
 #[derive(Args, Debug)]
+struct MeshArgs {
+    /// A picture (.png, .jpg) or an outline (.poly, .svg).
+    input: PathBuf,
+    /// Output: .obj (the mesh with texture coordinates), or .svg or .png (a picture of it).
+    /// Optional with --stats.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// About how many vertices.
+    #[arg(long, value_name = "N", default_value_t = bdmorph::meshing::DEFAULT_VERTICES)]
+    vertices: usize,
+    /// How far the mesh's boundary may stray from the traced outline, in pixels (default 1);
+    /// for SVG, how far curves may stray from their polylines, in the file's units after
+    /// transforms (default 1/1000 of the outline's bounding-box diagonal). Unused for .poly.
+    #[arg(long, value_name = "T")]
+    tolerance: Option<f64>,
+    /// The smallest angle of any triangle, in degrees (at most 33).
+    #[arg(long, value_name = "DEG", default_value_t = bdmorph::meshing::DEFAULT_MIN_ANGLE)]
+    min_angle: f64,
+    /// The background colour around the subject: #rrggbb, #rgb, white, black, red, green,
+    /// blue, grey, or auto (the picture's border). The subject is what differs from it by more
+    /// than --threshold (default 0.2: the largest channel difference, in [0, 1]).
+    #[arg(long, value_name = "COLOR", value_parser = parse_background)]
+    background: Option<bdmorph::meshing::Background>,
+    /// In [0, 1): the opacity above which a pixel is the subject (default 0.5); with
+    /// --background, the colour difference (default 0.2); for an opaque picture without
+    /// --background, the brightness below which it is (no default).
+    #[arg(long, value_name = "L")]
+    threshold: Option<f64>,
+    /// Picture size for SVG and PNG output, as WxH.
+    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    size: ImageSize,
+    /// Print one JSON object of statistics on stdout.
+    #[arg(long)]
+    stats: bool,
+    /// Print nothing but errors (and --stats).
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn parse_background(text: &str) -> Result<bdmorph::meshing::Background, String> {
+    text.parse()
+}
+
+#[derive(Args, Debug)]
 struct CompileArgs {
     /// The mesh to compile (OBJ or OFF): a counter-clockwise planar disk.
     source: PathBuf,
@@ -556,6 +636,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Geodesic(args) => geodesic::run(args),
         Command::Param(args) => param::run(args),
         Command::Deform(args) => param::deform(args),
+        Command::Mesh(args) => mesh::run(args),
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),

@@ -1,0 +1,601 @@
+//! Meshing pictures and outlines made in code: orientation, minimum angle, vertex count,
+//! boundary within the tolerance of the traced outline, holes and pieces kept, texture
+//! coordinates; and the errors of degenerate inputs.
+
+use bdmorph::generate::{self, capsule_distance};
+use bdmorph::info::MeshInfo;
+use bdmorph::meshing::{
+    self, Background, Contact, MeshOptions, Meshed, MeshingError, NoSubject, PictureOptions,
+};
+use bdmorph::render::Image;
+use bdmorph::{PlanarMesh, SurfaceMesh};
+
+/// A picture of the subject whose signed distance (in pixels) is `d`.
+fn picture(w: u32, h: u32, d: impl Fn([f64; 2]) -> f64) -> Image {
+    generate::picture(w, h, |x, y| d([x, y]))
+}
+
+fn circle(p: [f64; 2], c: [f64; 2], r: f64) -> f64 {
+    capsule_distance(p, c, c, r)
+}
+
+/// Boundary loops and connected pieces.
+fn topology(m: &PlanarMesh) -> (usize, usize) {
+    let info = MeshInfo::of(&SurfaceMesh {
+        positions: m.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+        faces: m.faces.clone(),
+        texcoords: None,
+    });
+    (info.boundary_loops, info.components)
+}
+
+/// The edges with one triangle.
+fn boundary_edges(m: &PlanarMesh) -> Vec<[u32; 2]> {
+    let mut count = std::collections::HashMap::new();
+    for f in &m.faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut edges: Vec<[u32; 2]> = count
+        .into_iter()
+        .filter(|&(_, c)| c == 1)
+        .map(|((a, b), _)| [a, b])
+        .collect();
+    edges.sort_unstable();
+    edges
+}
+
+fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    capsule_distance(p, a, b, 0.0)
+}
+
+/// The largest distance from any of `points` to the nearest of `segments`.
+fn farthest_from(points: &[[f64; 2]], segments: &[[[f64; 2]; 2]]) -> f64 {
+    points
+        .iter()
+        .map(|&p| {
+            segments
+                .iter()
+                .map(|s| distance_to_segment(p, s[0], s[1]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The checks every mesh passes: counter-clockwise triangles, the minimum angle, about the
+/// requested vertex count, one texture coordinate per vertex in [0, 1].
+fn check(m: &Meshed, vertices: usize, min_angle: f64) {
+    let mesh = &m.mesh;
+    assert!(
+        mesh.faces.iter().all(|f| mesh.signed_area(f) > 0.0),
+        "every triangle counter-clockwise"
+    );
+    let angle = meshing::min_angle(mesh);
+    assert!(angle >= min_angle - 1e-9, "smallest angle {angle}");
+    assert_eq!(angle, m.stats.min_angle);
+    let off = mesh.positions.len().abs_diff(vertices) as f64 / vertices as f64;
+    assert!(
+        off <= 0.1,
+        "{} vertices for {vertices} requested",
+        mesh.positions.len()
+    );
+    assert_eq!(m.texcoords.uv.len(), mesh.positions.len());
+    assert_eq!(m.texcoords.corners, mesh.faces);
+    assert!(m
+        .texcoords
+        .uv
+        .iter()
+        .flatten()
+        .all(|t| (0.0..=1.0).contains(t)));
+    assert_eq!(m.stats.vertices, mesh.positions.len());
+    assert_eq!(m.stats.faces, mesh.faces.len());
+    assert!(m.stats.refinement_complete);
+}
+
+/// The mesh's boundary and the traced outline are within `tolerance` of each other (both
+/// ways), and every traced loop is accounted for.
+fn check_boundary(image: &Image, picture: &PictureOptions, m: &Meshed, tolerance: f64) {
+    let traced = meshing::picture_outline(image, picture, Some(tolerance)).expect("traces");
+    let traced_segments: Vec<[[f64; 2]; 2]> = traced
+        .traced
+        .iter()
+        .flat_map(|l| (0..l.len()).map(move |k| [l[k], l[(k + 1) % l.len()]]))
+        .collect();
+    let boundary: Vec<[[f64; 2]; 2]> = boundary_edges(&m.mesh)
+        .iter()
+        .map(|e| e.map(|v| m.mesh.positions[v as usize]))
+        .collect();
+    let boundary_points: Vec<[f64; 2]> = boundary.iter().map(|s| s[0]).collect();
+    let traced_points: Vec<[f64; 2]> = traced.traced.concat();
+    let out = farthest_from(&boundary_points, &traced_segments);
+    let back = farthest_from(&traced_points, &boundary);
+    assert!(
+        out <= tolerance + 1e-9,
+        "a boundary vertex {out} from the traced outline"
+    );
+    assert!(
+        back <= tolerance + 1e-9,
+        "a traced point {back} from the boundary"
+    );
+    // Texture coordinates are the pixel positions.
+    for (p, t) in m.mesh.positions.iter().zip(&m.texcoords.uv) {
+        let expected = [
+            p[0] / f64::from(image.width),
+            p[1] / f64::from(image.height),
+        ];
+        assert!((t[0] - expected[0]).abs() < 1e-12 && (t[1] - expected[1]).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn a_disk_is_a_morphable_disk_within_the_tolerance() {
+    let (w, h) = (400, 300);
+    let image = picture(w, h, |p| circle(p, [200.0, 150.0], 100.0));
+    let options = MeshOptions::default().with_vertices(1500);
+    let m = meshing::mesh_picture(&image, &PictureOptions::default(), &options).expect("meshes");
+    check(&m, 1500, meshing::DEFAULT_MIN_ANGLE);
+    check_boundary(&image, &PictureOptions::default(), &m, 1.0);
+    assert_eq!(topology(&m.mesh), (1, 1));
+    assert_eq!((m.stats.pieces, m.stats.holes), (1, 0));
+    m.mesh.validate().expect("valid");
+    bdmorph::compile(&m.mesh.positions, &m.mesh.faces).expect("a disk that can be morphed");
+    // Pixels from the bottom-left corner: the circle's centre (200, 150 from the top) is at
+    // y = 300 - 150; its boundary within the tolerance plus the anti-aliasing of the circle.
+    for e in boundary_edges(&m.mesh) {
+        let p = m.mesh.positions[e[0] as usize];
+        let r = (p[0] - 200.0).hypot(p[1] - 150.0);
+        assert!(
+            (r - 100.0).abs() < 1.0 + 0.1,
+            "boundary vertex at radius {r}"
+        );
+    }
+    // Deterministic.
+    let again =
+        meshing::mesh_picture(&image, &PictureOptions::default(), &options).expect("meshes");
+    assert_eq!(again.mesh, m.mesh);
+}
+
+#[test]
+fn the_picture_is_upright_with_y_up() {
+    // A disk near the top-left of the picture lands near the top-left of the mesh: large y.
+    let image = picture(200, 100, |p| circle(p, [40.0, 30.0], 20.0));
+    let m = meshing::mesh_picture(
+        &image,
+        &PictureOptions::default(),
+        &MeshOptions::default().with_vertices(300),
+    )
+    .expect("meshes");
+    let n = m.mesh.positions.len() as f64;
+    let centre = m
+        .mesh
+        .positions
+        .iter()
+        .fold([0.0, 0.0], |c, p| [c[0] + p[0] / n, c[1] + p[1] / n]);
+    assert!(
+        (centre[0] - 40.0).abs() < 1.0 && (centre[1] - 70.0).abs() < 1.0,
+        "{centre:?}"
+    );
+    // The texture coordinate of the centre is the picture's (40 / 200, 1 - 30 / 100).
+    let t = m
+        .texcoords
+        .uv
+        .iter()
+        .fold([0.0, 0.0], |c, t| [c[0] + t[0] / n, c[1] + t[1] / n]);
+    assert!(
+        (t[0] - 0.2).abs() < 0.01 && (t[1] - 0.7).abs() < 0.01,
+        "{t:?}"
+    );
+}
+
+#[test]
+fn a_ring_keeps_its_hole() {
+    let image = picture(300, 300, |p| {
+        circle(p, [150.0, 150.0], 120.0).max(-circle(p, [150.0, 150.0], 50.0))
+    });
+    let m = meshing::mesh_picture(&image, &PictureOptions::default(), &MeshOptions::default())
+        .expect("meshes");
+    check(&m, meshing::DEFAULT_VERTICES, meshing::DEFAULT_MIN_ANGLE);
+    check_boundary(&image, &PictureOptions::default(), &m, 1.0);
+    assert_eq!(topology(&m.mesh), (2, 1));
+    assert_eq!((m.stats.pieces, m.stats.holes), (1, 1));
+    // Nothing inside the hole.
+    for f in &m.mesh.faces {
+        let c = f.iter().fold([0.0, 0.0], |c, &v| {
+            let p = m.mesh.positions[v as usize];
+            [c[0] + p[0] / 3.0, c[1] + p[1] / 3.0]
+        });
+        assert!((c[0] - 150.0).hypot(c[1] - 150.0) > 49.0);
+    }
+}
+
+#[test]
+fn two_pieces_and_an_island_in_a_hole() {
+    let image = picture(400, 200, |p| {
+        let ring = circle(p, [100.0, 100.0], 90.0).max(-circle(p, [100.0, 100.0], 50.0));
+        let island = circle(p, [100.0, 100.0], 25.0);
+        let other = circle(p, [300.0, 100.0], 60.0);
+        ring.min(island).min(other)
+    });
+    let options = MeshOptions::default()
+        .with_vertices(3000)
+        .with_min_angle(30.0);
+    let m = meshing::mesh_picture(&image, &PictureOptions::default(), &options).expect("meshes");
+    check(&m, 3000, 30.0);
+    check_boundary(&image, &PictureOptions::default(), &m, 1.0);
+    assert_eq!(topology(&m.mesh), (4, 3));
+    assert_eq!((m.stats.pieces, m.stats.holes), (3, 1));
+}
+
+#[test]
+fn a_thin_limb_is_kept_with_good_triangles() {
+    // A body with an arm 6 pixels wide and 200 long.
+    let image = picture(400, 200, |p| {
+        circle(p, [80.0, 100.0], 60.0).min(capsule_distance(p, [120.0, 100.0], [340.0, 60.0], 3.0))
+    });
+    let options = MeshOptions::default().with_vertices(1200);
+    let m = meshing::mesh_picture(&image, &PictureOptions::default(), &options).expect("meshes");
+    check(&m, 1200, meshing::DEFAULT_MIN_ANGLE);
+    check_boundary(&image, &PictureOptions::default(), &m, 1.0);
+    assert_eq!(topology(&m.mesh), (1, 1));
+    // The arm reaches its tip (x = 343 at y = 200 - 60), and is triangulated along its length.
+    let tip = m.mesh.positions.iter().map(|p| p[0]).fold(0.0, f64::max);
+    assert!(tip > 341.0, "the arm ends at x = {tip}");
+    let along_arm = m
+        .mesh
+        .faces
+        .iter()
+        .filter(|f| f.iter().all(|&v| m.mesh.positions[v as usize][0] > 200.0))
+        .count();
+    assert!(along_arm > 20, "{along_arm} triangles on the outer arm");
+    bdmorph::compile(&m.mesh.positions, &m.mesh.faces).expect("a disk");
+}
+
+#[test]
+fn vertex_counts_follow_the_request() {
+    let image = generate::picture_subject(512);
+    for n in [300, 2000, 8000] {
+        let m = meshing::mesh_picture(
+            &image,
+            &PictureOptions::default(),
+            &MeshOptions::default().with_vertices(n),
+        )
+        .expect("meshes");
+        check(&m, n, meshing::DEFAULT_MIN_ANGLE);
+        assert_eq!((m.stats.pieces, m.stats.holes), (2, 1));
+    }
+}
+
+#[test]
+fn the_tolerance_sets_the_outline() {
+    let image = picture(300, 300, |p| circle(p, [150.0, 150.0], 130.0));
+    let coarse =
+        meshing::picture_outline(&image, &PictureOptions::default(), Some(3.0)).expect("traces");
+    let fine =
+        meshing::picture_outline(&image, &PictureOptions::default(), Some(0.25)).expect("traces");
+    assert!(coarse.outline.vertices.len() * 2 < fine.outline.vertices.len());
+    for tolerance in [0.25, 3.0] {
+        let options = MeshOptions::default()
+            .with_vertices(800)
+            .with_tolerance(tolerance);
+        let m =
+            meshing::mesh_picture(&image, &PictureOptions::default(), &options).expect("meshes");
+        check_boundary(&image, &PictureOptions::default(), &m, tolerance);
+    }
+}
+
+#[test]
+fn opaque_pictures_need_a_background_or_a_threshold() {
+    // A dark disk on a white background, no transparency.
+    let mut image = picture(200, 200, |p| circle(p, [100.0, 100.0], 70.0));
+    for px in image.rgba.chunks_exact_mut(4) {
+        let a = f64::from(px[3]) / 255.0;
+        for c in &mut px[..3] {
+            *c = (a * 0.3 * f64::from(*c) + (1.0 - a) * 255.0).round() as u8;
+        }
+        px[3] = 255;
+    }
+    let e = meshing::mesh_picture(&image, &PictureOptions::default(), &MeshOptions::default())
+        .unwrap_err();
+    assert!(matches!(e, MeshingError::NoTransparency { .. }), "{e}");
+    for picture in [
+        PictureOptions::default().with_background(Background::Colour([255, 255, 255])),
+        PictureOptions::default().with_background(Background::Auto),
+        PictureOptions::default().with_threshold(0.5),
+    ] {
+        let m = meshing::mesh_picture(&image, &picture, &MeshOptions::default().with_vertices(600))
+            .expect("meshes");
+        check(&m, 600, meshing::DEFAULT_MIN_ANGLE);
+        assert_eq!(topology(&m.mesh), (1, 1));
+        let area: f64 = m.mesh.faces.iter().map(|f| m.mesh.signed_area(f)).sum();
+        let disk = std::f64::consts::PI * 70.0 * 70.0;
+        assert!(
+            (area - disk).abs() < 0.03 * disk,
+            "area {area} for {disk} ({picture:?})"
+        );
+    }
+}
+
+#[test]
+fn empty_transparent_and_speck_pictures_are_refused() {
+    let empty = Image {
+        width: 0,
+        height: 0,
+        rgba: Vec::new(),
+    };
+    let e = meshing::mesh_picture(&empty, &PictureOptions::default(), &MeshOptions::default())
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MeshingError::NoSubject {
+                reason: NoSubject::Empty,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let clear = picture(50, 50, |_| 10.0);
+    let e = meshing::mesh_picture(&clear, &PictureOptions::default(), &MeshOptions::default())
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MeshingError::NoSubject {
+                reason: NoSubject::Transparent { .. },
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // Specks of a pixel or two: too small for a tolerance of 1 pixel.
+    let specks = picture(50, 50, |p| {
+        circle(p, [10.5, 10.5], 0.8).min(circle(p, [30.5, 40.5], 1.1))
+    });
+    let e = meshing::mesh_picture(&specks, &PictureOptions::default(), &MeshOptions::default())
+        .unwrap_err();
+    match e {
+        MeshingError::TooSmall {
+            loops, tolerance, ..
+        } => assert_eq!((loops, tolerance), (2, 1.0)),
+        other => panic!("{other}"),
+    }
+    // A finer tolerance keeps them.
+    let m = meshing::mesh_picture(
+        &specks,
+        &PictureOptions::default(),
+        &MeshOptions::default().with_vertices(20).with_tolerance(0.1),
+    )
+    .expect("meshes at 0.1 pixels");
+    assert_eq!(m.stats.pieces, 2);
+    // A speck beside a subject is left out, and counted.
+    let beside = picture(100, 100, |p| {
+        circle(p, [40.0, 50.0], 30.0).min(circle(p, [90.5, 90.5], 0.8))
+    });
+    let m = meshing::mesh_picture(
+        &beside,
+        &PictureOptions::default(),
+        &MeshOptions::default().with_vertices(300),
+    )
+    .expect("meshes");
+    assert_eq!((m.stats.pieces, m.stats.dropped_outlines), (1, 1));
+}
+
+#[test]
+fn an_svg_with_curves_and_a_hole() {
+    // A shape of lines, a cubic, a quadratic and an arc, with a circular hole of radius 10
+    // at (50, 40), inside a group with a transform (scale 2).
+    let text = r#"<?xml version="1.0"?>
+<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 200 200">
+  <g transform="scale(2)">
+    <path d="M 10 70 L 10 30 C 10 0, 90 0, 90 30 L 90 50 Q 90 70 70 70 A 20 20 0 0 1 30 70 Z"/>
+    <circle cx="50" cy="40" r="10"/>
+  </g>
+</svg>"#;
+    let tolerance = 0.05;
+    let outline = meshing::parse_svg(text, Some(tolerance)).expect("parses");
+    assert_eq!(outline.texture_frame, Some([0.0, 0.0, 200.0, 200.0]));
+    let m = meshing::mesh_outline(&outline, &MeshOptions::default().with_vertices(2500))
+        .expect("meshes");
+    check(&m, 2500, meshing::DEFAULT_MIN_ANGLE);
+    assert_eq!(topology(&m.mesh), (2, 1));
+    assert_eq!((m.stats.pieces, m.stats.holes), (1, 1));
+    // The hole's boundary: scaled by 2, centre (100, 80) in the file, y flipped to 200 - 80;
+    // every vertex on it within the tolerance of the circle of radius 20.
+    let mut on_hole = 0;
+    for e in boundary_edges(&m.mesh) {
+        let p = m.mesh.positions[e[0] as usize];
+        let r = (p[0] - 100.0).hypot(p[1] - 120.0);
+        if r < 30.0 {
+            on_hole += 1;
+            assert!(
+                (r - 20.0).abs() <= tolerance + 1e-9,
+                "hole vertex at radius {r}"
+            );
+        }
+    }
+    assert!(on_hole >= 20, "{on_hole} vertices around the hole");
+    // The cubic's top (file y = 2 * 7.5 = 15) is at the top of the mesh (y = 200 - 15), the
+    // arc's bottom (file y = 2 * 90) at its bottom.
+    let top = m.mesh.positions.iter().map(|p| p[1]).fold(0.0, f64::max);
+    assert!((top - 185.0).abs() < tolerance + 1e-9, "top at {top}");
+    let bottom = m
+        .mesh
+        .positions
+        .iter()
+        .map(|p| p[1])
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        (bottom - 20.0).abs() < tolerance + 1e-9,
+        "bottom at {bottom}"
+    );
+    // Texture coordinates span the viewBox.
+    for (p, t) in m.mesh.positions.iter().zip(&m.texcoords.uv) {
+        assert!((t[0] - p[0] / 200.0).abs() < 1e-12 && (t[1] - p[1] / 200.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn self_intersecting_and_too_small_svg_outlines_are_refused() {
+    let crossing = r#"<svg viewBox="0 0 100 100">
+<rect x="10" y="10" width="50" height="50"/>
+<polygon points="50,50 90,50 90,90"/>
+</svg>"#;
+    let o = meshing::parse_svg(crossing, None).expect("parses");
+    let e = meshing::mesh_outline(&o, &MeshOptions::default()).unwrap_err();
+    match &e {
+        MeshingError::SelfIntersection {
+            place, contact, at, ..
+        } => {
+            assert_eq!(place.line, Some(2));
+            assert_eq!(*contact, Contact::Cross);
+            assert_eq!(*at, [60.0, 50.0]);
+        }
+        other => panic!("{other}"),
+    }
+    assert_eq!(
+        e.in_file("crossing.svg").to_string(),
+        "crossing.svg:2: <rect> segment 1 crosses <polygon> segment 0 (line 3) near (60, 50)"
+    );
+    let tiny = r#"<svg><rect width="100" height="100"/><circle cx="50" cy="50" r="0.05"/></svg>"#;
+    let e = meshing::parse_svg(tiny, Some(0.5)).unwrap_err();
+    assert!(matches!(e, MeshingError::LoopTooSmall { .. }), "{e}");
+}
+
+/// A square `[0, 4]^2` with a square `[1, 3]^2` inside, numbered from 1; `holes` hole points.
+fn nested_squares(holes: &str) -> String {
+    format!(
+        "# two squares\n8 2 0 0\n1 0 0\n2 4 0\n3 4 4\n4 0 4\n5 1 1\n6 3 1\n7 3 3\n8 1 3\n\
+         8 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n5 5 6\n6 6 7\n7 7 8\n8 8 5\n{holes}"
+    )
+}
+
+#[test]
+fn poly_holes_come_from_hole_points() {
+    let options = MeshOptions::default().with_vertices(600);
+    // With a hole point, the inner square is a hole (refined by parity, outside skipped).
+    let holed = meshing::parse_poly(&nested_squares("1\n1 2 2\n")).expect("parses");
+    let m = meshing::mesh_outline(&holed, &options).expect("meshes");
+    check(&m, 600, meshing::DEFAULT_MIN_ANGLE);
+    assert_eq!(topology(&m.mesh), (2, 1));
+    let area: f64 = m.mesh.faces.iter().map(|f| m.mesh.signed_area(f)).sum();
+    assert!((area - 12.0).abs() < 1e-9, "area {area}");
+    // Without one, as in Triangle, the inner square is part of the shape (an inner boundary):
+    // everything is refined, then the outside removed.
+    let filled = meshing::parse_poly(&nested_squares("0\n")).expect("parses");
+    let m = meshing::mesh_outline(&filled, &options).expect("meshes");
+    check(&m, 600, meshing::DEFAULT_MIN_ANGLE);
+    assert_eq!(topology(&m.mesh), (1, 1));
+    let area: f64 = m.mesh.faces.iter().map(|f| m.mesh.signed_area(f)).sum();
+    assert!((area - 16.0).abs() < 1e-9, "area {area}");
+    // The inner square's segments are kept as edges: 8 units of edges lie along them.
+    let mut edges: Vec<(u32, u32)> = m
+        .mesh
+        .faces
+        .iter()
+        .flat_map(|f| (0..3).map(move |k| (f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3]))))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let on_side = |p: [f64; 2], q: [f64; 2]| {
+        let inside = |x: f64| (1.0..=3.0).contains(&x);
+        ((p[0] == q[0] && (p[0] == 1.0 || p[0] == 3.0)) && inside(p[1]) && inside(q[1]))
+            || ((p[1] == q[1] && (p[1] == 1.0 || p[1] == 3.0)) && inside(p[0]) && inside(q[0]))
+    };
+    let along: f64 = edges
+        .iter()
+        .map(|&(a, b)| (m.mesh.positions[a as usize], m.mesh.positions[b as usize]))
+        .filter(|&(p, q)| on_side(p, q))
+        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+        .sum();
+    assert!(
+        (along - 8.0).abs() < 1e-9,
+        "{along} units of edges along the inner square"
+    );
+    // Texture coordinates: the bounding box as a square.
+    for (p, t) in m.mesh.positions.iter().zip(&m.texcoords.uv) {
+        assert!((t[0] - p[0] / 4.0).abs() < 1e-12 && (t[1] - p[1] / 4.0).abs() < 1e-12);
+    }
+    // A hole point outside every region changes nothing; hole points in both regions leave
+    // nothing.
+    let none = meshing::parse_poly(&nested_squares("2\n1 2 2\n2 0.5 0.5\n")).expect("parses");
+    let e = meshing::mesh_outline(&none, &options).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MeshingError::NothingInside {
+                hole_points: true,
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn poly_errors_name_their_line() {
+    let bad = nested_squares("0\n").replace("6 6 7", "6 6 9");
+    let e = meshing::parse_poly(&bad)
+        .unwrap_err()
+        .in_file("squares.poly");
+    assert_eq!(e.line(), Some(17));
+    assert_eq!(
+        e.to_string(),
+        "squares.poly:17: segment 6 refers to vertex 9, but the vertices are numbered 1 to 8"
+    );
+    // Crossing segments: name both and their lines.
+    let crossing = nested_squares("0\n").replace("5 1 1\n", "5 1 -1\n");
+    let o = meshing::parse_poly(&crossing).expect("parses");
+    let e = meshing::mesh_outline(&o, &MeshOptions::default())
+        .unwrap_err()
+        .in_file("squares.poly");
+    assert_eq!(
+        e.to_string(),
+        "squares.poly:12: segment 1 crosses segment 5 (line 16) near (2, 0)"
+    );
+}
+
+#[test]
+fn only_a_sharper_corner_of_the_outline_keeps_smaller_angles() {
+    // A wedge with a 15 degree tip at the origin and a round back of radius 100: no
+    // triangulation can have angles above 15 degrees at the tip, and refinement leaves the
+    // few triangles nearest it alone.
+    let half = 7.5f64.to_radians();
+    let mut wedge = vec![[0.0, 0.0]];
+    wedge.extend((0..=20).map(|i| {
+        let a = -half + 2.0 * half * f64::from(i) / 20.0;
+        [100.0 * a.cos(), 100.0 * a.sin()]
+    }));
+    let outline = meshing::Outline::from_loops(&[wedge]);
+    for n in [200, 2000] {
+        let m = meshing::mesh_outline(&outline, &MeshOptions::default().with_vertices(n))
+            .expect("meshes");
+        let skinny: Vec<&[u32; 3]> = m
+            .mesh
+            .faces
+            .iter()
+            .filter(|f| {
+                let one = PlanarMesh {
+                    positions: f.map(|v| m.mesh.positions[v as usize]).to_vec(),
+                    faces: vec![[0, 1, 2]],
+                };
+                meshing::min_angle(&one) < meshing::DEFAULT_MIN_ANGLE
+            })
+            .collect();
+        assert!(
+            !skinny.is_empty() && skinny.len() <= 4,
+            "{} skinny",
+            skinny.len()
+        );
+        for f in skinny {
+            let near = f
+                .iter()
+                .map(|&v| m.mesh.positions[v as usize][0].hypot(m.mesh.positions[v as usize][1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(near < 10.0, "a skinny triangle {near} from the tip");
+        }
+        assert!(m.stats.min_angle > 14.0, "{}", m.stats.min_angle);
+        assert!(m.mesh.faces.iter().all(|f| m.mesh.signed_area(f) > 0.0));
+    }
+}

@@ -1,0 +1,308 @@
+//! `bdmorph mesh` on the command line: a picture meshed, deformed and morphed end to end with
+//! the picture as texture; outline inputs; statistics; one-line errors that write nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use bdmorph::generate::{self, capsule_distance};
+use bdmorph::render::raster::{decode_image, encode_png};
+use bdmorph::render::Image;
+use bdmorph::PlanarMesh;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+}
+
+/// A fresh, empty directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bdmorph-mesh-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn save(dir: &Path, name: &str, image: &Image) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, encode_png(image).expect("encodes")).expect("writes");
+    path
+}
+
+/// Runs a command that must succeed, in `dir`; returns its stdout.
+fn succeeds(cmd: &mut Command, dir: &Path) -> String {
+    let r = cmd.current_dir(dir).output().expect("runs");
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    String::from_utf8(r.stdout).expect("utf8")
+}
+
+/// Runs a command that must fail, writing nothing into `dir`; returns its one line of stderr.
+fn fails_writing_nothing(cmd: &mut Command, dir: &Path) -> String {
+    let listing = || {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .expect("dir")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let before = listing();
+    let r = cmd.current_dir(dir).output().expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(r.stdout.is_empty(), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(listing(), before, "{err}");
+    err
+}
+
+/// Mean of a channel over the opaque pixels of `img` in the given part (`x`, `y` in [0, 1]).
+fn mean_channel(img: &Image, channel: usize, part: impl Fn(f64, f64) -> bool) -> f64 {
+    let (mut sum, mut n) = (0.0, 0.0);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let i = 4 * (y * img.width + x) as usize;
+            let p = &img.rgba[i..i + 4];
+            let (u, v) = (
+                f64::from(x) / f64::from(img.width),
+                f64::from(y) / f64::from(img.height),
+            );
+            if p[3] == 255 && part(u, v) {
+                sum += f64::from(p[channel]);
+                n += 1.0;
+            }
+        }
+    }
+    assert!(n > 100.0, "{n} opaque pixels");
+    sum / n
+}
+
+#[test]
+fn a_picture_meshed_deformed_and_morphed_with_its_texture() {
+    let dir = scratch("end-to-end");
+    // A wide oval: a disk-topology subject, lighter at the top and bluer on the left.
+    let (w, h) = (320, 200);
+    let picture = generate::picture(w, h, |x, y| {
+        capsule_distance([x, y], [110.0, 100.0], [210.0, 100.0], 70.0)
+    });
+    save(&dir, "pic.png", &picture);
+    succeeds(
+        bin().args(["mesh", "pic.png", "--vertices", "700", "-o", "m.obj"]),
+        &dir,
+    );
+    let (mesh, texcoords) = PlanarMesh::read_textured(&dir.join("m.obj")).expect("reads");
+    let texcoords = texcoords.expect("vt lines");
+    assert!(mesh.positions.len().abs_diff(700) < 70);
+    assert_eq!(texcoords.uv.len(), mesh.positions.len());
+    for (p, t) in mesh.positions.iter().zip(&texcoords.uv) {
+        assert!((t[0] - p[0] / f64::from(w)).abs() < 1e-9);
+        assert!((t[1] - p[1] / f64::from(h)).abs() < 1e-9);
+    }
+    // Handles: the four leftmost vertices stay, the four rightmost rise a little.
+    let mut by_x: Vec<usize> = (0..mesh.positions.len()).collect();
+    by_x.sort_by(|&a, &b| mesh.positions[a][0].total_cmp(&mesh.positions[b][0]));
+    let n = by_x.len();
+    let mut deform = bin();
+    deform.arg("deform").arg("m.obj");
+    for (k, &v) in by_x[..4].iter().chain(&by_x[n - 4..]).enumerate() {
+        let p = mesh.positions[v];
+        let lift = if k < 4 { 0.0 } else { 20.0 };
+        deform
+            .arg("--pin")
+            .arg(format!("{v}:{},{}", p[0], p[1] + lift));
+    }
+    succeeds(
+        deform.args(["--max-distortion", "4", "-o", "posed.obj"]),
+        &dir,
+    );
+    let posed = PlanarMesh::read(&dir.join("posed.obj")).expect("reads");
+    assert_eq!(posed.faces, mesh.faces);
+    succeeds(
+        bin().args([
+            "morph",
+            "m.obj",
+            "posed.obj",
+            "--frames",
+            "5",
+            "--texture",
+            "pic.png",
+            "-o",
+            "out.gif",
+        ]),
+        &dir,
+    );
+    let gif = std::fs::File::open(dir.join("out.gif")).expect("written");
+    let mut decoder = gif::DecodeOptions::new()
+        .read_info(std::io::BufReader::new(gif))
+        .expect("a GIF");
+    let mut frames = 0;
+    while decoder.read_next_frame().expect("decodes").is_some() {
+        frames += 1;
+    }
+    assert_eq!(frames, 5);
+    succeeds(
+        bin().args([
+            "morph",
+            "m.obj",
+            "posed.obj",
+            "--frames",
+            "5",
+            "--format",
+            "png",
+            "--size",
+            "320x200",
+            "--texture",
+            "pic.png",
+            "-o",
+            "frames",
+        ]),
+        &dir,
+    );
+    // The first frame is the picture, upright: lighter at the top, bluer on the left; as the
+    // picture itself is.
+    let first = decode_image(&std::fs::read(dir.join("frames/frame_0000.png")).expect("a frame"))
+        .expect("a PNG");
+    for img in [&picture, &first] {
+        let (top, bottom) = (
+            mean_channel(img, 1, |_, v| v < 0.4),
+            mean_channel(img, 1, |_, v| v > 0.6),
+        );
+        assert!(
+            top > bottom + 10.0,
+            "green {top} at the top, {bottom} at the bottom"
+        );
+        let (left, right) = (
+            mean_channel(img, 2, |u, _| u < 0.4),
+            mean_channel(img, 2, |u, _| u > 0.6),
+        );
+        assert!(
+            left > right + 20.0,
+            "blue {left} on the left, {right} on the right"
+        );
+    }
+    assert!(dir.join("frames/frame_0004.png").is_file());
+}
+
+#[test]
+fn stats_and_outline_inputs() {
+    let dir = scratch("stats");
+    let picture = generate::picture_subject(256);
+    save(&dir, "subject.png", &picture);
+    let out = succeeds(
+        bin().args(["mesh", "subject.png", "--vertices", "900", "--stats"]),
+        &dir,
+    );
+    let line = out.trim();
+    assert_eq!(out.lines().count(), 1);
+    for key in [
+        "\"vertices\":",
+        "\"faces\":",
+        "\"pieces\":2,",
+        "\"holes\":1,",
+        "\"min_angle\":",
+        "\"seconds\":",
+    ] {
+        assert!(line.contains(key), "{key} in {line}");
+    }
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
+  <path d="M 10 90 C 10 10, 90 10, 90 90 Z"/>
+</svg>"#;
+    std::fs::write(dir.join("arch.svg"), svg).expect("writes");
+    succeeds(
+        bin().args([
+            "mesh",
+            "arch.svg",
+            "--vertices",
+            "400",
+            "-q",
+            "-o",
+            "arch.obj",
+        ]),
+        &dir,
+    );
+    let (arch, uv) = PlanarMesh::read_textured(&dir.join("arch.obj")).expect("reads");
+    assert!(uv.is_some());
+    bdmorph::compile(&arch.positions, &arch.faces).expect("a disk");
+    let poly = "4 2 0 0\n1 0 0\n2 3 0\n3 3 2\n4 0 2\n4 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n0\n";
+    std::fs::write(dir.join("box.poly"), poly).expect("writes");
+    succeeds(
+        bin().args(["mesh", "box.poly", "--vertices", "300", "-o", "box.png"]),
+        &dir,
+    );
+    decode_image(&std::fs::read(dir.join("box.png")).expect("written")).expect("a PNG");
+}
+
+#[test]
+fn bad_inputs_are_one_line_and_write_nothing() {
+    let dir = scratch("errors");
+    save(&dir, "clear.png", &generate::picture(40, 30, |_, _| 5.0));
+    let specks = generate::picture(60, 60, |x, y| {
+        capsule_distance([x, y], [10.5, 10.5], [10.5, 10.5], 0.8)
+    });
+    save(&dir, "specks.png", &specks);
+    let mut opaque = generate::picture(40, 30, |_, _| -5.0);
+    opaque.rgba.chunks_exact_mut(4).for_each(|p| p[3] = 255);
+    save(&dir, "opaque.png", &opaque);
+    std::fs::write(
+        dir.join("cross.svg"),
+        "<svg>\n<polygon points=\"0,0 10,10 10,0 0,4\"/>\n</svg>\n",
+    )
+    .expect("writes");
+    std::fs::write(
+        dir.join("bad.poly"),
+        "3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 4\n3 3 1\n0\n",
+    )
+    .expect("writes");
+    std::fs::write(dir.join("notes.txt"), "hello").expect("writes");
+    let cases: [(&[&str], &str); 8] = [
+        (
+            &["clear.png"],
+            "bdmorph: error: clear.png: the picture is fully transparent",
+        ),
+        (
+            &["specks.png"],
+            "bdmorph: error: specks.png: every outline is too small for the tolerance 1",
+        ),
+        (
+            &["opaque.png"],
+            "bdmorph: error: opaque.png: the picture has no transparent pixels: give --background COLOR",
+        ),
+        (
+            &["cross.svg"],
+            "bdmorph: error: cross.svg:2: <polygon> segment 0 crosses <polygon> segment 2 near (2.85714, 2.85714)",
+        ),
+        (
+            &["bad.poly"],
+            "bdmorph: error: bad.poly:7: segment 2 refers to vertex 4, but the vertices are numbered 1 to 3",
+        ),
+        (
+            &["notes.txt"],
+            "bdmorph: error: notes.txt: not a picture (.png, .jpg) or an outline (.poly, .svg)",
+        ),
+        (
+            &["clear.png", "--min-angle", "40"],
+            "bdmorph: error: --min-angle 40: degrees from 0 to 33",
+        ),
+        (
+            &["missing.png"],
+            "bdmorph: error: missing.png: cannot read:",
+        ),
+    ];
+    for (args, start) in cases {
+        let err = fails_writing_nothing(bin().arg("mesh").args(args).args(["-o", "out.obj"]), &dir);
+        assert!(err.starts_with(start), "{args:?}: {err}");
+    }
+    // --background makes the opaque picture a subject.
+    succeeds(
+        bin().args([
+            "mesh",
+            "opaque.png",
+            "--background",
+            "black",
+            "--vertices",
+            "100",
+            "-o",
+            "out.obj",
+        ]),
+        &dir,
+    );
+}

@@ -4,7 +4,7 @@ use std::io::Write;
 
 use bdmorph::Blend;
 
-use super::morph::{check_options, morph_options, read_inputs, write_frames};
+use super::morph::{check_options, check_size, morph_options, read_inputs, write_frames};
 use super::output::{self, Plan};
 use super::BlendArgs;
 
@@ -24,6 +24,7 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
     if plan.as_ref().is_some_and(|p| p.format.is_animation()) && !args.out.quiet {
         eprintln!("bdmorph: warning: a blend is one frame; the animation will hold only it");
     }
+    check_size(plan.as_ref(), &args.out)?;
     let inputs = read_inputs(&args.meshes, &args.out, plan.as_ref())?;
     let options = morph_options(&args.solver);
     let blend = match &args.solver.program {

@@ -215,6 +215,7 @@ fn demo_writes_frames() {
     for name in [
         "viewer.html",
         "morph.gif",
+        "morph.mp4",
         "frames.png",
         "source.obj",
         "target.obj",
@@ -311,6 +312,7 @@ fn every_output_format_is_written() {
         std::fs::read(&out).expect("written")
     };
     assert!(animation("m.gif").starts_with(b"GIF89a"));
+    assert_eq!(&animation("m.mp4")[4..8], b"ftyp");
     let page = String::from_utf8(animation("m.html")).expect("utf8");
     assert!(page.contains("<canvas") && !page.contains("<script src"));
     // Per-frame pictures in a directory.

@@ -4,7 +4,9 @@ use std::io::Write;
 
 use bdmorph::Blend;
 
-use super::morph::{check_options, listed, max_distance, morph_options, read_inputs, write_frames};
+use super::morph::{
+    check_options, check_size, listed, max_distance, morph_options, read_inputs, write_frames,
+};
 use super::output::{self, Plan};
 use super::BlendArgs;
 
@@ -24,6 +26,7 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
     if plan.as_ref().is_some_and(|p| p.format.is_animation()) && !args.out.quiet {
         eprintln!("bdmorph: warning: a blend is one frame; the animation will hold only it");
     }
+    check_size(plan.as_ref(), &args.out)?;
     let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
     let options = morph_options(&args.solver);
     let blend = match &args.solver.program {

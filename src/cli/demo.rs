@@ -60,6 +60,16 @@ fn gingerbread_texture(size: u32, mesh: &PlanarMesh) -> Image {
 
 pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     let times = times(None, Some(args.frames))?;
+    let mp4 = Plan::new(
+        &args.output.join("morph.mp4"),
+        Some(Format::Mp4),
+        times.len(),
+    )?;
+    if let Some(note) = mp4.check_size(args.size)? {
+        if !args.quiet {
+            eprintln!("bdmorph: note: {note}");
+        }
+    }
     let source = generate::figure(0.01);
     let target = generate::wave(&source, 1.0);
     let texcoords: TexCoords = source.normalized_texcoords();
@@ -97,7 +107,11 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
         title,
     };
     let mut files = Vec::new();
-    for (name, format) in [("viewer.html", Format::Html), ("morph.gif", Format::Gif)] {
+    for (name, format) in [
+        ("viewer.html", Format::Html),
+        ("morph.gif", Format::Gif),
+        ("morph.mp4", Format::Mp4),
+    ] {
         let plan = Plan::new(&out.join(name), Some(format), frames.len())?;
         files.extend(output::render(&plan, &look, &frames, || {})?);
     }

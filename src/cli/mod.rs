@@ -54,16 +54,18 @@ enum Command {
     ///
     /// The output format follows the extension of -o (or --format): .obj, .svg or .png for
     /// one frame (--t) or for a directory of frame_NNNN files (--frames, -o DIR; .obj by
-    /// default); .gif (an animated loop) or .html (a self-contained viewer with a slider)
-    /// hold all frames in one file. With --texture, PNG, GIF and HTML output is textured
-    /// through the source's `vt` (or its normalised positions when it has none), and OBJ
-    /// frames carry the source's `vt`.
+    /// default); .gif (an animated loop), .mp4 (an H.264 video, encoded in-process by
+    /// OpenH264; odd --size sides are padded with white to even, 16x16 to 3840x2160) or .html
+    /// (a self-contained viewer with a slider) hold all frames in one file. With --texture,
+    /// PNG, GIF, MP4 and HTML output is textured through the source's `vt` (or its normalised
+    /// positions when it has none), and OBJ frames carry the source's `vt`.
     ///
     /// Examples:
     ///   bdmorph morph man.obj man2.obj --t 0.5 -o half.obj
     ///   bdmorph morph man.obj man2.obj --frames 30 -o frames/
     ///   bdmorph morph man.obj man2.obj --frames 30 --format png --size 400x400 -o pngs/
     ///   bdmorph morph man.obj man2.obj --frames 60 -o morph.gif
+    ///   bdmorph morph man.obj man2.obj --frames 60 --fps 30 --size 1280x720 -o morph.mp4
     ///   bdmorph morph man.obj man2.obj --frames 60 --texture skin.png -o viewer.html
     ///   bdmorph morph man.obj man2.obj --frames 11 --stats
     ///   bdmorph morph man.obj man2.obj --program man.bdm --t 0.5 -o half.obj
@@ -210,7 +212,7 @@ enum Command {
     ///   bdmorph info man.obj
     #[command(verbatim_doc_comment)]
     Info(InfoArgs),
-    /// Morph a figure made in code and write a viewer, a GIF and a picture strip.
+    /// Morph a figure made in code and write a viewer, a GIF, an MP4 and a picture strip.
     ///
     /// A gingerbread figure is triangulated (constrained Delaunay, refined), posed waving by
     /// a smooth deformation, and morphed; the results go to DIR (default ./bdmorph-demo).
@@ -282,13 +284,13 @@ struct OutputArgs {
     /// Output format, instead of the extension of -o.
     #[arg(long, value_enum, value_name = "FORMAT")]
     format: Option<Format>,
-    /// Picture size for PNG, GIF and SVG output, as WxH.
+    /// Picture size for PNG, GIF, MP4 and SVG output, as WxH (MP4 pads odd sides to even).
     #[arg(long, value_name = "WxH", default_value = "800x800")]
     size: ImageSize,
-    /// An image (PNG or JPEG) to map onto the triangles in PNG, GIF and HTML output.
+    /// An image (PNG or JPEG) to map onto the triangles in PNG, GIF, MP4 and HTML output.
     #[arg(long, value_name = "IMAGE")]
     texture: Option<PathBuf>,
-    /// Colour the triangles of PNG, GIF, SVG and HTML output by their conformal distortion
+    /// Colour the triangles of PNG, GIF, MP4, SVG and HTML output by their conformal distortion
     /// from the first mesh (viridis, log scale from 1 to the largest over all frames).
     #[arg(
         long = "color-by",
@@ -297,7 +299,7 @@ struct OutputArgs {
         value_name = "WHAT"
     )]
     color_by: Option<ColorBy>,
-    /// Frames per second of GIF and HTML playback.
+    /// Frames per second of GIF, MP4 and HTML playback.
     #[arg(long, value_name = "FPS", default_value_t = 25)]
     fps: u32,
     /// Print one JSON object of statistics per frame on stdout.
@@ -620,7 +622,7 @@ struct DemoArgs {
     /// Number of frames.
     #[arg(long, value_name = "N", default_value_t = 40)]
     frames: usize,
-    /// Picture size of the GIF and of each picture of the strip, as WxH.
+    /// Picture size of the GIF, the MP4 and each picture of the strip, as WxH.
     #[arg(long, value_name = "WxH", default_value = "360x360")]
     size: ImageSize,
     /// Print nothing but errors.

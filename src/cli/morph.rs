@@ -70,6 +70,16 @@ pub(super) fn check_options(out: &OutputArgs, solver: &SolverArgs) -> Result<(),
     Ok(())
 }
 
+/// Checks that the output can hold pictures of `--size`, and says when they will be padded.
+pub(super) fn check_size(plan: Option<&Plan>, out: &OutputArgs) -> Result<(), String> {
+    if let Some(note) = plan.map(|p| p.check_size(out.size)).transpose()?.flatten() {
+        if !out.quiet {
+            eprintln!("bdmorph: note: {note}");
+        }
+    }
+    Ok(())
+}
+
 /// Reads every mesh (and the first one's texture coordinates) and the texture, warning about
 /// options the output does not use.
 pub(super) fn read_inputs(
@@ -95,10 +105,10 @@ pub(super) fn read_inputs(
     };
     let draws = plan.is_some_and(Plan::draws);
     if texture.is_some() && !draws && !out.quiet {
-        eprintln!("bdmorph: warning: --texture only affects PNG, GIF and HTML output");
+        eprintln!("bdmorph: warning: --texture only affects PNG, GIF, MP4 and HTML output");
     }
     if out.color_by.is_some() && !draws && !out.quiet {
-        eprintln!("bdmorph: warning: --color-by only affects PNG, GIF, SVG and HTML output");
+        eprintln!("bdmorph: warning: --color-by only affects PNG, GIF, MP4, SVG and HTML output");
     }
     Ok(Inputs {
         paths: meshes.to_vec(),
@@ -248,6 +258,7 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         Some(path) => Some(Plan::new(path, args.out.format, times.len())?),
         None => None,
     };
+    check_size(plan.as_ref(), &args.out)?;
     let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
     let options = morph_options(&args.solver);
     let program = match &args.solver.program {

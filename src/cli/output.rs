@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use bdmorph::io::{self, TexCoords};
-use bdmorph::render::{colour, html, raster, svg, Drawing, Image, ImageSize, Viewport};
+use bdmorph::render::{colour, html, raster, svg, video, Drawing, Image, ImageSize, Viewport};
 
 /// An output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -16,6 +16,8 @@ pub enum Format {
     Png,
     /// GIF: an animated loop of all frames.
     Gif,
+    /// MP4: an H.264 video of all frames (sides rounded up to even).
+    Mp4,
     /// HTML: a self-contained viewer with a slider and play/pause.
     Html,
 }
@@ -29,9 +31,10 @@ impl Format {
             "svg" => Ok(Format::Svg),
             "png" => Ok(Format::Png),
             "gif" => Ok(Format::Gif),
+            "mp4" => Ok(Format::Mp4),
             "html" | "htm" => Ok(Format::Html),
             other => Err(format!(
-                "{}: unknown output extension '.{other}' (use .obj, .svg, .png, .gif or .html, or --format)",
+                "{}: unknown output extension '.{other}' (use .obj, .svg, .png, .gif, .mp4 or .html, or --format)",
                 path.display()
             )),
         })
@@ -39,7 +42,7 @@ impl Format {
 
     /// Whether one file holds every frame.
     pub fn is_animation(self) -> bool {
-        matches!(self, Format::Gif | Format::Html)
+        matches!(self, Format::Gif | Format::Mp4 | Format::Html)
     }
 
     fn extension(self) -> &'static str {
@@ -48,6 +51,7 @@ impl Format {
             Format::Svg => "svg",
             Format::Png => "png",
             Format::Gif => "gif",
+            Format::Mp4 => "mp4",
             Format::Html => "html",
         }
     }
@@ -73,7 +77,7 @@ impl Plan {
         if directory && from_ext.is_some() {
             return Err(format!(
                 "{}: with --frames, -o names a directory for {} frames (frame_0000.{}, ...); \
-                 give a directory, or a .gif or .html file",
+                 give a directory, or a .gif, .mp4 or .html file",
                 path.display(),
                 format.extension(),
                 format.extension()
@@ -84,6 +88,28 @@ impl Plan {
             format,
             directory,
         })
+    }
+
+    /// Checks, before any frame is computed, that pictures of `size` can be written in this
+    /// format; returns a note when the size will be adjusted (MP4 rounds odd sides up).
+    pub fn check_size(&self, size: ImageSize) -> Result<Option<String>, String> {
+        if self.format != Format::Mp4 {
+            return Ok(None);
+        }
+        let (w, h) = video::video_size(size.width, size.height).map_err(|e| {
+            format!(
+                "{}: --size {}x{}: {e}",
+                self.path.display(),
+                size.width,
+                size.height
+            )
+        })?;
+        Ok(((w, h) != (size.width, size.height)).then(|| {
+            format!(
+                "H.264 needs even sides: the {}x{} pictures are padded with white to {w}x{h}",
+                size.width, size.height
+            )
+        }))
     }
 
     /// Whether the format draws pictures (and so can use a texture).
@@ -212,6 +238,16 @@ pub fn render(
             }
             let delay = (100 / look.fps.clamp(1, 100)) as u16;
             files.push((name(0), raster::encode_gif(&images, delay).map_err(err)?));
+        }
+        Format::Mp4 => {
+            let mut images = Vec::with_capacity(frames.len());
+            for (i, f) in frames.iter().enumerate() {
+                images.push(raster::render(&f.positions, &drawing(i), &view, look.size));
+                progress();
+            }
+            let bytes = video::encode_mp4(&images, look.fps)
+                .map_err(|e| format!("{}: {e}", name(0).display()))?;
+            files.push((name(0), bytes));
         }
         Format::Html => {
             let texture_png = match look.texture {

@@ -1,4 +1,5 @@
-//! Pictures of frames: rasterised PNG and GIF, SVG, and a self-contained HTML viewer.
+//! Pictures of frames: rasterised PNG and GIF, H.264 MP4 video, SVG, and a self-contained HTML
+//! viewer.
 //!
 //! All renderers share the types here. A [`Viewport`] is fixed for a whole animation (fit to
 //! every frame), so frames line up; world `y` points up, image `y` down.
@@ -8,6 +9,7 @@ pub mod html;
 pub mod raster;
 pub mod surface;
 pub mod svg;
+pub mod video;
 
 /// What to draw besides the positions: the triangles and, optionally, a texture mapped through
 /// per-corner texture coordinates.

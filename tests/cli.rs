@@ -217,6 +217,7 @@ fn demo_writes_frames() {
         "morph.gif",
         "morph.mp4",
         "frames.png",
+        "figure.png",
         "source.obj",
         "target.obj",
     ] {
@@ -230,6 +231,112 @@ fn demo_writes_frames() {
         strip.width > 4 * 80 && strip.height >= 80,
         "five pictures side by side"
     );
+}
+
+#[test]
+fn the_readme_path_from_a_picture_to_an_animation_works() {
+    // The README's four commands (fewer frames), then what each one promised.
+    let dir = scratch("picture-path");
+    let run = |args: &[&str]| {
+        let r = bin().args(args).current_dir(&dir).output().expect("runs");
+        assert!(
+            r.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        (
+            String::from_utf8(r.stdout).expect("utf8"),
+            String::from_utf8(r.stderr).expect("utf8"),
+        )
+    };
+    run(&["demo", "--frames", "3", "--size", "80x80", "-q"]);
+    let picture = bdmorph::render::raster::read_image(&dir.join("bdmorph-demo/figure.png"))
+        .expect("figure.png");
+    let transparent = picture.rgba.chunks(4).filter(|p| p[3] == 0).count();
+    let opaque = picture.rgba.chunks(4).filter(|p| p[3] == 255).count();
+    assert!(
+        transparent > 1000 && opaque > 1000,
+        "a subject on a transparent ground"
+    );
+    run(&["mesh", "bdmorph-demo/figure.png", "-o", "figure.obj", "-q"]);
+    let (_, err) = run(&[
+        "deform",
+        "figure.obj",
+        "--fix",
+        "165,30",
+        "--fix",
+        "265,30",
+        "--fix",
+        "210,480",
+        "--drag",
+        "405,345:345,455",
+        "--max-distortion",
+        "4",
+        "-o",
+        "wave.obj",
+    ]);
+    assert!(err.contains("--drag 405,345 is vertex "), "{err}");
+    let (stats, _) = run(&[
+        "morph",
+        "figure.obj",
+        "wave.obj",
+        "--frames",
+        "6",
+        "--texture",
+        "bdmorph-demo/figure.png",
+        "--stats",
+        "-o",
+        "wave.mp4",
+    ]);
+    assert_eq!(stats.lines().count(), 6);
+    assert!(
+        stats.lines().all(|l| l.contains("\"flipped_triangles\":0")),
+        "{stats}"
+    );
+    let video = std::fs::read(dir.join("wave.mp4")).expect("wave.mp4");
+    assert_eq!(&video[4..8], b"ftyp");
+    // The dragged vertex is where the drag put it; the mesh kept its texture coordinates.
+    let rest = bdmorph::io::read_mesh(&dir.join("figure.obj")).expect("figure.obj");
+    let posed = bdmorph::io::read_mesh(&dir.join("wave.obj")).expect("wave.obj");
+    assert!(rest.texcoords.is_some());
+    let v = err
+        .split("--drag 405,345 is vertex ")
+        .nth(1)
+        .and_then(|s| s.split([',', ' ']).next())
+        .and_then(|s| s.parse::<usize>().ok())
+        .expect("vertex");
+    let p = posed.positions[v];
+    assert!((p[0] - 345.0).hypot(p[1] - 455.0) < 1e-6, "{p:?}");
+    // Two handles on one vertex, or none at all, are refused.
+    let err = fails_writing_nothing(
+        bin().args([
+            "deform",
+            "figure.obj",
+            "--fix",
+            "165,30",
+            "--drag",
+            "165.5,30:170,40",
+            "--max-distortion",
+            "4",
+            "-o",
+            "twice.obj",
+        ]),
+        &dir,
+    );
+    assert!(err.contains("are both on vertex"), "{err}");
+    let r = bin()
+        .args([
+            "deform",
+            "figure.obj",
+            "--max-distortion",
+            "4",
+            "-o",
+            "none.obj",
+        ])
+        .current_dir(&dir)
+        .output()
+        .expect("runs");
+    assert!(!r.status.success() && !dir.join("none.obj").exists());
 }
 
 fn run_ok(cmd: &mut Command) -> std::process::Output {

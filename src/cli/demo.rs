@@ -58,6 +58,41 @@ fn gingerbread_texture(size: u32, mesh: &PlanarMesh) -> Image {
     }
 }
 
+/// The figure as a picture to start from (`bdmorph mesh figure.png`): the icing texture inside
+/// the outline, transparent outside, anti-aliased (3 x 3 samples per pixel).
+fn figure_picture(size: u32, mesh: &PlanarMesh) -> Image {
+    let mut picture = gingerbread_texture(size, mesh);
+    let outline = generate::figure_outline();
+    let (lo, hi) = mesh.bounds();
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let inside = |x: f64, y: f64| {
+        // Even-odd crossings of a ray to the right.
+        let mut odd = false;
+        for (i, a) in outline.iter().enumerate() {
+            let b = outline[(i + 1) % outline.len()];
+            if (a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]) {
+                odd = !odd;
+            }
+        }
+        odd
+    };
+    for row in 0..size {
+        for col in 0..size {
+            let mut hits = 0u32;
+            for sy in 0..3 {
+                for sx in 0..3 {
+                    let u = (f64::from(col) + (f64::from(sx) + 0.5) / 3.0) / f64::from(size);
+                    let v = 1.0 - (f64::from(row) + (f64::from(sy) + 0.5) / 3.0) / f64::from(size);
+                    hits += u32::from(inside(lo[0] + u * extent, lo[1] + v * extent));
+                }
+            }
+            let at = 4 * (row as usize * size as usize + col as usize) + 3;
+            picture.rgba[at] = (hits * 255 / 9) as u8;
+        }
+    }
+    picture
+}
+
 pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     let times = times(None, Some(args.frames))?;
     let mp4 = Plan::new(
@@ -134,6 +169,10 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     files.push((
         out.join("frames.png"),
         raster::encode_png(&strip).map_err(|e| e.to_string())?,
+    ));
+    files.push((
+        out.join("figure.png"),
+        raster::encode_png(&figure_picture(512, &source)).map_err(|e| e.to_string())?,
     ));
     for (name, mesh) in [("source.obj", &source), ("target.obj", &target)] {
         let mut bytes = Vec::new();

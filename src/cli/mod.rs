@@ -144,7 +144,10 @@ enum Command {
     Param(ParamArgs),
     /// Deform a planar mesh by handles, with every triangle's distortion bounded.
     ///
-    /// The vertices given by --pin move to their targets; the rest follows with a flip-free
+    /// The vertices given by --pin move to their targets (--drag X,Y:TX,TY moves the vertex
+    /// nearest (X, Y) to (TX, TY), and --fix X,Y keeps the vertex nearest (X, Y) where it
+    /// is: handles by place, for meshes whose vertex numbers nobody knows, such as those made
+    /// by `bdmorph mesh`); the rest follows with a flip-free
     /// map whose conformal distortion (largest over smallest singular value of each
     /// triangle's affine map) is at most --max-distortion, by the large-scale bounded
     /// distortion method (Kovalsky et al. 2015) from the identity. The result can be a
@@ -154,8 +157,9 @@ enum Command {
     ///
     /// -o OUT.obj writes `v x y 0` lines and the input's faces; .svg and .png draw it.
     ///
-    /// Example:
+    /// Examples:
     ///   bdmorph deform man.obj --pin 0:0,0 --pin 120:1.5,2 --max-distortion 3 -o posed.obj
+    ///   bdmorph deform figure.obj --fix 180,40 --drag 330,340:380,470 --max-distortion 4 -o wave.obj
     #[command(verbatim_doc_comment)]
     Deform(DeformArgs),
     /// Mesh a picture's subject, or an outline, into triangles ready to morph.
@@ -520,13 +524,42 @@ fn parse_pin(text: &str) -> Result<(u32, [f64; 2]), String> {
     Ok((v, [x, y]))
 }
 
+/// Parses `X,Y`: two finite numbers.
+fn parse_point(text: &str) -> Result<[f64; 2], String> {
+    let bad = || format!("'{text}' is not X,Y (two numbers)");
+    let (x, y) = text.split_once(',').ok_or_else(bad)?;
+    let x: f64 = x.trim().parse().map_err(|_| bad())?;
+    let y: f64 = y.trim().parse().map_err(|_| bad())?;
+    if !(x.is_finite() && y.is_finite()) {
+        return Err(bad());
+    }
+    Ok([x, y])
+}
+
+/// Parses `X,Y:TX,TY`: a place and its target.
+fn parse_drag(text: &str) -> Result<([f64; 2], [f64; 2]), String> {
+    let bad = |_| format!("drag '{text}' is not X,Y:TX,TY (a place, a colon, its target)");
+    let (from, to) = text.split_once(':').ok_or_else(|| bad(String::new()))?;
+    Ok((
+        parse_point(from).map_err(bad)?,
+        parse_point(to).map_err(bad)?,
+    ))
+}
+
 #[derive(Args, Debug)]
 struct DeformArgs {
     /// The planar mesh (OBJ or OFF, z = 0).
     mesh: PathBuf,
-    /// A handle: vertex V (0-based) moves to (X, Y); repeatable, at least one.
-    #[arg(long = "pin", value_name = "V:X,Y", value_parser = parse_pin, required = true, allow_hyphen_values = true)]
+    /// A handle: vertex V (0-based) moves to (X, Y); repeatable. At least one handle
+    /// (--pin, --drag or --fix) is needed.
+    #[arg(long = "pin", value_name = "V:X,Y", value_parser = parse_pin, required_unless_present_any = ["drags", "fixes"], allow_hyphen_values = true)]
     pins: Vec<(u32, [f64; 2])>,
+    /// A handle by place: the vertex nearest (X, Y) moves to (TX, TY); repeatable.
+    #[arg(long = "drag", value_name = "X,Y:TX,TY", value_parser = parse_drag, allow_hyphen_values = true)]
+    drags: Vec<([f64; 2], [f64; 2])>,
+    /// A handle by place: the vertex nearest (X, Y) stays where it is; repeatable.
+    #[arg(long = "fix", value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
+    fixes: Vec<[f64; 2]>,
     /// The bound K >= 1 on every triangle's conformal distortion.
     #[arg(long, value_name = "K")]
     max_distortion: f64,

@@ -502,6 +502,44 @@ fn picture(
     raster::strip(&[flat, checker], 2)
 }
 
+/// The handles: --pin's vertices, then --drag's and --fix's places turned into their
+/// nearest vertices (said on stderr unless quiet). Two handles on one vertex are refused.
+fn handles(args: &DeformArgs, positions: &[[f64; 2]]) -> Result<Vec<(u32, [f64; 2])>, String> {
+    let nearest = |p: [f64; 2]| -> u32 {
+        let d = |q: &[f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+        (0..positions.len())
+            .min_by(|&a, &b| d(&positions[a]).total_cmp(&d(&positions[b])))
+            .unwrap_or(0) as u32
+    };
+    let mut pins = args.pins.clone();
+    let mut picked = Vec::new();
+    for &(from, to) in &args.drags {
+        let v = nearest(from);
+        picked.push(format!("--drag {},{} is vertex {v}", from[0], from[1]));
+        pins.push((v, to));
+    }
+    for &at in &args.fixes {
+        let v = nearest(at);
+        picked.push(format!("--fix {},{} is vertex {v}", at[0], at[1]));
+        if let Some(&p) = positions.get(v as usize) {
+            pins.push((v, p));
+        }
+    }
+    let mut seen = std::collections::HashMap::new();
+    for (i, &(v, _)) in pins.iter().enumerate() {
+        if let Some(first) = seen.insert(v, i) {
+            return Err(format!(
+                "handles {first} and {i} (in the order --pin, --drag, --fix; 0-based) are both \
+                 on vertex {v}: give each vertex one handle"
+            ));
+        }
+    }
+    if !picked.is_empty() && !args.quiet {
+        eprintln!("bdmorph: {} (0-based)", picked.join(", "));
+    }
+    Ok(pins)
+}
+
 pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     let plan = match &args.output {
         Some(path) => Some(output::Plan::new(path, None, 1)?),
@@ -520,8 +558,9 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     let in_file = |e: bdmorph::param::ParamError| {
         bdmorph::Located::new(&args.mesh, &lines, &planar.faces, e).to_string()
     };
+    let pins = handles(&args, &planar.positions)?;
     let options = BoundedOptions::new(args.max_distortion).with_iterations(args.iterations);
-    let mut bd = BoundedDistortion::new(&mesh, &args.pins, options).map_err(in_file)?;
+    let mut bd = BoundedDistortion::new(&mesh, &pins, options).map_err(in_file)?;
     let mut uv = planar.positions.clone();
     let report = run_bounded(
         &mut bd,

@@ -37,6 +37,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod deform;
 pub mod distortion;
 pub mod generate;
 pub mod geodesic;

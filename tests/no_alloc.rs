@@ -129,3 +129,24 @@ fn newton_iterations_and_frames_do_not_allocate() {
     let during = allocations() - before;
     assert_eq!(during, 0, "{during} allocations over 5 geodesic queries");
 }
+
+#[test]
+fn a_drag_does_not_allocate() {
+    let rest = generate::disk(20, 0.2);
+    let n = rest.positions.len() as u32;
+    let mut pose =
+        bdmorph::deform::Deformer::new(&rest, bdmorph::deform::Method::arap()).expect("set up");
+    pose.set_pins(&[0, n - 1, n - 7]).expect("pins");
+    let mut targets: Vec<[f64; 2]> = [0, n - 1, n - 7]
+        .iter()
+        .map(|&v| rest.positions[v as usize])
+        .collect();
+    pose.drag(&targets).expect("first drag");
+    for step in 1..=5 {
+        targets[1][0] += 0.01 * f64::from(step);
+        let before = allocations();
+        let report = pose.drag(&targets).expect("drag");
+        assert_eq!(allocations(), before, "drag {step} allocated");
+        assert!(report.iterations >= 1);
+    }
+}

@@ -155,11 +155,15 @@ enum Command {
     /// those pins, the command says so and names the worst triangles (exit code 1; the
     /// closest map found is still written).
     ///
+    /// --method arap poses as rigidly as possible instead (hard pins, local/global iterations
+    /// on a prefactored Laplacian; no distortion bound, flipped triangles reported).
+    ///
     /// -o OUT.obj writes `v x y 0` lines and the input's faces; .svg and .png draw it.
     ///
     /// Examples:
     ///   bdmorph deform man.obj --pin 0:0,0 --pin 120:1.5,2 --max-distortion 3 -o posed.obj
     ///   bdmorph deform figure.obj --fix 180,40 --drag 330,340:380,470 --max-distortion 4 -o wave.obj
+    ///   bdmorph deform figure.obj --method arap --fix 180,40 --drag 330,340:380,470 -o wave.obj
     #[command(verbatim_doc_comment)]
     Deform(DeformArgs),
     /// Mesh a picture's subject, or an outline, into triangles ready to morph.
@@ -524,6 +528,15 @@ fn parse_pin(text: &str) -> Result<(u32, [f64; 2]), String> {
     Ok((v, [x, y]))
 }
 
+/// `deform --method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum DeformMethod {
+    /// Bounded distortion (Kovalsky et al. 2015), every triangle's distortion at most K.
+    Bounded,
+    /// As-rigid-as-possible with hard pins (local/global).
+    Arap,
+}
+
 /// Parses `X,Y`: two finite numbers.
 fn parse_point(text: &str) -> Result<[f64; 2], String> {
     let bad = || format!("'{text}' is not X,Y (two numbers)");
@@ -560,12 +573,17 @@ struct DeformArgs {
     /// A handle by place: the vertex nearest (X, Y) stays where it is; repeatable.
     #[arg(long = "fix", value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
     fixes: Vec<[f64; 2]>,
-    /// The bound K >= 1 on every triangle's conformal distortion.
-    #[arg(long, value_name = "K")]
-    max_distortion: f64,
-    /// The most iterations.
-    #[arg(long, value_name = "N", default_value_t = 5000)]
-    iterations: u32,
+    /// How the mesh follows the handles: bounded (bounded distortion, needs
+    /// --max-distortion) or arap (as-rigid-as-possible with hard pins; no bound, flips
+    /// reported).
+    #[arg(long, value_enum, default_value_t = DeformMethod::Bounded)]
+    method: DeformMethod,
+    /// The bound K >= 1 on every triangle's conformal distortion (--method bounded).
+    #[arg(long, value_name = "K", required_if_eq("method", "bounded"))]
+    max_distortion: Option<f64>,
+    /// The most iterations (default 5000 for bounded, 1000 local/global steps for arap).
+    #[arg(long, value_name = "N")]
+    iterations: Option<u32>,
     /// Output: .obj, .svg or .png.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,

@@ -540,6 +540,59 @@ fn handles(args: &DeformArgs, positions: &[[f64; 2]]) -> Result<Vec<(u32, [f64; 
     Ok(pins)
 }
 
+/// A pose, why its bound was not met (if it was not), and a one-line summary.
+type Posed = (Vec<[f64; 2]>, Option<String>, String);
+
+/// `deform --method arap`: the pose, nothing unmet (ARAP has no bound to miss), and a summary;
+/// `--stats` prints the method, time, largest conformal distortion, flips and pin residual.
+fn arap_pose(
+    args: &DeformArgs,
+    planar: &bdmorph::PlanarMesh,
+    pins: &[(u32, [f64; 2])],
+) -> Result<Posed, String> {
+    use bdmorph::deform::{ArapOptions, Deformer, Method};
+    let started = std::time::Instant::now();
+    let options = ArapOptions::default()
+        .with_iterations(args.iterations.unwrap_or(1000))
+        .with_tolerance(1e-10);
+    let mut pose = Deformer::new(planar, Method::Arap(options))
+        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let vertices: Vec<u32> = pins.iter().map(|p| p.0).collect();
+    let targets: Vec<[f64; 2]> = pins.iter().map(|p| p.1).collect();
+    pose.set_pins(&vertices)
+        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let report = pose
+        .drag(&targets)
+        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let rest = bdmorph::distortion::RestShape::new(&planar.positions, &planar.faces);
+    let mut each = vec![0.0; planar.faces.len()];
+    let distortion = rest.distortion_into(pose.positions(), &mut each);
+    if args.stats {
+        let json = format!(
+            "{{\"method\":\"arap\",\"iterations\":{},\"energy\":{:e},\"max_conformal_distortion\":{},\"flipped_triangles\":{},\"pin_residual\":{:e},\"seconds\":{:e}}}",
+            report.iterations,
+            report.energy,
+            if distortion.is_finite() { distortion.to_string() } else { "null".into() },
+            report.flipped_triangles,
+            report.pin_residual,
+            seconds
+        );
+        writeln!(std::io::stdout().lock(), "{json}").map_err(|e| e.to_string())?;
+    }
+    if report.flipped_triangles > 0 && !args.quiet {
+        eprintln!(
+            "bdmorph: warning: {} flipped triangles (ARAP does not prevent them; --method bounded does)",
+            report.flipped_triangles
+        );
+    }
+    let summary = format!(
+        "arap, {} iterations in {seconds:.2} s; largest distortion {distortion:.4}, {} flipped",
+        report.iterations, report.flipped_triangles
+    );
+    Ok((pose.positions().to_vec(), None, summary))
+}
+
 pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     let plan = match &args.output {
         Some(path) => Some(output::Plan::new(path, None, 1)?),
@@ -558,21 +611,40 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     let in_file = |e: bdmorph::param::ParamError| {
         bdmorph::Located::new(&args.mesh, &lines, &planar.faces, e).to_string()
     };
+    if args.method == super::DeformMethod::Bounded && args.max_distortion.is_none() {
+        return Err("--method bounded (the default) needs --max-distortion K".into());
+    }
     let pins = handles(&args, &planar.positions)?;
-    let options = BoundedOptions::new(args.max_distortion).with_iterations(args.iterations);
-    let mut bd = BoundedDistortion::new(&mesh, &pins, options).map_err(in_file)?;
-    let mut uv = planar.positions.clone();
-    let report = run_bounded(
-        &mut bd,
-        &mut uv,
-        args.iterations,
-        "deforming",
-        args.quiet,
-        args.stats,
-        &in_file,
-    )?;
-    let line = |f| lines.face_line(f);
-    let unmet = (!report.converged).then(|| unmet_message(&report, args.max_distortion, &line));
+    let (uv, unmet, summary) = match args.method {
+        super::DeformMethod::Arap => arap_pose(&args, &planar, &pins)?,
+        super::DeformMethod::Bounded => {
+            let k = args.max_distortion.unwrap_or(f64::NAN);
+            let iterations = args.iterations.unwrap_or(5000);
+            let options = BoundedOptions::new(k).with_iterations(iterations);
+            let mut bd = BoundedDistortion::new(&mesh, &pins, options).map_err(in_file)?;
+            let mut uv = planar.positions.clone();
+            let report = run_bounded(
+                &mut bd,
+                &mut uv,
+                iterations,
+                "deforming",
+                args.quiet,
+                args.stats,
+                &in_file,
+            )?;
+            let line = |f| lines.face_line(f);
+            let unmet = (!report.converged).then(|| unmet_message(&report, k, &line));
+            let summary = format!(
+                "{} iterations in {:.2} s; largest distortion {:.4}, {} inverted, constraints met to {:.1e}",
+                report.iterations,
+                report.seconds,
+                report.max_distortion,
+                report.inverted,
+                report.constraint_error
+            );
+            (uv, unmet, summary)
+        }
+    };
     if let Some(plan) = plan {
         let title = format!("bdmorph deform: {}", args.mesh.display());
         let look = output::Look {
@@ -592,15 +664,7 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
         let files = output::render(&plan, &look, &frames, || {})?;
         output::write(&plan, &files)?;
         if !args.quiet {
-            eprintln!(
-                "wrote {} ({} iterations in {:.2} s; largest distortion {:.4}, {} inverted, constraints met to {:.1e})",
-                plan.path.display(),
-                report.iterations,
-                report.seconds,
-                report.max_distortion,
-                report.inverted,
-                report.constraint_error
-            );
+            eprintln!("wrote {} ({summary})", plan.path.display());
         }
     }
     unmet.map_or(Ok(()), Err)

@@ -30,7 +30,7 @@
 
 pub mod bounded;
 pub mod energy;
-mod frames;
+pub(crate) mod frames;
 mod linear;
 mod local_global;
 mod newton;

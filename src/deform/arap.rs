@@ -15,8 +15,7 @@ use bdmorph_cholesky::Cholesky;
 
 use super::{DeformError, DragReport};
 use crate::param::frames::Frames;
-
-const NONE: u32 = u32::MAX;
+use crate::param::local_global::{fit_each, free_laplacian, global_rhs, weighted_edges, Fit, NONE};
 
 /// Options of [`super::Method::Arap`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,17 +68,7 @@ pub(crate) struct Arap {
 
 impl Arap {
     pub(crate) fn new(frames: &Frames, n: usize, options: ArapOptions) -> Arap {
-        let wdx = (0..frames.len())
-            .map(|f| {
-                let x = frames.local[f];
-                let mut out = [[0.0; 2]; 3];
-                for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
-                    let w = frames.cot[f][corner];
-                    out[corner] = [w * (x[i][0] - x[j][0]), w * (x[i][1] - x[j][1])];
-                }
-                out
-            })
-            .collect();
+        let wdx = weighted_edges(frames);
         Arap {
             options,
             index: vec![NONE; n],
@@ -105,48 +94,14 @@ impl Arap {
                 k += 1;
             }
         }
-        let mut pairs: Vec<(u32, u32)> = (0..k).map(|i| (i, i)).collect();
-        let mut vals: Vec<f64> = vec![0.0; k as usize];
-        for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
-            for (corner, (i, j)) in [(b, c), (c, a), (a, b)].into_iter().enumerate() {
-                let w = frames.cot[f][corner];
-                let (ii, jj) = (self.index[i as usize], self.index[j as usize]);
-                for x in [ii, jj] {
-                    if x != NONE {
-                        pairs.push((x, x));
-                        vals.push(w);
-                    }
-                }
-                if ii != NONE && jj != NONE {
-                    pairs.push((ii.max(jj), ii.min(jj)));
-                    vals.push(-w);
-                }
-            }
-        }
         self.chol = if k > 0 {
-            Some(Cholesky::assemble(k as usize, &pairs, &vals, 2)?)
+            Some(free_laplacian(frames, &self.index, k)?)
         } else {
             None
         };
         self.rhs = vec![0.0; 2 * k as usize];
         self.pins = pins.to_vec();
         Ok(())
-    }
-
-    /// The local step: each triangle's closest rotation; returns the ARAP energy of `uv`
-    /// (area-weighted mean of `|J − R|²`).
-    fn fit(&mut self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
-        let mut energy = 0.0;
-        for (f, l) in self.l.iter_mut().enumerate() {
-            let [[a, b], [c, d]] = frames.gradient(f, uv);
-            let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
-            let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
-            let q = (e * e + h * h).sqrt();
-            energy += frames.area[f] * (2.0 * (q - 1.0) * (q - 1.0) + 2.0 * (fq * fq + g * g));
-            let (p, s) = if q > 0.0 { (e / q, h / q) } else { (1.0, 0.0) };
-            *l = [[p, -s], [s, p]];
-        }
-        energy / frames.total_area
     }
 
     pub(crate) fn drag(
@@ -176,37 +131,11 @@ impl Arap {
         let mut last_change = 0.0;
         while iterations < self.options.iterations.max(1) {
             iterations += 1;
-            self.fit(frames, uv);
+            fit_each(frames, uv, Fit::Rotation, &mut self.l);
             let Some(chol) = self.chol.as_mut() else {
                 break;
             };
-            self.rhs.fill(0.0);
-            for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
-                let l = self.l[f];
-                let vs = [a, b, c];
-                for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
-                    let wdx = self.wdx[f][corner];
-                    let w = frames.cot[f][corner];
-                    let ldx = [
-                        l[0][0] * wdx[0] + l[0][1] * wdx[1],
-                        l[1][0] * wdx[0] + l[1][1] * wdx[1],
-                    ];
-                    for (v, other, sign) in [(vs[i], vs[j], 1.0), (vs[j], vs[i], -1.0)] {
-                        let iv = self.index[v as usize];
-                        if iv == NONE {
-                            continue;
-                        }
-                        let iv = iv as usize;
-                        self.rhs[iv] += sign * ldx[0];
-                        self.rhs[k + iv] += sign * ldx[1];
-                        if self.index[other as usize] == NONE {
-                            let pin = uv[other as usize];
-                            self.rhs[iv] += w * pin[0];
-                            self.rhs[k + iv] += w * pin[1];
-                        }
-                    }
-                }
-            }
+            global_rhs(frames, &self.l, &self.wdx, &self.index, uv, &mut self.rhs);
             chol.solve_in_place(&mut self.rhs, 2)?;
             last_change = 0.0f64;
             for (v, out) in uv.iter_mut().enumerate() {
@@ -221,7 +150,7 @@ impl Arap {
                 break;
             }
         }
-        let energy = self.fit(frames, uv);
+        let energy = fit_each(frames, uv, Fit::Rotation, &mut self.l);
         let pin_residual = self
             .pins
             .iter()

@@ -20,7 +20,8 @@ use bdmorph_cholesky::Cholesky;
 use super::frames::Frames;
 use super::ParamError;
 
-const NONE: u32 = u32::MAX;
+/// Marks a pinned vertex in a row numbering.
+pub(crate) const NONE: u32 = u32::MAX;
 
 /// Rotations or similarities.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,7 +34,6 @@ pub(crate) enum Fit {
 pub(crate) struct LocalGlobal {
     fit: Fit,
     index: Vec<u32>,
-    pinned: u32,
     chol: Cholesky,
     rhs: Vec<f64>,
     /// Per triangle, the fitted `L` (rows).
@@ -65,42 +65,11 @@ impl LocalGlobal {
                 k += 1;
             }
         }
-        let mut pairs: Vec<(u32, u32)> = (0..k).map(|i| (i, i)).collect();
-        let mut vals: Vec<f64> = vec![0.0; k as usize];
-        for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
-            for (corner, (i, j)) in [(b, c), (c, a), (a, b)].into_iter().enumerate() {
-                let w = frames.cot[f][corner];
-                let (ii, jj) = (index[i as usize], index[j as usize]);
-                if ii != NONE {
-                    pairs.push((ii, ii));
-                    vals.push(w);
-                }
-                if jj != NONE {
-                    pairs.push((jj, jj));
-                    vals.push(w);
-                }
-                if ii != NONE && jj != NONE {
-                    pairs.push((ii.max(jj), ii.min(jj)));
-                    vals.push(-w);
-                }
-            }
-        }
-        let chol = Cholesky::assemble(k as usize, &pairs, &vals, 2).map_err(err)?;
-        let wdx = (0..frames.len())
-            .map(|f| {
-                let x = frames.local[f];
-                let mut out = [[0.0; 2]; 3];
-                for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
-                    let w = frames.cot[f][corner];
-                    out[corner] = [w * (x[i][0] - x[j][0]), w * (x[i][1] - x[j][1])];
-                }
-                out
-            })
-            .collect();
+        let chol = free_laplacian(frames, &index, k).map_err(err)?;
+        let wdx = weighted_edges(frames);
         Ok(LocalGlobal {
             fit,
             index,
-            pinned,
             chol,
             rhs: vec![0.0; 2 * k as usize],
             l: vec![[[1.0, 0.0], [0.0, 1.0]]; frames.len()],
@@ -116,27 +85,7 @@ impl LocalGlobal {
     /// `2 (q − 1)² + 2 r²` or ASAP `2 r²`, with `q`, `r` the norms of
     /// `J`'s similarity and anti-similarity parts), as an area-weighted mean.
     fn fit(&mut self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
-        let mut energy = 0.0;
-        for (f, l) in self.l.iter_mut().enumerate() {
-            let [[a, b], [c, d]] = frames.gradient(f, uv);
-            let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
-            let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
-            let (q2, r2) = (e * e + h * h, fq * fq + g * g);
-            let q = q2.sqrt();
-            let psi = match self.fit {
-                Fit::Rotation => 2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r2,
-                // |J - S|² for the nearest similarity S: the anti-conformal part.
-                Fit::Similarity => 2.0 * r2,
-            };
-            energy += frames.area[f] * psi;
-            let (p, s) = match self.fit {
-                Fit::Rotation if q > 0.0 => (e / q, h / q),
-                Fit::Rotation => (1.0, 0.0),
-                Fit::Similarity => (e, h),
-            };
-            *l = [[p, -s], [s, p]];
-        }
-        energy / frames.total_area
+        fit_each(frames, uv, self.fit, &mut self.l)
     }
 
     /// One local step and one global step, in place; the method's energy (ARAP or ASAP,
@@ -153,33 +102,7 @@ impl LocalGlobal {
         };
         // Global: Σ_j w_ij (u_i - u_j) = Σ w_ij L (x_i - x_j), the pinned vertex moved right.
         let k = self.rhs.len() / 2;
-        self.rhs.fill(0.0);
-        let pin = uv[self.pinned as usize];
-        for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
-            let l = self.l[f];
-            let vs = [a, b, c];
-            for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
-                let wdx = self.wdx[f][corner];
-                let w = frames.cot[f][corner];
-                let ldx = [
-                    l[0][0] * wdx[0] + l[0][1] * wdx[1],
-                    l[1][0] * wdx[0] + l[1][1] * wdx[1],
-                ];
-                for (v, other, sign) in [(vs[i], vs[j], 1.0), (vs[j], vs[i], -1.0)] {
-                    let iv = self.index[v as usize];
-                    if iv == NONE {
-                        continue;
-                    }
-                    let iv = iv as usize;
-                    self.rhs[iv] += sign * ldx[0];
-                    self.rhs[k + iv] += sign * ldx[1];
-                    if other == self.pinned {
-                        self.rhs[iv] += w * pin[0];
-                        self.rhs[k + iv] += w * pin[1];
-                    }
-                }
-            }
-        }
+        global_rhs(frames, &self.l, &self.wdx, &self.index, uv, &mut self.rhs);
         self.chol
             .solve_in_place(&mut self.rhs, 2)
             .map_err(|source| ParamError::Solver {
@@ -195,6 +118,122 @@ impl LocalGlobal {
         let after = self.fit(frames, uv);
         self.fitted = Some(after);
         Ok((before, after))
+    }
+}
+
+/// Per triangle and edge `(b, c), (c, a), (a, b)`: its cotangent weight times its vector in
+/// the triangle's isometric layout.
+pub(crate) fn weighted_edges(frames: &Frames) -> Vec<[[f64; 2]; 3]> {
+    (0..frames.len())
+        .map(|f| {
+            let x = frames.local[f];
+            let mut out = [[0.0; 2]; 3];
+            for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
+                let w = frames.cot[f][corner];
+                out[corner] = [w * (x[i][0] - x[j][0]), w * (x[i][1] - x[j][1])];
+            }
+            out
+        })
+        .collect()
+}
+
+/// The cotangent Laplacian of the free vertices (`index[v]` their row, [`NONE`] for pinned
+/// ones; `k` of them), factored for solves with two right-hand sides.
+pub(crate) fn free_laplacian(
+    frames: &Frames,
+    index: &[u32],
+    k: u32,
+) -> Result<Cholesky, bdmorph_cholesky::CholeskyError> {
+    let mut pairs: Vec<(u32, u32)> = (0..k).map(|i| (i, i)).collect();
+    let mut vals: Vec<f64> = vec![0.0; k as usize];
+    for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
+        for (corner, (i, j)) in [(b, c), (c, a), (a, b)].into_iter().enumerate() {
+            let w = frames.cot[f][corner];
+            let (ii, jj) = (index[i as usize], index[j as usize]);
+            if ii != NONE {
+                pairs.push((ii, ii));
+                vals.push(w);
+            }
+            if jj != NONE {
+                pairs.push((jj, jj));
+                vals.push(w);
+            }
+            if ii != NONE && jj != NONE {
+                pairs.push((ii.max(jj), ii.min(jj)));
+                vals.push(-w);
+            }
+        }
+    }
+    Cholesky::assemble(k as usize, &pairs, &vals, 2)
+}
+
+/// The local step on `uv`: each triangle's best rotation or similarity into `l`, from its
+/// deformation gradient `J` (the cotangent-weighted fit of the edges is the same: for any
+/// triangle `Σ cot θₖ eₖ eₖᵀ = 2A I`, so the fit of `J`'s edges is `J`'s closest rotation or
+/// similarity); returns the method's energy of `uv` (ARAP `2 (q − 1)² + 2 r²` or ASAP
+/// `2 r²`, with `q`, `r` the norms of `J`'s similarity and anti-similarity parts), as an
+/// area-weighted mean.
+pub(crate) fn fit_each(frames: &Frames, uv: &[[f64; 2]], fit: Fit, l: &mut [[[f64; 2]; 2]]) -> f64 {
+    let mut energy = 0.0;
+    for (f, l) in l.iter_mut().enumerate() {
+        let [[a, b], [c, d]] = frames.gradient(f, uv);
+        let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
+        let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
+        let (q2, r2) = (e * e + h * h, fq * fq + g * g);
+        let q = q2.sqrt();
+        let psi = match fit {
+            Fit::Rotation => 2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r2,
+            // |J - S|² for the nearest similarity S: the anti-conformal part.
+            Fit::Similarity => 2.0 * r2,
+        };
+        energy += frames.area[f] * psi;
+        let (p, s) = match fit {
+            Fit::Rotation if q > 0.0 => (e / q, h / q),
+            Fit::Rotation => (1.0, 0.0),
+            Fit::Similarity => (e, h),
+        };
+        *l = [[p, -s], [s, p]];
+    }
+    energy / frames.total_area
+}
+
+/// The global step's right-hand sides (x then y, one row per free vertex):
+/// `Σ w_ij L (x_i − x_j)` plus, for each pinned neighbour `j`, `w_ij u_j`.
+pub(crate) fn global_rhs(
+    frames: &Frames,
+    l: &[[[f64; 2]; 2]],
+    wdx: &[[[f64; 2]; 3]],
+    index: &[u32],
+    uv: &[[f64; 2]],
+    rhs: &mut [f64],
+) {
+    let k = rhs.len() / 2;
+    rhs.fill(0.0);
+    for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
+        let l = l[f];
+        let vs = [a, b, c];
+        for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
+            let wdx = wdx[f][corner];
+            let w = frames.cot[f][corner];
+            let ldx = [
+                l[0][0] * wdx[0] + l[0][1] * wdx[1],
+                l[1][0] * wdx[0] + l[1][1] * wdx[1],
+            ];
+            for (v, other, sign) in [(vs[i], vs[j], 1.0), (vs[j], vs[i], -1.0)] {
+                let iv = index[v as usize];
+                if iv == NONE {
+                    continue;
+                }
+                let iv = iv as usize;
+                rhs[iv] += sign * ldx[0];
+                rhs[k + iv] += sign * ldx[1];
+                if index[other as usize] == NONE {
+                    let pin = uv[other as usize];
+                    rhs[iv] += w * pin[0];
+                    rhs[k + iv] += w * pin[1];
+                }
+            }
+        }
     }
 }
 

@@ -32,7 +32,7 @@ pub mod bounded;
 pub mod energy;
 pub(crate) mod frames;
 mod linear;
-mod local_global;
+pub(crate) mod local_global;
 mod newton;
 
 use std::time::Instant;

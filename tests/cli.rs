@@ -1547,3 +1547,80 @@ fn failed_frames_name_the_lines_of_their_worst_triangles() {
         "{err}"
     );
 }
+
+#[test]
+fn deform_poses_by_each_method_with_the_same_stats() {
+    let dir = scratch("deform-methods");
+    let disk = generate::disk(8, 0.2);
+    let planar = write(&dir, "disk.obj", &disk);
+    let rim = disk.positions.len() - 1;
+    let p = disk.positions[rim];
+    let target = [1.3 * p[0] + 0.2, 1.3 * p[1]];
+    let pull = format!("{rim}:{},{}", target[0], target[1]);
+    for method in ["kvf", "arap", "bounded"] {
+        let out = dir.join(format!("{method}.obj"));
+        let mut c = bin();
+        c.arg("deform")
+            .arg(&planar)
+            .args(["--method", method, "--pin", "0:0,0", "--pin", &pull]);
+        if method == "bounded" {
+            c.args(["--max-distortion", "3"]);
+        }
+        let r = run_ok(c.args(["--stats", "-q", "-o"]).arg(&out));
+        let stats = String::from_utf8(r.stdout).expect("utf8");
+        assert_eq!(stats.lines().count(), 1, "{stats}");
+        assert!(
+            stats.contains(&format!("\"method\":\"{method}\"")),
+            "{stats}"
+        );
+        for key in [
+            "\"max_conformal_distortion\":",
+            "\"flipped_triangles\":0",
+            "\"pin_residual\":",
+            "\"seconds\":",
+        ] {
+            assert!(stats.contains(key), "{method}: {key} in {stats}");
+        }
+        let distortion = number_after_f64(&stats, "\"max_conformal_distortion\":");
+        assert!(distortion > 1.0 && distortion < 3.01, "{method}: {stats}");
+        let posed = PlanarMesh::read(&out).expect("readable");
+        assert_eq!(posed.faces, disk.faces);
+        let q = posed.positions[rim];
+        let residual = (q[0] - target[0]).hypot(q[1] - target[1]);
+        // Hard pins exactly; KVF's soft ones within its stated default closeness.
+        let allowed = if method == "kvf" {
+            1e-2 * disk.diameter()
+        } else {
+            1e-9
+        };
+        assert!(residual < allowed, "{method}: {residual}");
+        assert!(
+            (number_after_f64(&stats, "\"pin_residual\":") - residual).abs() < 1e-9,
+            "{stats}"
+        );
+    }
+    // KVF's weight must be positive; a bounded pose still needs its bound.
+    let err = fails_writing_nothing(
+        bin().arg("deform").arg(&planar).args([
+            "--method",
+            "kvf",
+            "--pin-weight",
+            "0",
+            "--pin",
+            "0:0,0",
+            "-o",
+            "w.obj",
+        ]),
+        &dir,
+    );
+    assert!(err.contains("weight must be a finite number > 0"), "{err}");
+}
+
+/// The number after `key` in `text`.
+fn number_after_f64(text: &str, key: &str) -> f64 {
+    text.split(key)
+        .nth(1)
+        .and_then(|s| s.split([',', '}']).next())
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no number after {key} in {text}"))
+}

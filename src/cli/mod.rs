@@ -156,7 +156,12 @@ enum Command {
     /// closest map found is still written).
     ///
     /// --method arap poses as rigidly as possible instead (hard pins, local/global iterations
-    /// on a prefactored Laplacian; no distortion bound, flipped triangles reported).
+    /// on a prefactored Laplacian; no distortion bound, flipped triangles reported), and
+    /// --method kvf by as-Killing-as-possible vector fields, the original BDMORPH editor's
+    /// deformation (soft handles, --pin-weight; flipped triangles reported).
+    ///
+    /// --stats prints one JSON object: method, iterations, largest conformal distortion,
+    /// flipped triangles, pin residual, seconds (and, for bounded, its full report).
     ///
     /// -o OUT.obj writes `v x y 0` lines and the input's faces; .svg and .png draw it.
     ///
@@ -164,6 +169,7 @@ enum Command {
     ///   bdmorph deform man.obj --pin 0:0,0 --pin 120:1.5,2 --max-distortion 3 -o posed.obj
     ///   bdmorph deform figure.obj --fix 180,40 --drag 330,340:380,470 --max-distortion 4 -o wave.obj
     ///   bdmorph deform figure.obj --method arap --fix 180,40 --drag 330,340:380,470 -o wave.obj
+    ///   bdmorph deform figure.obj --method kvf --fix 180,40 --drag 330,340:380,470 -o wave.obj
     #[command(verbatim_doc_comment)]
     Deform(DeformArgs),
     /// Mesh a picture's subject, or an outline, into triangles ready to morph.
@@ -535,6 +541,9 @@ enum DeformMethod {
     Bounded,
     /// As-rigid-as-possible with hard pins (local/global).
     Arap,
+    /// As-Killing-as-possible vector fields (the original editor's), soft handles weighted
+    /// by --pin-weight.
+    Kvf,
 }
 
 /// Parses `X,Y`: two finite numbers.
@@ -574,16 +583,22 @@ struct DeformArgs {
     #[arg(long = "fix", value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
     fixes: Vec<[f64; 2]>,
     /// How the mesh follows the handles: bounded (bounded distortion, needs
-    /// --max-distortion) or arap (as-rigid-as-possible with hard pins; no bound, flips
-    /// reported).
+    /// --max-distortion), arap (as-rigid-as-possible with hard pins; no bound, flips
+    /// reported) or kvf (as-Killing-as-possible fields with soft handles, the original
+    /// editor's; no bound, flips reported).
     #[arg(long, value_enum, default_value_t = DeformMethod::Bounded)]
     method: DeformMethod,
     /// The bound K >= 1 on every triangle's conformal distortion (--method bounded).
     #[arg(long, value_name = "K", required_if_eq("method", "bounded"))]
     max_distortion: Option<f64>,
-    /// The most iterations (default 5000 for bounded, 1000 local/global steps for arap).
+    /// The most iterations (default 5000 for bounded, 1000 local/global steps for arap,
+    /// 1000 field steps for kvf).
     #[arg(long, value_name = "N")]
     iterations: Option<u32>,
+    /// KVF's handle weight, relative to the mesh's stiffness (default 100): larger holds the
+    /// handles closer to their targets.
+    #[arg(long, value_name = "W")]
+    pin_weight: Option<f64>,
     /// Output: .obj, .svg or .png.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,

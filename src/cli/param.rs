@@ -543,55 +543,110 @@ fn handles(args: &DeformArgs, positions: &[[f64; 2]]) -> Result<Vec<(u32, [f64; 
 /// A pose, why its bound was not met (if it was not), and a one-line summary.
 type Posed = (Vec<[f64; 2]>, Option<String>, String);
 
-/// `deform --method arap`: the pose, nothing unmet (ARAP has no bound to miss), and a summary;
-/// `--stats` prints the method, time, largest conformal distortion, flips and pin residual.
-fn arap_pose(
+/// `deform --method kvf|arap` through [`bdmorph::deform::Deformer`]: the pose, nothing unmet
+/// (neither has a bound to miss), and a summary; `--stats` prints the method, time, largest
+/// conformal distortion, flips and pin residual.
+///
+/// ARAP's hard pins go to their targets in one drag iterated to convergence. KVF moves its
+/// handles there as a mouse would, in [`KVF_MOVES`] even moves of a few steps each, then
+/// iterates at the targets to convergence: its steps follow the handles, and one jump of
+/// the whole way would ask a single field for a large rotation.
+fn deformer_pose(
     args: &DeformArgs,
     planar: &bdmorph::PlanarMesh,
     pins: &[(u32, [f64; 2])],
 ) -> Result<Posed, String> {
-    use bdmorph::deform::{ArapOptions, Deformer, Method};
+    use bdmorph::deform::{ArapOptions, Deformer, KvfOptions, Method};
+    let in_file = |e: bdmorph::deform::DeformError| format!("{}: {e}", args.mesh.display());
     let started = std::time::Instant::now();
-    let options = ArapOptions::default()
-        .with_iterations(args.iterations.unwrap_or(1000))
-        .with_tolerance(1e-10);
-    let mut pose = Deformer::new(planar, Method::Arap(options))
-        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    let limit = args.iterations.unwrap_or(1000);
+    let method = match args.method {
+        super::DeformMethod::Kvf => {
+            let mut options = KvfOptions::default();
+            if let Some(w) = args.pin_weight {
+                options = options.with_weight(w);
+            }
+            Method::Kvf(options)
+        }
+        _ => Method::Arap(
+            ArapOptions::default()
+                .with_iterations(limit)
+                .with_tolerance(1e-10),
+        ),
+    };
+    let name = method.name();
+    let mut pose = Deformer::new(planar, method).map_err(in_file)?;
     let vertices: Vec<u32> = pins.iter().map(|p| p.0).collect();
     let targets: Vec<[f64; 2]> = pins.iter().map(|p| p.1).collect();
-    pose.set_pins(&vertices)
-        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
-    let report = pose
-        .drag(&targets)
-        .map_err(|e| format!("{}: {e}", args.mesh.display()))?;
+    pose.set_pins(&vertices).map_err(in_file)?;
+    let mut iterations = 0;
+    let mut report = None;
+    if name == "kvf" {
+        let from: Vec<[f64; 2]> = vertices
+            .iter()
+            .map(|&v| planar.positions[v as usize])
+            .collect();
+        let mut moving = from.clone();
+        for k in 1..=KVF_MOVES {
+            let s = f64::from(k) / f64::from(KVF_MOVES);
+            for ((m, a), b) in moving.iter_mut().zip(&from).zip(&targets) {
+                *m = [a[0] + (b[0] - a[0]) * s, a[1] + (b[1] - a[1]) * s];
+            }
+            let r = pose.drag(&moving).map_err(in_file)?;
+            iterations += r.iterations;
+        }
+        while iterations < limit {
+            let r = pose.drag(&targets).map_err(in_file)?;
+            iterations += r.iterations;
+            let done = r.last_change <= 1e-10;
+            report = Some(r);
+            if done {
+                break;
+            }
+        }
+    }
+    let report = match report {
+        Some(r) => r,
+        None => {
+            let r = pose.drag(&targets).map_err(in_file)?;
+            iterations += r.iterations;
+            r
+        }
+    };
     let seconds = started.elapsed().as_secs_f64();
-    let rest = bdmorph::distortion::RestShape::new(&planar.positions, &planar.faces);
-    let mut each = vec![0.0; planar.faces.len()];
-    let distortion = rest.distortion_into(pose.positions(), &mut each);
     if args.stats {
         let json = format!(
-            "{{\"method\":\"arap\",\"iterations\":{},\"energy\":{:e},\"max_conformal_distortion\":{},\"flipped_triangles\":{},\"pin_residual\":{:e},\"seconds\":{:e}}}",
-            report.iterations,
+            "{{\"method\":\"{name}\",\"iterations\":{iterations},\"energy\":{:e},\"max_conformal_distortion\":{},\"flipped_triangles\":{},\"pin_residual\":{:e},\"last_change\":{:e},\"seconds\":{:e}}}",
             report.energy,
-            if distortion.is_finite() { distortion.to_string() } else { "null".into() },
+            json(report.max_distortion),
             report.flipped_triangles,
             report.pin_residual,
+            report.last_change,
             seconds
         );
         writeln!(std::io::stdout().lock(), "{json}").map_err(|e| e.to_string())?;
     }
     if report.flipped_triangles > 0 && !args.quiet {
         eprintln!(
-            "bdmorph: warning: {} flipped triangles (ARAP does not prevent them; --method bounded does)",
+            "bdmorph: warning: {} flipped triangles ({name} does not prevent them; --method bounded does)",
             report.flipped_triangles
         );
     }
+    if report.last_change > 1e-10 && !args.quiet {
+        eprintln!(
+            "bdmorph: warning: {name} stopped after {iterations} iterations still moving (last step {:.1e} of the size); raise --iterations",
+            report.last_change
+        );
+    }
     let summary = format!(
-        "arap, {} iterations in {seconds:.2} s; largest distortion {distortion:.4}, {} flipped",
-        report.iterations, report.flipped_triangles
+        "{name}, {iterations} iterations in {seconds:.2} s; largest distortion {:.4}, {} flipped, handles met to {:.1e}",
+        report.max_distortion, report.flipped_triangles, report.pin_residual
     );
     Ok((pose.positions().to_vec(), None, summary))
 }
+
+/// The moves `deform --method kvf` takes its handles to their targets in.
+const KVF_MOVES: u32 = 10;
 
 pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     let plan = match &args.output {
@@ -616,7 +671,9 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     }
     let pins = handles(&args, &planar.positions)?;
     let (uv, unmet, summary) = match args.method {
-        super::DeformMethod::Arap => arap_pose(&args, &planar, &pins)?,
+        super::DeformMethod::Arap | super::DeformMethod::Kvf => {
+            deformer_pose(&args, &planar, &pins)?
+        }
         super::DeformMethod::Bounded => {
             let k = args.max_distortion.unwrap_or(f64::NAN);
             let iterations = args.iterations.unwrap_or(5000);
@@ -629,9 +686,21 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
                 iterations,
                 "deforming",
                 args.quiet,
-                args.stats,
+                false,
                 &in_file,
             )?;
+            if args.stats {
+                // The bounded report, with the keys every method's --stats has.
+                let all = bounded_json(&report);
+                let flipped = report.inverted;
+                let json = format!(
+                    "{{\"method\":\"bounded\",\"max_conformal_distortion\":{},\"flipped_triangles\":{flipped},\"pin_residual\":{:e},{}",
+                    json(report.max_distortion),
+                    report.constraint_error,
+                    &all[1..]
+                );
+                writeln!(std::io::stdout().lock(), "{json}").map_err(|e| e.to_string())?;
+            }
             let line = |f| lines.face_line(f);
             let unmet = (!report.converged).then(|| unmet_message(&report, k, &line));
             let summary = format!(

@@ -67,6 +67,10 @@ pub(crate) struct Arap {
 }
 
 impl Arap {
+    pub(crate) fn options(&self) -> ArapOptions {
+        self.options
+    }
+
     pub(crate) fn new(frames: &Frames, n: usize, options: ArapOptions) -> Arap {
         let wdx = weighted_edges(frames);
         Arap {
@@ -111,18 +115,6 @@ impl Arap {
         uv: &mut [[f64; 2]],
         size: f64,
     ) -> Result<DragReport, DeformError> {
-        if targets.len() != self.pins.len() || self.pins.is_empty() {
-            return Err(DeformError::TargetCount {
-                pins: self.pins.len(),
-                got: targets.len(),
-            });
-        }
-        if let Some(index) = targets
-            .iter()
-            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
-        {
-            return Err(DeformError::NonFiniteTarget { index });
-        }
         for (&p, &t) in self.pins.iter().zip(targets) {
             uv[p as usize] = t;
         }
@@ -150,19 +142,10 @@ impl Arap {
                 break;
             }
         }
-        let energy = fit_each(frames, uv, Fit::Rotation, &mut self.l);
-        let pin_residual = self
-            .pins
-            .iter()
-            .zip(targets)
-            .map(|(&p, t)| (uv[p as usize][0] - t[0]).hypot(uv[p as usize][1] - t[1]))
-            .fold(0.0, f64::max);
         Ok(DragReport {
             iterations,
-            energy,
             last_change: last_change / size,
-            flipped_triangles: 0,
-            pin_residual,
+            ..DragReport::default()
         })
     }
 }

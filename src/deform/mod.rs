@@ -2,11 +2,21 @@
 //! the set of handles changes (the only time anything is factored), and a cheap, warm-started,
 //! allocation-free drag per mouse move.
 //!
-//! Methods so far: [`Method::Arap`], as-rigid-as-possible with hard pins (2D local/global,
-//! Sorkine and Alexa 2007, in the planar form of Liu et al. 2008): each drag runs a few
-//! local/global iterations from the previous drag's result with one prefactored cotangent
-//! Laplacian. (The issue's `kvf` and per-drag `bounded` methods are still to come; bounded
-//! distortion posing is `bdmorph deform --max-distortion` today.)
+//! Methods ([`Method`]):
+//!
+//! - [`Method::Kvf`], as-Killing-as-possible vector fields (Solomon et al. 2011), the
+//!   original BDMORPH editor's: soft handles with a weight, each step a Killing field moved
+//!   along by log spirals, with a strain term so that poses do not drift ([`KvfOptions`]).
+//! - [`Method::Arap`], as-rigid-as-possible with hard pins (2D local/global, Sorkine and
+//!   Alexa 2007, in the planar form of Liu et al. 2008): a few iterations per drag from the
+//!   previous pose with one prefactored cotangent Laplacian ([`ArapOptions`]).
+//! - [`Method::Bounded`], bounded distortion (Kovalsky et al. 2015) with hard pins: every
+//!   triangle's conformal distortion at most `K` and none flipped, met or reported per drag
+//!   ([`BoundedPoseOptions`]).
+//!
+//! Each drag's [`DragReport`] measures the pose the same way for every method: ARAP
+//! energy, largest conformal distortion, flipped triangles, the handles' residual.
+//! Meshes of several pieces, with holes, pose as well: every piece needs a handle.
 //!
 //! ```
 //! use bdmorph::deform::{Deformer, Method};
@@ -23,25 +33,56 @@
 //! ```
 
 mod arap;
+mod bounded;
+mod kvf;
 
 use crate::mesh::{MeshError, PlanarMesh};
 use crate::param::frames::Frames;
 
 pub use arap::ArapOptions;
+pub use bounded::BoundedPoseOptions;
+pub use kvf::KvfOptions;
 
 /// How the mesh follows its handles.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum Method {
+    /// As-Killing-as-possible vector fields with soft handles (the original editor's).
+    Kvf(KvfOptions),
     /// As-rigid-as-possible with hard pins.
     Arap(ArapOptions),
+    /// Bounded distortion with hard pins.
+    Bounded(BoundedPoseOptions),
 }
 
 impl Method {
+    /// KVF with the default options.
+    pub fn kvf() -> Method {
+        Method::Kvf(KvfOptions::default())
+    }
     /// ARAP with the default options.
     pub fn arap() -> Method {
         Method::Arap(ArapOptions::default())
     }
+    /// Bounded distortion with the bound `K` and the default options.
+    pub fn bounded(max_distortion: f64) -> Method {
+        Method::Bounded(BoundedPoseOptions::new(max_distortion))
+    }
+    /// The method's name on the command line: `kvf`, `arap` or `bounded`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Kvf(_) => "kvf",
+            Method::Arap(_) => "arap",
+            Method::Bounded(_) => "bounded",
+        }
+    }
+}
+
+/// The method's state.
+enum Solver {
+    Kvf(kvf::Kvf),
+    Arap(arap::Arap),
+    Bounded(Box<bounded::Bounded>),
 }
 
 /// Why posing failed.
@@ -88,16 +129,37 @@ pub enum DeformError {
         index: usize,
     },
     /// The linear solver failed.
-    #[error("the ARAP system could not be factored or solved: {0}")]
+    #[error("the posing system could not be factored or solved: {0}")]
     Solver(#[from] crate::CholeskyError),
+    /// `set_positions` with another number of points than vertices.
+    #[error("{got} positions given for {expected} vertices")]
+    PositionCount {
+        /// Vertices of the mesh.
+        expected: usize,
+        /// Points given.
+        got: usize,
+    },
+    /// A distortion bound that is not a finite number at least 1.
+    #[error("the distortion bound must be a finite number >= 1, not {0}")]
+    BadBound(f64),
+    /// A KVF handle weight that is not a finite positive number.
+    #[error("the handles' weight must be a finite number > 0, not {0}")]
+    BadWeight(f64),
+    /// `set_weight` on a method without handle weights.
+    #[error("only kvf has a handle weight")]
+    NoWeight,
+    /// The bounded-distortion solver failed.
+    #[error(transparent)]
+    Bounded(crate::param::ParamError),
 }
 
-/// What a drag did.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What a drag did, and the pose it left, measured the same way for every method.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DragReport {
-    /// Local/global iterations run.
+    /// The method's iterations run (local/global steps, KVF steps, projections).
     pub iterations: u32,
-    /// The ARAP energy after them (area-weighted mean of `|J - R|²`).
+    /// The pose's ARAP energy (area-weighted mean of `|J - R|²`, `J` each triangle's
+    /// deformation gradient, `R` its closest rotation).
     pub energy: f64,
     /// The largest move of any vertex in the last iteration, relative to the mesh's size:
     /// how far from converged the pose is.
@@ -106,6 +168,11 @@ pub struct DragReport {
     pub flipped_triangles: usize,
     /// The largest distance of a pinned vertex from its target (0 for hard pins).
     pub pin_residual: f64,
+    /// The largest conformal distortion `σ₁ / σ₂` of an unflipped triangle.
+    pub max_distortion: f64,
+    /// For [`Method::Bounded`], whether every triangle is within the bound and none is
+    /// flipped; `None` for methods without a bound.
+    pub bound_met: Option<bool>,
 }
 
 /// A mesh prepared for posing.
@@ -114,7 +181,8 @@ pub struct Deformer {
     frames: Frames,
     diameter: f64,
     positions: Vec<[f64; 2]>,
-    solver: arap::Arap,
+    pins: Vec<u32>,
+    solver: Solver,
 }
 
 impl std::fmt::Debug for Deformer {
@@ -122,13 +190,16 @@ impl std::fmt::Debug for Deformer {
         f.debug_struct("Deformer")
             .field("vertices", &self.rest.positions.len())
             .field("faces", &self.rest.faces.len())
+            .field("method", &self.method().name())
+            .field("pins", &self.pins.len())
             .finish_non_exhaustive()
     }
 }
 
 impl Deformer {
-    /// Checks the mesh (a valid planar mesh: counter-clockwise, no degenerate triangle) and
-    /// prepares the method's constants. Nothing is factored until [`Deformer::set_pins`].
+    /// Checks the mesh (a valid planar mesh: counter-clockwise, no degenerate triangle; any
+    /// number of pieces and holes) and prepares the method's constants. Nothing is factored
+    /// until [`Deformer::set_pins`].
     pub fn new(mesh: &PlanarMesh, method: Method) -> Result<Deformer, DeformError> {
         mesh.validate()?;
         let surface = crate::SurfaceMesh {
@@ -140,14 +211,31 @@ impl Deformer {
             face,
             area: mesh.signed_area(&mesh.faces[face]),
         })?;
-        let Method::Arap(options) = method;
+        let n = mesh.positions.len();
+        let solver = match method {
+            Method::Kvf(options) => Solver::Kvf(kvf::Kvf::new(&frames, n, options)),
+            Method::Arap(options) => Solver::Arap(arap::Arap::new(&frames, n, options)),
+            Method::Bounded(options) => {
+                Solver::Bounded(Box::new(bounded::Bounded::new(&frames, n, options)?))
+            }
+        };
         Ok(Deformer {
-            solver: arap::Arap::new(&frames, mesh.positions.len(), options),
+            solver,
             diameter: mesh.diameter().max(f64::MIN_POSITIVE),
             positions: mesh.positions.clone(),
             rest: mesh.clone(),
             frames,
+            pins: Vec::new(),
         })
+    }
+
+    /// The method and its options.
+    pub fn method(&self) -> Method {
+        match &self.solver {
+            Solver::Kvf(s) => Method::Kvf(s.options()),
+            Solver::Arap(s) => Method::Arap(s.options()),
+            Solver::Bounded(s) => Method::Bounded(s.options()),
+        }
     }
 
     /// Sets the pinned vertices (the handles, in the order [`Deformer::drag`] takes their
@@ -170,25 +258,85 @@ impl Deformer {
         if let Some(vertex) = unpinned_piece(n, &self.rest.faces, &pinned) {
             return Err(DeformError::PieceWithoutPin { vertex });
         }
-        self.solver.set_pins(&self.frames, pins)
+        match &mut self.solver {
+            Solver::Kvf(s) => s.set_pins(&self.frames, pins)?,
+            Solver::Arap(s) => s.set_pins(&self.frames, pins)?,
+            Solver::Bounded(s) => s.set_pins(&self.frames, n, pins)?,
+        }
+        self.pins = pins.to_vec();
+        Ok(())
+    }
+
+    /// Sets [`Method::Kvf`]'s handle weight and refactors; the pins stay.
+    pub fn set_weight(&mut self, weight: f64) -> Result<(), DeformError> {
+        match &mut self.solver {
+            Solver::Kvf(s) => s.set_weight(&self.frames, weight),
+            _ => Err(DeformError::NoWeight),
+        }
     }
 
     /// Moves the pins to `targets` (one per pin, in [`Deformer::set_pins`]'s order) and
     /// updates the pose, starting from the previous one. Allocates nothing.
     pub fn drag(&mut self, targets: &[[f64; 2]]) -> Result<DragReport, DeformError> {
-        let mut report =
-            self.solver
-                .drag(&self.frames, targets, &mut self.positions, self.diameter)?;
-        report.flipped_triangles = self
-            .rest
-            .faces
+        if targets.len() != self.pins.len() || self.pins.is_empty() {
+            return Err(DeformError::TargetCount {
+                pins: self.pins.len(),
+                got: targets.len(),
+            });
+        }
+        if let Some(index) = targets
             .iter()
-            .filter(|f| {
-                let [a, b, c] = f.map(|v| self.positions[v as usize]);
-                (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) <= 0.0
-            })
-            .count();
+            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+        {
+            return Err(DeformError::NonFiniteTarget { index });
+        }
+        let size = self.diameter;
+        let mut report = match &mut self.solver {
+            Solver::Kvf(s) => s.drag(&self.frames, targets, &mut self.positions, size)?,
+            Solver::Arap(s) => s.drag(&self.frames, targets, &mut self.positions, size)?,
+            Solver::Bounded(s) => {
+                s.drag(&self.frames, targets, &self.pins, &mut self.positions, size)?
+            }
+        };
+        self.measure(targets, &mut report);
         Ok(report)
+    }
+
+    /// Fills the report's measures of the pose: energy, distortion, flips, pin residual.
+    fn measure(&self, targets: &[[f64; 2]], report: &mut DragReport) {
+        let (mut energy, mut worst, mut flipped) = (0.0, 1.0f64, 0);
+        for f in 0..self.frames.len() {
+            let j = self.frames.gradient(f, &self.positions);
+            let [[a, b], [c, d]] = j;
+            let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
+            let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
+            let q = (e * e + h * h).sqrt();
+            let r = (fq * fq + g * g).sqrt();
+            energy += self.frames.area[f] * (2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r * r);
+            // σ₁ = q + r, σ₂ = q − r (signed): flipped when σ₂ ≤ 0.
+            if q - r <= 0.0 {
+                flipped += 1;
+            } else {
+                worst = worst.max((q + r) / (q - r));
+            }
+        }
+        report.energy = energy / self.frames.total_area;
+        report.flipped_triangles = flipped;
+        report.max_distortion = worst;
+        report.pin_residual = self
+            .pins
+            .iter()
+            .zip(targets)
+            .map(|(&p, t)| {
+                let u = self.positions[p as usize];
+                (u[0] - t[0]).hypot(u[1] - t[1])
+            })
+            .fold(0.0, f64::max);
+        if let Solver::Bounded(s) = &self.solver {
+            let o = s.options();
+            report.bound_met =
+                Some(flipped == 0 && worst <= o.max_distortion * (1.0 + o.tolerance));
+        }
     }
 
     /// The current pose, one position per vertex.
@@ -196,9 +344,38 @@ impl Deformer {
         &self.positions
     }
 
+    /// The pins, in [`Deformer::set_pins`]'s order.
+    pub fn pins(&self) -> &[u32] {
+        &self.pins
+    }
+
+    /// The rest shape.
+    pub fn rest(&self) -> &PlanarMesh {
+        &self.rest
+    }
+
     /// Puts the pose back to the rest shape (pins stay).
     pub fn reset(&mut self) {
         self.positions.copy_from_slice(&self.rest.positions);
+    }
+
+    /// Replaces the pose (the next drag starts from it), e.g. an undo; `positions` must
+    /// have one point per vertex, all finite.
+    pub fn set_positions(&mut self, positions: &[[f64; 2]]) -> Result<(), DeformError> {
+        if positions.len() != self.positions.len() {
+            return Err(DeformError::PositionCount {
+                expected: self.positions.len(),
+                got: positions.len(),
+            });
+        }
+        if let Some(index) = positions
+            .iter()
+            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+        {
+            return Err(DeformError::NonFiniteTarget { index });
+        }
+        self.positions.copy_from_slice(positions);
+        Ok(())
     }
 }
 
@@ -234,4 +411,62 @@ fn unpinned_piece(n: usize, faces: &[[u32; 3]], pinned: &[bool]) -> Option<u32> 
         }
     }
     (0..n as u32).find(|&v| used[v as usize] && !held[find(&mut parent, v) as usize])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate;
+
+    /// The figure raises its arm in 20 moves and lowers it again, then settles: with the
+    /// strain term the rest shape comes back; without it (the original's flow), it does
+    /// not. Returns the largest distance from the rest shape, relative to the size.
+    fn away_and_back(strain_feedback: bool) -> f64 {
+        let rest = generate::figure(0.01);
+        let p = &rest.positions;
+        let nearest = |q: [f64; 2]| {
+            (0..p.len())
+                .min_by(|&a, &b| {
+                    let d = |i: usize| (p[i][0] - q[0]).powi(2) + (p[i][1] - q[1]).powi(2);
+                    d(a).total_cmp(&d(b))
+                })
+                .expect("vertices") as u32
+        };
+        let pins: Vec<u32> = [[-0.45, -1.5], [0.45, -1.5], [0.0, 2.8], [1.72, 1.4]]
+            .into_iter()
+            .map(nearest)
+            .collect();
+        let mut pose = Deformer::new(&rest, Method::kvf()).expect("set up");
+        if let Solver::Kvf(kvf) = &mut pose.solver {
+            kvf.strain_feedback = strain_feedback;
+        }
+        pose.set_pins(&pins).expect("pins");
+        let start: Vec<[f64; 2]> = pins.iter().map(|&v| p[v as usize]).collect();
+        let mut targets = start.clone();
+        for k in (1..=20).chain((0..20).rev()) {
+            let s = f64::from(k) / 20.0;
+            targets[3] = [start[3][0] - 0.7 * s, start[3][1] + 1.3 * s];
+            pose.drag(&targets).expect("drag");
+        }
+        for _ in 0..2000 {
+            if pose.drag(&targets).expect("drag").last_change < 1e-13 {
+                break;
+            }
+        }
+        pose.positions()
+            .iter()
+            .zip(p)
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .fold(0.0, f64::max)
+            / rest.diameter()
+    }
+
+    #[test]
+    fn the_strain_term_is_what_stops_the_drift() {
+        let with = away_and_back(true);
+        let without = away_and_back(false);
+        eprintln!("away and back: {with:e} with the strain term, {without:e} without");
+        assert!(with < 1e-9, "{with}");
+        assert!(without > 1e-3, "{without}");
+    }
 }

@@ -160,6 +160,8 @@ pub struct BoundedDistortion {
     /// Two right-hand sides (u and v) for the projection target, and two for the row.
     rhs: Vec<f64>,
     row: Vec<f64>,
+    /// The half-space row before its solve.
+    eta: Vec<f64>,
     projected: Vec<[[f64; 2]; 2]>,
 }
 
@@ -205,6 +207,29 @@ impl BoundedDistortion {
         }
         let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
         BoundedDistortion::with_frames(frames, n, pins, 0, options)
+    }
+
+    /// The solver for the handles `pins` (vertices, each checked in range, at least one),
+    /// their targets to come with [`BoundedDistortion::set_targets`]: posing, where the
+    /// handles move and the factor stays.
+    pub(crate) fn for_handles(
+        frames: Frames,
+        n: usize,
+        pins: &[u32],
+        options: BoundedOptions,
+    ) -> Result<BoundedDistortion, ParamError> {
+        if !(options.max_distortion >= 1.0 && options.max_distortion.is_finite()) {
+            return Err(ParamError::BadBound(options.max_distortion));
+        }
+        let pins: Vec<(u32, [f64; 2])> = pins.iter().map(|&v| (v, [0.0; 2])).collect();
+        BoundedDistortion::with_frames(frames, n, &pins, 0, options)
+    }
+
+    /// Moves the handles' targets (one per pin, in order); allocates nothing.
+    pub(crate) fn set_targets(&mut self, targets: &[[f64; 2]]) {
+        for (pin, &t) in self.pins.iter_mut().zip(targets) {
+            pin.1 = t;
+        }
     }
 
     fn with_frames(
@@ -259,6 +284,7 @@ impl BoundedDistortion {
             chol,
             rhs: vec![0.0; 2 * k as usize],
             row: vec![0.0; 2 * k as usize],
+            eta: vec![0.0; 2 * k as usize],
             projected: vec![[[0.0; 2]; 2]; m],
         })
     }
@@ -337,7 +363,7 @@ impl BoundedDistortion {
     }
 
     /// The largest distortion and the number of inverted triangles of `uv`.
-    fn measure(&self, uv: &[[f64; 2]]) -> (f64, usize) {
+    pub(crate) fn measure(&self, uv: &[[f64; 2]]) -> (f64, usize) {
         let mut worst: f64 = 1.0;
         let mut inverted = 0;
         for f in 0..self.frames.len() {
@@ -471,9 +497,9 @@ impl BoundedDistortion {
         if active {
             let lhs: f64 = self.row.iter().zip(&self.rhs).map(|(a, b)| a * b).sum();
             if lhs > row_rhs {
-                let eta = self.row.clone();
+                self.eta.copy_from_slice(&self.row);
                 self.chol.solve_in_place(&mut self.row, 2).map_err(err)?;
-                let denom: f64 = eta.iter().zip(&self.row).map(|(a, b)| a * b).sum();
+                let denom: f64 = self.eta.iter().zip(&self.row).map(|(a, b)| a * b).sum();
                 if denom > 0.0 {
                     let mu = (lhs - row_rhs) / denom;
                     for (x, y) in self.rhs.iter_mut().zip(&self.row) {

@@ -144,8 +144,21 @@ pub(crate) fn free_laplacian(
     index: &[u32],
     k: u32,
 ) -> Result<Cholesky, bdmorph_cholesky::CholeskyError> {
+    free_laplacian_plus(frames, index, k, &[])
+}
+
+/// As [`free_laplacian`], with `extra` `(row, value)` added to the diagonal (soft pins).
+pub(crate) fn free_laplacian_plus(
+    frames: &Frames,
+    index: &[u32],
+    k: u32,
+    extra: &[(u32, f64)],
+) -> Result<Cholesky, bdmorph_cholesky::CholeskyError> {
     let mut pairs: Vec<(u32, u32)> = (0..k).map(|i| (i, i)).collect();
     let mut vals: Vec<f64> = vec![0.0; k as usize];
+    for &(row, value) in extra {
+        vals[row as usize] += value;
+    }
     for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
         for (corner, (i, j)) in [(b, c), (c, a), (a, b)].into_iter().enumerate() {
             let w = frames.cot[f][corner];

@@ -33,7 +33,7 @@ pub mod energy;
 pub(crate) mod frames;
 mod linear;
 pub(crate) mod local_global;
-mod newton;
+pub(crate) mod newton;
 
 use std::time::Instant;
 

@@ -1,0 +1,203 @@
+//! Bounded-distortion posing (Kovalsky, Aigerman, Basri, Lipman 2015), per drag, with hard
+//! handles: a few ARAP local/global iterations from the previous pose (the as-rigid pose the
+//! bound is then imposed on, as the paper projects a given map), then, if a triangle is
+//! over the bound or flipped, alternating projections until every triangle is within it and
+//! none is flipped, or the iteration budget is spent (then the report says so, and the next
+//! drag goes on from there, with projections only until the bound is met again: ARAP
+//! iterations would undo part of their work each time). Both factors (the rest Laplacian on the free vertices, as ARAP
+//! and the projections weight it) are made once per set of pins.
+//!
+//! Projections alone, from the handles moved, would stop at the first map within the bound:
+//! the triangles near a handle end at the bound, whatever an as-rigid pose would need, and
+//! nothing brings a pose back once the handles return. The ARAP iterations give the pose
+//! its shape and its way back; the projections its guarantee.
+
+use super::arap::{Arap, ArapOptions};
+use super::{DeformError, DragReport};
+use crate::param::bounded::{BoundedDistortion, BoundedOptions};
+use crate::param::energy::Energy;
+use crate::param::frames::Frames;
+use crate::param::newton::Newton;
+
+/// Projections without progress (the largest distortion down by a relative 1e-4) in one drag
+/// before the Newton finish takes over.
+const STALL: u32 = 8;
+
+/// Options of [`super::Method::Bounded`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct BoundedPoseOptions {
+    /// The bound `K ≥ 1` on every triangle's conformal distortion.
+    pub max_distortion: f64,
+    /// Projection (and Newton finish) iterations per drag at most (default 100); a drag
+    /// stops as soon as the bound is met.
+    pub iterations: u32,
+    /// ARAP local/global iterations per drag before the projections (default 5).
+    pub arap_iterations: u32,
+    /// The bound counts as met at `K (1 + tolerance)` (default 1e-3).
+    pub tolerance: f64,
+}
+
+impl BoundedPoseOptions {
+    /// Options with the bound `K`.
+    pub fn new(max_distortion: f64) -> BoundedPoseOptions {
+        BoundedPoseOptions {
+            max_distortion,
+            iterations: 100,
+            arap_iterations: 5,
+            tolerance: 1e-3,
+        }
+    }
+    /// Sets the ARAP iterations per drag.
+    pub fn with_arap_iterations(mut self, iterations: u32) -> Self {
+        self.arap_iterations = iterations;
+        self
+    }
+    /// Sets the most iterations per drag.
+    pub fn with_iterations(mut self, iterations: u32) -> Self {
+        self.iterations = iterations;
+        self
+    }
+}
+
+/// The method's state.
+pub(crate) struct Bounded {
+    options: BoundedPoseOptions,
+    solver: Option<BoundedDistortion>,
+    arap: Arap,
+    /// The finishing phase: projected Newton on the excess distortion, pins held, for when
+    /// the projections stall (as [`BoundedDistortion::solve_with`] does).
+    newton: Option<Newton>,
+    /// Whether the last drag ended over the bound: the next one only projects.
+    behind: bool,
+    /// The pose before an iteration, to measure its change.
+    previous: Vec<[f64; 2]>,
+}
+
+impl Bounded {
+    pub(crate) fn new(
+        frames: &Frames,
+        n: usize,
+        options: BoundedPoseOptions,
+    ) -> Result<Bounded, DeformError> {
+        let k = options.max_distortion;
+        if !(k >= 1.0 && k.is_finite()) {
+            return Err(DeformError::BadBound(k));
+        }
+        Ok(Bounded {
+            options,
+            solver: None,
+            newton: None,
+            behind: false,
+            arap: Arap::new(
+                frames,
+                n,
+                ArapOptions::default().with_iterations(options.arap_iterations),
+            ),
+            previous: Vec::new(),
+        })
+    }
+
+    pub(crate) fn options(&self) -> BoundedPoseOptions {
+        self.options
+    }
+
+    pub(crate) fn set_pins(
+        &mut self,
+        frames: &Frames,
+        n: usize,
+        pins: &[u32],
+    ) -> Result<(), DeformError> {
+        let mut options = BoundedOptions::new(self.options.max_distortion)
+            .with_iterations(self.options.iterations)
+            .with_newton_finish(false);
+        options.tolerance = self.options.tolerance;
+        self.previous = vec![[0.0; 2]; n];
+        self.behind = false;
+        let bound = (self.options.max_distortion * (1.0 - 0.5 * self.options.tolerance)).max(1.0);
+        let mut newton =
+            Newton::new(frames, n, Energy::Excess { bound }).map_err(DeformError::Bounded)?;
+        newton.set_partial_projection(false);
+        newton.fix(pins.iter().copied());
+        self.newton = Some(newton);
+        if self.options.arap_iterations > 0 {
+            self.arap.set_pins(frames, pins)?;
+        }
+        self.solver = Some(
+            BoundedDistortion::for_handles(frames.clone(), n, pins, options)
+                .map_err(DeformError::Bounded)?,
+        );
+        Ok(())
+    }
+
+    pub(crate) fn drag(
+        &mut self,
+        frames: &Frames,
+        targets: &[[f64; 2]],
+        pins: &[u32],
+        uv: &mut [[f64; 2]],
+        size: f64,
+    ) -> Result<DragReport, DeformError> {
+        let solver = self.solver.as_mut().ok_or(DeformError::TargetCount {
+            pins: 0,
+            got: targets.len(),
+        })?;
+        solver.set_targets(targets);
+        let (mut arap_iterations, mut arap_change) = (0, 0.0);
+        if self.options.arap_iterations > 0 && !self.behind {
+            let report = self.arap.drag(frames, targets, uv, size)?;
+            (arap_iterations, arap_change) = (report.iterations, report.last_change);
+        }
+        for (&p, &t) in pins.iter().zip(targets) {
+            uv[p as usize] = t;
+        }
+        let limit = self.options.max_distortion * (1.0 + self.options.tolerance);
+        let mut iterations = 0;
+        let mut last_change = 0.0f64;
+        let (mut best, mut since_best) = (f64::INFINITY, 0);
+        loop {
+            let (worst, inverted) = solver.measure(uv);
+            let met = worst <= limit && inverted == 0;
+            if met || iterations >= self.options.iterations {
+                self.behind = !met;
+                break;
+            }
+            if worst < best * (1.0 - 1e-4) {
+                (best, since_best) = (worst, 0);
+            } else {
+                since_best += 1;
+            }
+            self.previous.copy_from_slice(uv);
+            match self.newton.as_mut() {
+                // Projections that stopped improving on an unflipped pose: Newton on the
+                // excess, whose line search never flips a triangle.
+                Some(newton) if since_best >= STALL && inverted == 0 => {
+                    let step = newton.iterate(frames, uv).map_err(DeformError::Bounded)?;
+                    if step.step == 0.0 {
+                        // No decrease: a local minimum of the excess; reported as unmet.
+                        self.behind = true;
+                        iterations += 1;
+                        break;
+                    }
+                }
+                _ => solver.iterate(uv).map_err(DeformError::Bounded)?,
+            }
+            last_change = uv
+                .iter()
+                .zip(&self.previous)
+                .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                .fold(0.0, f64::max);
+            iterations += 1;
+        }
+        Ok(DragReport {
+            iterations: arap_iterations + iterations,
+            // The last iteration's change, of whichever phase ran last.
+            last_change: if iterations > 0 {
+                last_change / size
+            } else {
+                arap_change
+            },
+            ..DragReport::default()
+        })
+    }
+}

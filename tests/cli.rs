@@ -276,6 +276,28 @@ fn the_readme_path_from_a_picture_to_an_animation_works() {
         "wave.obj",
     ]);
     assert!(err.contains("--drag 405,345 is vertex "), "{err}");
+    // The posing section's command: the same handles by KVF.
+    let (kvf, _) = run(&[
+        "deform",
+        "figure.obj",
+        "--method",
+        "kvf",
+        "--fix",
+        "165,30",
+        "--fix",
+        "265,30",
+        "--fix",
+        "210,480",
+        "--drag",
+        "405,345:345,455",
+        "--stats",
+        "-o",
+        "wave_kvf.obj",
+    ]);
+    assert!(
+        kvf.contains("\"method\":\"kvf\"") && kvf.contains("\"flipped_triangles\":0"),
+        "{kvf}"
+    );
     let (stats, _) = run(&[
         "morph",
         "figure.obj",

@@ -50,9 +50,9 @@ pub struct KvfOptions {
     /// the handles closer to their targets, smaller lets the shape pull them (the original's
     /// "control points weight"). Changing it refactors, as [`super::Deformer::set_pins`].
     pub weight: f64,
-    /// Steps per drag at most (default 4), each one field and one move along it.
+    /// Steps per drag at most (default 2), each one field and one move along it.
     pub iterations: u32,
-    /// Alternations of the field's `ω` and `v` per step (default 3).
+    /// Alternations of the field's `ω` and `v` per step (default 2).
     pub alternations: u32,
     /// A drag stops early once no vertex moved by more than this times the mesh's size in a
     /// step (default `1e-12`).
@@ -63,8 +63,8 @@ impl Default for KvfOptions {
     fn default() -> Self {
         KvfOptions {
             weight: 100.0,
-            iterations: 4,
-            alternations: 3,
+            iterations: 2,
+            alternations: 2,
             tolerance: 1e-12,
         }
     }
@@ -116,7 +116,10 @@ pub(crate) struct Kvf {
     gradient: Vec<[[f64; 2]; 2]>,
     omega: Vec<f64>,
     wdx: Vec<[[f64; 2]; 3]>,
-    /// Per vertex, the sum of its edges' spiral images, and how many edges those are.
+    /// Each edge once, with how many triangles hold it (1 on the boundary, 2 inside).
+    edges: Vec<(u32, u32, f64)>,
+    /// Per vertex, the sum of its edges' spiral images (each counted once per triangle
+    /// holding it), and how many those are.
     sum: Vec<[f64; 2]>,
     count: Vec<f64>,
 }
@@ -132,6 +135,20 @@ impl Kvf {
             diagonal += 2.0 * frames.cot[f].iter().sum::<f64>();
         }
         let used = count.iter().filter(|&&c| c > 0.0).count().max(1);
+        let mut keyed: Vec<(u32, u32)> = frames
+            .faces
+            .iter()
+            .flat_map(|f| [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])])
+            .map(|(a, b)| (a.min(b), a.max(b)))
+            .collect();
+        keyed.sort_unstable();
+        let mut edges: Vec<(u32, u32, f64)> = Vec::with_capacity(keyed.len() / 2 + 1);
+        for (a, b) in keyed {
+            match edges.last_mut() {
+                Some(last) if (last.0, last.1) == (a, b) => last.2 += 1.0,
+                _ => edges.push((a, b, 1.0)),
+            }
+        }
         let m = frames.len();
         Kvf {
             options,
@@ -147,6 +164,7 @@ impl Kvf {
             gradient: vec![[[1.0, 0.0], [0.0, 1.0]]; m],
             omega: vec![0.0; m],
             wdx: weighted_edges(frames),
+            edges,
             sum: vec![[0.0; 2]; n],
             count,
         }
@@ -226,8 +244,10 @@ impl Kvf {
     ) -> Result<f64, DeformError> {
         let n = uv.len();
         fit_each(frames, uv, Fit::Rotation, &mut self.rotation);
-        for f in 0..frames.len() {
-            self.gradient[f] = frames.gradient(f, uv);
+        if !self.strain_feedback {
+            for f in 0..frames.len() {
+                self.gradient[f] = frames.gradient(f, uv);
+            }
         }
         self.omega.fill(0.0);
         let chol = self.chol.as_mut().ok_or(DeformError::TargetCount {
@@ -276,23 +296,20 @@ impl Kvf {
         }
         // Move along the field v = y − u by each edge's log spiral.
         self.sum.fill([0.0; 2]);
-        for face in &frames.faces {
-            for (i, j) in [(face[0], face[1]), (face[1], face[2]), (face[2], face[0])] {
-                let (i, j) = (i as usize, j as usize);
-                let (pi, pj) = (uv[i], uv[j]);
-                let vi = [self.rhs[i] - pi[0], self.rhs[n + i] - pi[1]];
-                let vj = [self.rhs[j] - pj[0], self.rhs[n + j] - pj[1]];
-                let phi = spiral_factor(
-                    [vi[0] - vj[0], vi[1] - vj[1]],
-                    [pi[0] - pj[0], pi[1] - pj[1]],
-                );
-                let mi = cmul(vi, phi);
-                let mj = cmul(vj, phi);
-                self.sum[i][0] += pi[0] + mi[0];
-                self.sum[i][1] += pi[1] + mi[1];
-                self.sum[j][0] += pj[0] + mj[0];
-                self.sum[j][1] += pj[1] + mj[1];
-            }
+        for &(i, j, times) in &self.edges {
+            let (i, j) = (i as usize, j as usize);
+            let (pi, pj) = (uv[i], uv[j]);
+            let vi = [self.rhs[i] - pi[0], self.rhs[n + i] - pi[1]];
+            let vj = [self.rhs[j] - pj[0], self.rhs[n + j] - pj[1]];
+            let phi = spiral_factor(
+                [vi[0] - vj[0], vi[1] - vj[1]],
+                [pi[0] - pj[0], pi[1] - pj[1]],
+            );
+            let (mi, mj) = (cmul(vi, phi), cmul(vj, phi));
+            self.sum[i][0] += times * (pi[0] + mi[0]);
+            self.sum[i][1] += times * (pi[1] + mi[1]);
+            self.sum[j][0] += times * (pj[0] + mj[0]);
+            self.sum[j][1] += times * (pj[1] + mj[1]);
         }
         let mut change = 0.0f64;
         for (v, out) in uv.iter_mut().enumerate() {
@@ -323,6 +340,11 @@ fn gradient_of(frames: &Frames, f: usize, xy: &[f64], n: usize) -> [[f64; 2]; 2]
     out
 }
 
+/// `k!` for `k = 0..=10`.
+const FACTORIALS: [f64; 11] = [
+    1.0, 1.0, 2.0, 6.0, 24.0, 120.0, 720.0, 5040.0, 40320.0, 362880.0, 3628800.0,
+];
+
 /// Complex product.
 fn cmul(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]]
@@ -342,14 +364,18 @@ fn spiral_factor(dv: [f64; 2], dp: [f64; 2]) -> [f64; 2] {
         (dv[1] * dp[0] - dv[0] * dp[1]) / d2,
     ];
     let r2 = z[0] * z[0] + z[1] * z[1];
-    if r2 < 1e-8 {
-        // 1 + z/2 + z²/6 + z³/24, error below |z|⁴/120 < 1e-18.
-        let z2 = cmul(z, z);
-        let z3 = cmul(z2, z);
-        return [
-            1.0 + z[0] / 2.0 + z2[0] / 6.0 + z3[0] / 24.0,
-            z[1] / 2.0 + z2[1] / 6.0 + z3[1] / 24.0,
-        ];
+    if r2 < 0.01 {
+        // Σ zᵏ / (k + 1)! for k ≤ 9, by Horner: the remainder is below |z|¹⁰ / 11! < 1e-17
+        // for |z| < 0.1, so no sines, cosines or exponentials for the small fields of a
+        // drag.
+        // Five terms are enough below |z| = 1e-3 (remainder below 1e-18).
+        let terms = if r2 < 1e-6 { 5 } else { 10 };
+        let mut acc = [1.0 / FACTORIALS[terms], 0.0];
+        for k in (0..terms - 1).rev() {
+            acc = cmul(acc, z);
+            acc[0] += 1.0 / FACTORIALS[k + 1];
+        }
+        return acc;
     }
     // eᶻ − 1 = (eᵃ cos b − 1) + i eᵃ sin b, with eᵃ cos b − 1 = expm1(a) cos b − 2 sin²(b/2).
     let (a, b) = (z[0], z[1]);
@@ -370,7 +396,15 @@ mod tests {
     /// rotation field's spiral is the rotation.
     #[test]
     fn spiral_factor_is_the_flow_of_a_similarity() {
-        for z in [[1e-6, 2e-6], [0.3, -0.2], [0.0, 1.5], [-2.0, 0.5]] {
+        for z in [
+            [1e-6, 2e-6],
+            [0.05, -0.08],
+            [0.099, 0.0],
+            [0.0, -0.0999],
+            [0.3, -0.2],
+            [0.0, 1.5],
+            [-2.0, 0.5],
+        ] {
             let dp = [0.7, -0.4];
             let dv = cmul(z, dp);
             let phi = spiral_factor(dv, dp);

@@ -142,7 +142,7 @@ enum Command {
     ///   bdmorph param camelhead.off --method bounded --max-distortion 3 -o camel_k3.obj
     #[command(verbatim_doc_comment)]
     Param(ParamArgs),
-    /// Deform a planar mesh by handles, with every triangle's distortion bounded.
+    /// Deform a planar mesh by handles: bounded distortion (the default), ARAP or KVF.
     ///
     /// The vertices given by --pin move to their targets (--drag X,Y:TX,TY moves the vertex
     /// nearest (X, Y) to (TX, TY), and --fix X,Y keeps the vertex nearest (X, Y) where it

@@ -51,6 +51,7 @@ pub use morph::{blend, path};
 pub mod param;
 pub mod reference;
 pub mod render;
+pub mod studio;
 
 /// The sparse Cholesky engine every system factors and solves with.
 pub use bdmorph_cholesky as cholesky;

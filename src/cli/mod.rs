@@ -235,6 +235,21 @@ enum Command {
     ///   bdmorph demo -o my-demo
     #[command(verbatim_doc_comment)]
     Demo(DemoArgs),
+    /// The studio: an animation editor in the browser, on the live engine.
+    ///
+    /// Serves the editor on 127.0.0.1 (never another interface) and prints exactly one line
+    /// on stdout, the URL to open (it carries this run's token; nothing is served without
+    /// it), then logs on stderr until Ctrl-C. FILE is a picture (meshed by its subject and
+    /// drawn on the mesh), a mesh (OBJ/OFF) or a project the studio saved; without one the
+    /// studio starts from the sample figure. Saves and exports go into FILE's folder (or the
+    /// current one), by plain file names.
+    ///
+    /// Examples:
+    ///   bdmorph studio
+    ///   bdmorph studio figure.png --open
+    ///   bdmorph studio wave.json --port 8300
+    #[command(verbatim_doc_comment)]
+    Studio(StudioArgs),
 }
 
 #[derive(Args, Debug)]
@@ -569,6 +584,18 @@ fn parse_drag(text: &str) -> Result<([f64; 2], [f64; 2]), String> {
 }
 
 #[derive(Args, Debug)]
+struct StudioArgs {
+    /// A picture (.png, .jpg), mesh (.obj, .off) or studio project (.json) to open.
+    file: Option<PathBuf>,
+    /// The port to listen on (default: any free one).
+    #[arg(long, default_value_t = 0)]
+    port: u16,
+    /// Start the system's browser on the URL.
+    #[arg(long)]
+    open: bool,
+}
+
+#[derive(Args, Debug)]
 struct DeformArgs {
     /// The planar mesh (OBJ or OFF, z = 0).
     mesh: PathBuf,
@@ -708,6 +735,12 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Studio(args) => bdmorph::studio::run(bdmorph::studio::StudioOptions {
+            file: args.file,
+            port: args.port,
+            open: args.open,
+        })
+        .map_err(|e| e.to_string()),
     }
 }
 

@@ -1,0 +1,514 @@
+// bdmorph studio: the page. Plain JavaScript module on a 2D canvas; the engine is the server,
+// reached over one WebSocket (JSON requests; JSON state and binary f32 frames back).
+//
+// At most one drag and one scrub are in flight: a newer position waits in a one-slot mailbox
+// and replaces any older waiting one, so the engine never works on stale positions.
+
+const token = new URLSearchParams(location.search).get("token") || "";
+const $ = (id) => document.getElementById(id);
+const canvas = $("view");
+const ctx = canvas.getContext("2d");
+
+const KIND_POSE = 1, KIND_MESH = 2, KIND_FRAME = 3;
+
+const S = {
+  state: null,            // the last JSON state
+  n: 0, m: 0,
+  rest: null,             // Float32Array 2n
+  faces: null,            // Uint32Array 3m
+  uv: null,               // Float32Array 2n or null
+  pose: null,             // the positions shown
+  dist: null,             // per-triangle distortion shown
+  showing: "pose",        // "pose" (the keyframe being posed) or "frame" (the animation)
+  frameInfo: { worst: 1, flipped: 0, time: 0 },
+  pins: [],
+  drag: null,             // { pin, targets } while dragging
+  dragSeq: 0, dragInFlight: false, dragWaiting: null,
+  scrubSeq: 0, scrubInFlight: false, scrubWaiting: null,
+  view: { scale: 1, x: 0, y: 0 },
+  pan: null,
+  playing: false, playStart: 0, playFrom: 0,
+  texture: null,
+  stats: { poseUpdates: 0, frameUpdates: 0, latencies: [], sent: new Map() },
+};
+window.studio = S;
+
+// ---- the socket -------------------------------------------------------------------------
+const ws = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(token)}`);
+ws.binaryType = "arraybuffer";
+const send = (request) => { if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(request)); };
+ws.onopen = () => send({ op: "hello" });
+ws.onclose = () => status("disconnected: reload the page once the studio runs again", true);
+ws.onmessage = (event) => {
+  if (typeof event.data === "string") onState(JSON.parse(event.data));
+  else onBinary(event.data);
+};
+
+function status(text, error = false) {
+  const el = $("status");
+  el.textContent = text;
+  el.classList.toggle("error", error);
+}
+
+function onState(msg) {
+  if (msg.type === "error") { status(msg.message, true); settleAll(); return; }
+  if (msg.type !== "state") return;
+  S.state = msg;
+  S.pins = msg.keyframes[msg.current].pins.slice();
+  const method = $("method");
+  if (document.activeElement !== method) method.value = msg.method.name;
+  syncParam();
+  $("undo").disabled = !msg.can_undo;
+  $("redo").disabled = !msg.can_redo;
+  $("texture").disabled = !msg.textured;
+  if (msg.textured && !S.texture) loadTexture();
+  const key = msg.keyframes[msg.current];
+  if (document.activeElement !== $("key-time")) $("key-time").value = key.time;
+  $("key-easing").value = key.easing;
+  if (document.activeElement !== $("fps")) $("fps").value = msg.fps;
+  drawTimeline();
+  if (msg.message) status(msg.message, msg.message.startsWith("error"));
+  else showStats();
+  if (msg.message && msg.message.startsWith("error")) settleAll();
+  draw();
+}
+
+function settleAll() {
+  S.dragInFlight = false; S.scrubInFlight = false;
+  flushDrag(); flushScrub();
+}
+
+function onBinary(buffer) {
+  const head = new DataView(buffer, 0, 32);
+  const kind = head.getUint32(0, true);
+  if (kind === KIND_MESH) {
+    const n = head.getUint32(4, true), m = head.getUint32(8, true), textured = head.getUint32(12, true);
+    S.n = n; S.m = m;
+    S.rest = new Float32Array(buffer, 16, 2 * n);
+    S.faces = new Uint32Array(buffer, 16 + 8 * n, 3 * m);
+    S.uv = textured ? new Float32Array(buffer, 16 + 8 * n + 12 * m, 2 * n) : null;
+    S.pose = Float32Array.from(S.rest);
+    S.dist = new Float32Array(m).fill(1);
+    fit();
+    return;
+  }
+  const seq = head.getUint32(4, true), n = head.getUint32(8, true), m = head.getUint32(12, true);
+  if (n !== S.n || m !== S.m) return;
+  S.frameInfo = { worst: head.getFloat32(16, true), flipped: head.getUint32(20, true), time: head.getFloat32(24, true) };
+  S.pose = new Float32Array(buffer, 32, 2 * n);
+  S.dist = new Float32Array(buffer, 32 + 8 * n, m);
+  const sentAt = S.stats.sent.get(`${kind}:${seq}`);
+  if (sentAt !== undefined) {
+    S.stats.latencies.push(performance.now() - sentAt);
+    if (S.stats.latencies.length > 1000) S.stats.latencies.shift();
+    S.stats.sent.delete(`${kind}:${seq}`);
+  }
+  if (kind === KIND_POSE) {
+    S.showing = "pose";
+    S.stats.poseUpdates++;
+    if (seq !== 0 && seq === S.dragSeq) { S.dragInFlight = false; flushDrag(); }
+  } else if (kind === KIND_FRAME) {
+    S.showing = "frame";
+    S.stats.frameUpdates++;
+    if (seq === S.scrubSeq) { S.scrubInFlight = false; flushScrub(); }
+  }
+  showStats();
+  draw();
+}
+
+function showStats() {
+  const st = S.state;
+  if (!st) return;
+  const what = S.showing === "frame" ? `frame at ${S.frameInfo.time.toFixed(2)} s` : `keyframe ${st.current + 1} of ${st.keyframes.length}`;
+  const worst = Number.isFinite(S.frameInfo.worst) ? S.frameInfo.worst.toFixed(3) : "∞";
+  const lat = S.stats.latencies;
+  const recent = lat.slice(-30);
+  const mean = recent.length ? (recent.reduce((a, b) => a + b, 0) / recent.length).toFixed(1) : "–";
+  status(`${what} · ${st.vertices} vertices, ${st.faces} triangles · largest distortion ${worst}, ${S.frameInfo.flipped} flipped · ${S.pins.length} pins · ${mean} ms per update`);
+}
+
+// ---- view ---------------------------------------------------------------------------------
+function resize() {
+  const r = canvas.getBoundingClientRect();
+  const dpr = window.devicePixelRatio || 1;
+  canvas.width = Math.max(1, Math.round(r.width * dpr));
+  canvas.height = Math.max(1, Math.round(r.height * dpr));
+  draw();
+}
+window.addEventListener("resize", resize);
+
+function fit() {
+  if (!S.rest) return;
+  let lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
+  for (let i = 0; i < S.n; i++) {
+    const x = S.rest[2 * i], y = S.rest[2 * i + 1];
+    lo = [Math.min(lo[0], x), Math.min(lo[1], y)];
+    hi = [Math.max(hi[0], x), Math.max(hi[1], y)];
+  }
+  const w = canvas.width, h = canvas.height;
+  const span = Math.max(hi[0] - lo[0], hi[1] - lo[1]) || 1;
+  // Room for poses that reach beyond the rest shape.
+  S.view.scale = 0.6 * Math.min(w, h) / span;
+  S.view.x = w / 2 - S.view.scale * (lo[0] + hi[0]) / 2;
+  S.view.y = h / 2 + S.view.scale * (lo[1] + hi[1]) / 2;
+  draw();
+}
+
+// World (y up) to canvas pixels and back.
+const dpr = () => window.devicePixelRatio || 1;
+function toCanvas(x, y) { return [S.view.x + S.view.scale * x, S.view.y - S.view.scale * y]; }
+function toWorld(px, py) { return [(px - S.view.x) / S.view.scale, (S.view.y - py) / S.view.scale]; }
+function eventCanvas(e) {
+  const r = canvas.getBoundingClientRect();
+  return [(e.clientX - r.left) * dpr(), (e.clientY - r.top) * dpr()];
+}
+// For scripted tests: the page (CSS pixel) position of a world point, and of vertex v now.
+S.toPage = (x, y) => {
+  const r = canvas.getBoundingClientRect();
+  const [px, py] = toCanvas(x, y);
+  return [r.left + px / dpr(), r.top + py / dpr()];
+};
+S.vertexOnPage = (v) => S.toPage(S.pose[2 * v], S.pose[2 * v + 1]);
+
+// ---- drawing ------------------------------------------------------------------------------
+const SHADES = 24;
+// Viridis-like ramp from 1 (dark) to the scale's top (yellow), on a log scale.
+function shade(i) {
+  const t = i / (SHADES - 1);
+  const stops = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+  const s = t * (stops.length - 1), k = Math.min(stops.length - 2, Math.floor(s)), f = s - k;
+  const c = stops[k].map((a, j) => Math.round(a + f * (stops[k + 1][j] - a)));
+  return `rgb(${c[0]},${c[1]},${c[2]})`;
+}
+const RAMP = Array.from({ length: SHADES }, (_, i) => shade(i));
+
+function draw() {
+  const w = canvas.width, h = canvas.height;
+  ctx.setTransform(1, 0, 0, 1, 0, 0);
+  ctx.fillStyle = "#fff";
+  ctx.fillRect(0, 0, w, h);
+  if (!S.pose || !S.faces) return;
+  const P = S.pose, F = S.faces, D = S.dist;
+  const sx = S.view.scale, ox = S.view.x, oy = S.view.y;
+  if ($("overlay").checked && S.rest) {
+    ctx.strokeStyle = "rgba(200,120,0,0.35)";
+    ctx.lineWidth = 1;
+    strokeEdges(S.rest, sx, ox, oy);
+  }
+  if ($("texture").checked && S.texture && S.uv) {
+    drawTextured(P, sx, ox, oy);
+  } else {
+    // Triangles grouped by shade: one path per shade.
+    const colours = $("colours").checked;
+    let top = 0;
+    for (let f = 0; f < S.m; f++) if (Number.isFinite(D[f])) top = Math.max(top, D[f]);
+    const scale = Math.log(Math.max(top, 1.05));
+    const buckets = Array.from({ length: SHADES + 1 }, () => []);
+    for (let f = 0; f < S.m; f++) {
+      const d = D[f];
+      if (!Number.isFinite(d)) buckets[SHADES].push(f);
+      else if (!colours) buckets[0].push(f);
+      else buckets[Math.min(SHADES - 1, Math.floor((SHADES - 1) * Math.log(Math.max(d, 1)) / scale + 0.5))].push(f);
+    }
+    for (let b = 0; b <= SHADES; b++) {
+      const list = buckets[b];
+      if (!list.length) continue;
+      ctx.beginPath();
+      for (const f of list) {
+        const a = F[3 * f], c = F[3 * f + 1], e = F[3 * f + 2];
+        ctx.moveTo(ox + sx * P[2 * a], oy - sx * P[2 * a + 1]);
+        ctx.lineTo(ox + sx * P[2 * c], oy - sx * P[2 * c + 1]);
+        ctx.lineTo(ox + sx * P[2 * e], oy - sx * P[2 * e + 1]);
+        ctx.closePath();
+      }
+      ctx.fillStyle = b === SHADES ? "#e0102a" : (colours ? RAMP[b] : "#b9d3ee");
+      ctx.fill();
+    }
+  }
+  if ($("edges").checked) {
+    ctx.strokeStyle = "rgba(255,255,255,0.35)";
+    ctx.lineWidth = 1;
+    strokeEdges(P, sx, ox, oy);
+  }
+  if (S.showing === "pose") {
+    for (let i = 0; i < S.pins.length; i++) {
+      const v = S.pins[i];
+      const [px, py] = toCanvas(P[2 * v], P[2 * v + 1]);
+      ctx.beginPath();
+      ctx.arc(px, py, 6 * dpr(), 0, 2 * Math.PI);
+      ctx.fillStyle = S.drag && S.drag.pin === i ? "#ff3b00" : "#ff9d00";
+      ctx.fill();
+      ctx.lineWidth = 2;
+      ctx.strokeStyle = "#222";
+      ctx.stroke();
+    }
+  }
+}
+
+function strokeEdges(P, sx, ox, oy) {
+  const F = S.faces;
+  ctx.beginPath();
+  for (let f = 0; f < S.m; f++) {
+    const a = F[3 * f], c = F[3 * f + 1], e = F[3 * f + 2];
+    ctx.moveTo(ox + sx * P[2 * a], oy - sx * P[2 * a + 1]);
+    ctx.lineTo(ox + sx * P[2 * c], oy - sx * P[2 * c + 1]);
+    ctx.lineTo(ox + sx * P[2 * e], oy - sx * P[2 * e + 1]);
+    ctx.closePath();
+  }
+  ctx.stroke();
+}
+
+// Each triangle drawn with the picture through the affine map its corners define.
+function drawTextured(P, sx, ox, oy) {
+  const img = S.texture, W = img.width, H = img.height, F = S.faces, U = S.uv;
+  for (let f = 0; f < S.m; f++) {
+    const v = [F[3 * f], F[3 * f + 1], F[3 * f + 2]];
+    const p = v.map((k) => [ox + sx * P[2 * k], oy - sx * P[2 * k + 1]]);
+    const t = v.map((k) => [U[2 * k] * W, (1 - U[2 * k + 1]) * H]);
+    const den = (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]);
+    if (Math.abs(den) < 1e-12) continue;
+    const a = ((p[1][0] - p[0][0]) * (t[2][1] - t[0][1]) - (p[2][0] - p[0][0]) * (t[1][1] - t[0][1])) / den;
+    const b = ((p[1][1] - p[0][1]) * (t[2][1] - t[0][1]) - (p[2][1] - p[0][1]) * (t[1][1] - t[0][1])) / den;
+    const c = ((p[2][0] - p[0][0]) * (t[1][0] - t[0][0]) - (p[1][0] - p[0][0]) * (t[2][0] - t[0][0])) / den;
+    const d = ((p[2][1] - p[0][1]) * (t[1][0] - t[0][0]) - (p[1][1] - p[0][1]) * (t[2][0] - t[0][0])) / den;
+    const e = p[0][0] - a * t[0][0] - c * t[0][1];
+    const g = p[0][1] - b * t[0][0] - d * t[0][1];
+    ctx.save();
+    ctx.beginPath();
+    ctx.moveTo(p[0][0], p[0][1]); ctx.lineTo(p[1][0], p[1][1]); ctx.lineTo(p[2][0], p[2][1]);
+    ctx.closePath();
+    ctx.clip();
+    ctx.setTransform(a, b, c, d, e, g);
+    ctx.drawImage(img, 0, 0);
+    ctx.restore();
+  }
+  ctx.setTransform(1, 0, 0, 1, 0, 0);
+}
+
+function loadTexture() {
+  const img = new Image();
+  img.onload = () => { S.texture = img; draw(); };
+  img.src = `texture.png?token=${encodeURIComponent(token)}`;
+}
+
+// ---- posing -------------------------------------------------------------------------------
+function nearestVertex(px, py, radius) {
+  let best = -1, bestD = radius * radius;
+  for (let v = 0; v < S.n; v++) {
+    const [x, y] = toCanvas(S.pose[2 * v], S.pose[2 * v + 1]);
+    const d = (x - px) ** 2 + (y - py) ** 2;
+    if (d < bestD) { bestD = d; best = v; }
+  }
+  return best;
+}
+function nearestPin(px, py, radius) {
+  let best = -1, bestD = radius * radius;
+  S.pins.forEach((v, i) => {
+    const [x, y] = toCanvas(S.pose[2 * v], S.pose[2 * v + 1]);
+    const d = (x - px) ** 2 + (y - py) ** 2;
+    if (d < bestD) { bestD = d; best = i; }
+  });
+  return best;
+}
+function pinTargets() { return S.pins.map((v) => [S.pose[2 * v], S.pose[2 * v + 1]]); }
+
+function requestDrag(targets) {
+  S.dragWaiting = targets;
+  flushDrag();
+}
+function flushDrag() {
+  if (S.dragInFlight || !S.dragWaiting) return;
+  const targets = S.dragWaiting;
+  S.dragWaiting = null;
+  S.dragInFlight = true;
+  S.dragSeq++;
+  S.stats.sent.set(`${KIND_POSE}:${S.dragSeq}`, performance.now());
+  send({ op: "drag", seq: S.dragSeq, targets });
+}
+
+canvas.addEventListener("contextmenu", (e) => {
+  e.preventDefault();
+  if (S.showing !== "pose") return;
+  const [px, py] = eventCanvas(e);
+  const i = nearestPin(px, py, 12 * dpr());
+  if (i >= 0) {
+    S.pins.splice(i, 1);
+    send({ op: "pins", pins: S.pins });
+    draw();
+  }
+});
+
+canvas.addEventListener("mousedown", (e) => {
+  canvas.focus();
+  const [px, py] = eventCanvas(e);
+  if (e.button === 1 || (e.button === 0 && e.shiftKey)) {
+    S.pan = { px, py, x: S.view.x, y: S.view.y };
+    e.preventDefault();
+    return;
+  }
+  if (e.button !== 0 || !S.pose) return;
+  if (S.showing !== "pose") { send({ op: "select", keyframe: S.state.current }); return; }
+  let i = nearestPin(px, py, 12 * dpr());
+  if (i < 0) {
+    const v = nearestVertex(px, py, 14 * dpr());
+    if (v < 0) return;
+    S.pins.push(v);
+    i = S.pins.length - 1;
+    send({ op: "pins", pins: S.pins });
+  }
+  S.drag = { pin: i, targets: pinTargets() };
+  draw();
+});
+
+window.addEventListener("mousemove", (e) => {
+  const [px, py] = eventCanvas(e);
+  if (S.pan) {
+    S.view.x = S.pan.x + (px - S.pan.px);
+    S.view.y = S.pan.y + (py - S.pan.py);
+    draw();
+    return;
+  }
+  if (!S.drag) return;
+  S.drag.targets[S.drag.pin] = toWorld(px, py);
+  requestDrag(S.drag.targets.map((t) => t.slice()));
+});
+
+window.addEventListener("mouseup", () => {
+  if (S.pan) { S.pan = null; return; }
+  if (!S.drag) return;
+  S.drag = null;
+  send({ op: "drag_end" });
+  draw();
+});
+
+canvas.addEventListener("wheel", (e) => {
+  e.preventDefault();
+  const [px, py] = eventCanvas(e);
+  const k = Math.exp(-e.deltaY * 0.0015);
+  S.view.x = px - k * (px - S.view.x);
+  S.view.y = py - k * (py - S.view.y);
+  S.view.scale *= k;
+  draw();
+}, { passive: false });
+
+window.addEventListener("keydown", (e) => {
+  if (e.target instanceof HTMLInputElement) return;
+  if ((e.ctrlKey || e.metaKey) && e.key === "z") { send({ op: "undo" }); e.preventDefault(); }
+  if ((e.ctrlKey || e.metaKey) && (e.key === "y" || (e.shiftKey && e.key === "Z"))) { send({ op: "redo" }); e.preventDefault(); }
+  if (e.key === " ") { togglePlay(); e.preventDefault(); }
+});
+
+// ---- controls -----------------------------------------------------------------------------
+function syncParam() {
+  const st = S.state;
+  if (!st) return;
+  const name = $("method").value;
+  const label = $("param-label");
+  const input = $("param");
+  label.style.visibility = name === "arap" ? "hidden" : "visible";
+  label.firstChild.textContent = name === "bounded" ? "K " : "weight ";
+  if (document.activeElement !== input) input.value = name === "bounded" ? st.method.max_distortion : st.method.weight;
+}
+$("method").addEventListener("change", () => {
+  send({ op: "method", name: $("method").value });
+});
+$("param").addEventListener("change", () => {
+  const value = Number($("param").value);
+  const name = $("method").value;
+  send({ op: "method", name, ...(name === "bounded" ? { max_distortion: value } : { weight: value }) });
+});
+$("undo").onclick = () => send({ op: "undo" });
+$("redo").onclick = () => send({ op: "redo" });
+$("reset").onclick = () => send({ op: "reset" });
+$("unpin").onclick = () => { S.pins = []; send({ op: "pins", pins: [] }); draw(); };
+for (const id of ["edges", "colours", "texture", "overlay"]) $(id).addEventListener("change", draw);
+$("fit").onclick = fit;
+$("save").onclick = () => send({ op: "save", name: $("save-name").value });
+$("export-format").addEventListener("change", () => {
+  const f = $("export-format").value;
+  const ext = { gif: ".gif", mp4: ".mp4", png: ".png", html: ".html", obj: "" }[f];
+  $("export-name").value = "animation" + (f === "obj" ? "-frames" : ext);
+});
+$("export").onclick = () => {
+  status("exporting…");
+  send({ op: "export", format: $("export-format").value, name: $("export-name").value });
+};
+$("add-key").onclick = () => {
+  const last = S.state.keyframes[S.state.keyframes.length - 1].time;
+  send({ op: "add_keyframe", time: Math.round((last + 1) * 1000) / 1000 });
+};
+$("frame-key").onclick = () => send({ op: "frame_to_keyframe", time: sliderTime() });
+$("delete-key").onclick = () => send({ op: "delete_keyframe", keyframe: S.state.current });
+$("key-time").addEventListener("change", () => send({ op: "set_time", keyframe: S.state.current, time: Number($("key-time").value) }));
+$("key-easing").addEventListener("change", () => send({ op: "set_easing", keyframe: S.state.current, easing: $("key-easing").value }));
+
+function drawTimeline() {
+  const st = S.state, keys = $("keys");
+  keys.textContent = "";
+  const duration = Math.max(st.duration, 1e-9);
+  st.keyframes.forEach((k, i) => {
+    const el = document.createElement("div");
+    el.className = "key" + (i === st.current ? " current" : "");
+    el.style.left = `${(100 * k.time) / duration}%`;
+    el.title = `keyframe ${i + 1} at ${k.time} s (${k.easing})`;
+    el.dataset.index = String(i);
+    el.onclick = () => send({ op: "select", keyframe: i });
+    keys.appendChild(el);
+  });
+}
+
+// ---- playback -----------------------------------------------------------------------------
+function sliderTime() {
+  const st = S.state;
+  return st ? (Number($("time").value) / 1000) * st.duration : 0;
+}
+function requestScrub(time) {
+  S.scrubWaiting = time;
+  flushScrub();
+}
+function flushScrub() {
+  if (S.scrubInFlight || S.scrubWaiting === null) return;
+  const time = S.scrubWaiting;
+  S.scrubWaiting = null;
+  S.scrubInFlight = true;
+  S.scrubSeq++;
+  S.stats.sent.set(`${KIND_FRAME}:${S.scrubSeq}`, performance.now());
+  send({ op: "scrub", seq: S.scrubSeq, time });
+}
+$("time").addEventListener("input", () => {
+  const time = sliderTime();
+  $("time-readout").textContent = `${time.toFixed(2)} s`;
+  requestScrub(time);
+});
+
+function togglePlay() {
+  if (!S.state || S.state.keyframes.length < 2) { status("add a second keyframe to play", true); return; }
+  S.playing = !S.playing;
+  $("play").textContent = S.playing ? "Pause" : "Play";
+  if (S.playing) {
+    S.playStart = performance.now();
+    S.playFrom = sliderTime() >= S.state.duration ? 0 : sliderTime();
+    requestAnimationFrame(tick);
+  }
+}
+$("play").onclick = togglePlay;
+let lastTick = 0;
+function tick(now) {
+  if (!S.playing) return;
+  const st = S.state;
+  const fps = Math.max(1, Number($("fps").value) || 25);
+  if (now - lastTick >= 1000 / fps - 1) {
+    lastTick = now;
+    let time = S.playFrom + (now - S.playStart) / 1000;
+    if (time > st.duration) {
+      if ($("loop").checked) { S.playStart = now; S.playFrom = 0; time = 0; }
+      else { time = st.duration; S.playing = false; $("play").textContent = "Play"; }
+    }
+    $("time").value = String(Math.round((1000 * time) / Math.max(st.duration, 1e-9)));
+    $("time-readout").textContent = `${time.toFixed(2)} s`;
+    requestScrub(time);
+  }
+  requestAnimationFrame(tick);
+}
+
+resize();

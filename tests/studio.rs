@@ -1,0 +1,444 @@
+//! `bdmorph studio` as a server: the URL line, the checks on every request and socket (token,
+//! Host, Origin, sizes, malformed input, paths outside the workspace), each refused with the
+//! server still serving; the engine over the socket (pins, drags, keyframes, scrubs, save,
+//! export); projects refused cleanly when damaged or from another version.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use bdmorph::generate;
+use tungstenite::client::IntoClientRequest;
+use tungstenite::{Message, WebSocket};
+
+/// A running studio, stopped when dropped.
+struct Studio {
+    child: Child,
+    port: u16,
+    token: String,
+}
+
+impl Studio {
+    fn start(dir: &Path, file: Option<&str>) -> Studio {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_bdmorph"));
+        c.arg("studio").current_dir(dir);
+        if let Some(f) = file {
+            c.arg(f);
+        }
+        let mut child = c
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("starts");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().expect("stdout"))
+            .read_line(&mut line)
+            .expect("the URL line");
+        let url = line.trim();
+        let rest = url
+            .strip_prefix("http://127.0.0.1:")
+            .unwrap_or_else(|| panic!("a loopback URL, not {url:?}"));
+        let (port, query) = rest.split_once("/?token=").expect("a token");
+        Studio {
+            child,
+            port: port.parse().expect("port"),
+            token: query.to_owned(),
+        }
+    }
+
+    /// Sends raw bytes as one HTTP request; the status code of the answer.
+    fn raw(&self, request: &[u8]) -> u16 {
+        let mut s = TcpStream::connect(("127.0.0.1", self.port)).expect("connects");
+        s.set_read_timeout(Some(Duration::from_secs(10)))
+            .expect("timeout");
+        s.write_all(request).expect("writes");
+        let mut answer = Vec::new();
+        let _ = s.read_to_end(&mut answer);
+        let text = String::from_utf8_lossy(&answer);
+        text.split_whitespace()
+            .nth(1)
+            .and_then(|c| c.parse().ok())
+            .unwrap_or(0)
+    }
+
+    fn get(&self, path: &str, extra_headers: &str) -> u16 {
+        let request = format!(
+            "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{}\r\n{extra_headers}Connection: close\r\n\r\n",
+            self.port
+        );
+        self.raw(request.as_bytes())
+    }
+
+    fn page_is_served(&self) -> bool {
+        self.get(&format!("/?token={}", self.token), "") == 200
+    }
+
+    fn socket(&self) -> WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>> {
+        let url = format!("ws://127.0.0.1:{}/ws?token={}", self.port, self.token);
+        let (ws, _) = tungstenite::connect(url).expect("socket opens");
+        ws
+    }
+}
+
+impl Drop for Studio {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bdmorph-studio-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+/// Sends a request and reads answers until one of `kind` (a binary kind number, or 0 for a
+/// JSON state); returns the JSON states seen and that answer's bytes.
+fn ask(
+    ws: &mut WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>,
+    request: &str,
+    kind: u32,
+) -> (Vec<serde_json::Value>, Vec<u8>) {
+    ws.send(Message::Text(request.into())).expect("sends");
+    let mut states = Vec::new();
+    loop {
+        match ws.read().expect("an answer") {
+            Message::Text(t) => {
+                let v: serde_json::Value = serde_json::from_str(t.as_str()).expect("JSON");
+                states.push(v);
+                if kind == 0 {
+                    return (states, Vec::new());
+                }
+            }
+            Message::Binary(b) => {
+                let k = u32::from_le_bytes(b[..4].try_into().expect("header"));
+                if k == kind {
+                    return (states, b.to_vec());
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// `hello`: the state, the mesh message and the first pose (its answers, in that order).
+fn hello(
+    ws: &mut WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>,
+) -> (serde_json::Value, Vec<u8>, Vec<u8>) {
+    let (states, mesh) = ask(ws, r#"{"op":"hello"}"#, 2);
+    let (_, pose) = ask_more(ws, 1);
+    (states[0].clone(), mesh, pose)
+}
+
+/// Reads on without sending, until a binary answer of `kind`.
+fn ask_more(
+    ws: &mut WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>,
+    kind: u32,
+) -> (Vec<serde_json::Value>, Vec<u8>) {
+    loop {
+        if let Message::Binary(b) = ws.read().expect("an answer") {
+            if u32::from_le_bytes(b[..4].try_into().expect("header")) == kind {
+                return (Vec::new(), b.to_vec());
+            }
+        }
+    }
+}
+
+/// Positions of a binary frame (kind 1 or 3).
+fn positions(frame: &[u8]) -> Vec<[f32; 2]> {
+    let n = u32::from_le_bytes(frame[8..12].try_into().expect("n")) as usize;
+    (0..n)
+        .map(|i| {
+            let at = 32 + 8 * i;
+            [
+                f32::from_le_bytes(frame[at..at + 4].try_into().expect("x")),
+                f32::from_le_bytes(frame[at + 4..at + 8].try_into().expect("y")),
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn every_request_needs_the_token_our_host_and_our_origin() {
+    let dir = scratch("guard");
+    let studio = Studio::start(&dir, None);
+    let t = &studio.token;
+    assert_eq!(studio.get(&format!("/?token={t}"), ""), 200);
+    assert_eq!(studio.get(&format!("/studio.js?token={t}"), ""), 200);
+    // No token, a wrong one, one of the wrong length.
+    assert_eq!(studio.get("/", ""), 403);
+    assert_eq!(studio.get("/studio.js", ""), 403);
+    assert_eq!(
+        studio.get("/?token=0123456789abcdef0123456789abcdef", ""),
+        403
+    );
+    assert_eq!(studio.get(&format!("/?token={t}x"), ""), 403);
+    // A foreign Host (DNS rebinding) and a foreign Origin (another site's page).
+    let foreign_host = format!(
+        "GET /?token={t} HTTP/1.1\r\nHost: evil.example:{}\r\nConnection: close\r\n\r\n",
+        studio.port
+    );
+    assert_eq!(studio.raw(foreign_host.as_bytes()), 403);
+    assert_eq!(
+        studio.get(&format!("/?token={t}"), "Origin: http://evil.example\r\n"),
+        403
+    );
+    assert_eq!(
+        studio.get(
+            &format!("/?token={t}"),
+            &format!("Origin: http://127.0.0.1:{}\r\n", studio.port)
+        ),
+        200
+    );
+    // No Host at all, malformed HTTP, an oversized request line, other methods, other paths.
+    assert_eq!(
+        studio.raw(format!("GET /?token={t} HTTP/1.0\r\n\r\n").as_bytes()),
+        400
+    );
+    let garbage = studio.raw(b"\x16\x03\x01 not http at all\r\n\r\n");
+    assert!((400..500).contains(&garbage) || garbage == 0, "{garbage}");
+    let long = format!("/?token={t}&pad={}", "a".repeat(200_000));
+    let code = studio.get(&long, "");
+    assert!((400..500).contains(&code) || code == 0, "{code}");
+    let post = format!(
+        "POST /?token={t} HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc",
+        studio.port
+    );
+    assert_eq!(studio.raw(post.as_bytes()), 405);
+    assert_eq!(studio.get(&format!("/../../etc/passwd?token={t}"), ""), 404);
+    assert_eq!(studio.get(&format!("/texture.png?token={t}"), ""), 404);
+    // Sockets: without the token, or from another origin, the handshake is refused.
+    let bare = format!("ws://127.0.0.1:{}/ws", studio.port);
+    assert!(tungstenite::connect(bare).is_err());
+    let mut request = format!("ws://127.0.0.1:{}/ws?token={t}", studio.port)
+        .into_client_request()
+        .expect("request");
+    request
+        .headers_mut()
+        .insert("Origin", "http://evil.example".parse().expect("header"));
+    assert!(tungstenite::connect(request).is_err());
+    assert!(studio.page_is_served(), "still serving after all that");
+}
+
+#[test]
+fn bad_messages_are_refused_and_the_server_keeps_serving() {
+    let dir = scratch("messages");
+    let studio = Studio::start(&dir, None);
+    let mut ws = studio.socket();
+    let (states, _) = ask(&mut ws, "{ not json", 0);
+    assert_eq!(states[0]["type"], "error", "{states:?}");
+    let (states, _) = ask(&mut ws, r#"{"op":"no_such_thing"}"#, 0);
+    assert_eq!(states[0]["type"], "error");
+    let (states, _) = ask(&mut ws, r#"{"op":"drag","seq":1,"targets":[[0,0]]}"#, 0);
+    assert!(
+        states[0]["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("pin some vertices")),
+        "{states:?}"
+    );
+    let (states, _) = ask(&mut ws, r#"{"op":"pins","pins":[999999]}"#, 0);
+    assert!(states[0]["message"]
+        .as_str()
+        .is_some_and(|m| m.starts_with("error")));
+    ws.send(Message::Binary(vec![1, 2, 3].into()))
+        .expect("sends");
+    match ws.read().expect("answer") {
+        Message::Text(t) => assert!(t.as_str().contains("binary requests are not accepted")),
+        other => panic!("{other:?}"),
+    }
+    // An oversized message closes that socket; the server goes on.
+    let big = format!(r#"{{"op":"pins","pins":[{}0]}}"#, "0,".repeat(600_000));
+    let _ = ws.send(Message::Text(big.into()));
+    let closed = (0..5).any(|_| ws.read().is_err());
+    assert!(closed, "the oversized message's socket is closed");
+    assert!(studio.page_is_served());
+    // A new socket (a reload, or a second tab) works, alongside another.
+    let mut a = studio.socket();
+    let mut b = studio.socket();
+    let (state, mesh, _) = hello(&mut a);
+    assert_eq!(state["type"], "state");
+    assert!(mesh.len() > 16);
+    let (state, _, _) = hello(&mut b);
+    assert_eq!(state["keyframes"].as_array().map(Vec::len), Some(1));
+}
+
+#[test]
+fn writes_go_only_into_the_workspace_by_plain_names() {
+    let dir = scratch("paths");
+    let studio = Studio::start(&dir, None);
+    let mut ws = studio.socket();
+    hello(&mut ws);
+    ask(&mut ws, r#"{"op":"add_keyframe","time":1}"#, 1);
+    let outside = dir.parent().expect("parent").join("bdmorph-escaped.json");
+    for name in [
+        "../bdmorph-escaped.json",
+        "/tmp/bdmorph-escaped.json",
+        "sub/dir.json",
+        ".hidden.json",
+        "notes.txt",
+        "",
+    ] {
+        let request = serde_json::json!({"op": "save", "name": name}).to_string();
+        let (states, _) = ask(&mut ws, &request, 0);
+        let said = states[0]["message"].as_str().unwrap_or_default();
+        assert!(said.starts_with("error"), "{name:?}: {said}");
+    }
+    let (states, _) = ask(
+        &mut ws,
+        r#"{"op":"export","format":"gif","name":"../escaped.gif"}"#,
+        0,
+    );
+    assert!(states[0]["message"]
+        .as_str()
+        .unwrap_or_default()
+        .starts_with("error"));
+    assert!(!outside.exists());
+    assert_eq!(
+        std::fs::read_dir(&dir).expect("dir").count(),
+        0,
+        "nothing written"
+    );
+    // A plain name is written, atomically, and read back whole.
+    let (states, _) = ask(&mut ws, r#"{"op":"save","name":"walk.json"}"#, 0);
+    assert!(
+        states[0]["message"]
+            .as_str()
+            .unwrap_or_default()
+            .starts_with("saved"),
+        "{states:?}"
+    );
+    let project = bdmorph::studio::Project::read(&dir.join("walk.json")).expect("a valid project");
+    assert_eq!(project.keyframes.len(), 2);
+    assert!(studio.page_is_served());
+}
+
+#[test]
+fn the_engine_poses_plays_saves_and_reopens_the_same_frames() {
+    let dir = scratch("engine");
+    let studio = Studio::start(&dir, None);
+    let mut ws = studio.socket();
+    let (state, mesh, _) = hello(&mut ws);
+    let n = u32::from_le_bytes(mesh[4..8].try_into().expect("n")) as usize;
+    assert_eq!(state["vertices"].as_u64(), Some(n as u64));
+    let (_, rest) = ask(&mut ws, r#"{"op":"select","keyframe":0}"#, 1);
+    let rest = positions(&rest);
+    // Add a keyframe, pin two vertices of it and drag one.
+    ask(&mut ws, r#"{"op":"add_keyframe","time":2}"#, 1);
+    let far = (0..n)
+        .max_by(|&a, &b| {
+            let d = |i: usize| (rest[i][0] - rest[0][0]).hypot(rest[i][1] - rest[0][1]);
+            d(a).total_cmp(&d(b))
+        })
+        .expect("vertices");
+    ask(&mut ws, &format!(r#"{{"op":"pins","pins":[0,{far}]}}"#), 0);
+    let mut last = Vec::new();
+    for step in 1..=10 {
+        let target = [
+            rest[far][0] + 0.05 * step as f32,
+            rest[far][1] + 0.08 * step as f32,
+        ];
+        let request = serde_json::json!({
+            "op": "drag", "seq": step, "targets": [rest[0], target]
+        });
+        let (_, frame) = ask(&mut ws, &request.to_string(), 1);
+        assert_eq!(
+            u32::from_le_bytes(frame[4..8].try_into().expect("seq")),
+            step
+        );
+        last = positions(&frame);
+    }
+    ask(&mut ws, r#"{"op":"drag_end"}"#, 0);
+    assert!(
+        (last[far][0] - (rest[far][0] + 0.5)).abs() < 0.02,
+        "{:?}",
+        last[far]
+    );
+    ask(
+        &mut ws,
+        r#"{"op":"set_easing","keyframe":0,"easing":"ease-in-out"}"#,
+        0,
+    );
+    // Undo and redo the drag.
+    let (_, undone) = ask(&mut ws, r#"{"op":"undo"}"#, 1);
+    assert_eq!(positions(&undone)[far], rest[far]);
+    let (_, redone) = ask(&mut ws, r#"{"op":"redo"}"#, 1);
+    assert_eq!(positions(&redone)[far], last[far]);
+    // Scrub: the frame at 1 s, and the ends are the keyframes.
+    let (_, middle) = ask(&mut ws, r#"{"op":"scrub","seq":7,"time":1.0}"#, 3);
+    let (_, end) = ask(&mut ws, r#"{"op":"scrub","seq":8,"time":2.0}"#, 3);
+    let end = positions(&end);
+    assert!((end[far][0] - last[far][0]).abs() < 1e-4);
+    // Save, export, then open the saved project in a new studio: the same frame at 1 s.
+    let (states, _) = ask(&mut ws, r#"{"op":"save","name":"anim.json"}"#, 0);
+    assert!(states[0]["message"]
+        .as_str()
+        .unwrap_or_default()
+        .starts_with("saved"));
+    for (format, name) in [("gif", "a.gif"), ("png", "a.png"), ("html", "a.html")] {
+        let request =
+            serde_json::json!({"op": "export", "format": format, "name": name, "frames": 6});
+        let (states, _) = ask(&mut ws, &request.to_string(), 0);
+        let said = states[0]["message"].as_str().unwrap_or_default();
+        assert!(said.starts_with("exported"), "{format}: {said}");
+    }
+    let gif = std::fs::read(dir.join("a.gif")).expect("gif");
+    let mut decoder = gif::DecodeOptions::new();
+    decoder.set_color_output(gif::ColorOutput::RGBA);
+    let mut reader = decoder.read_info(gif.as_slice()).expect("a GIF");
+    let mut frames = 0;
+    while reader.read_next_frame().expect("frame").is_some() {
+        frames += 1;
+    }
+    assert_eq!(frames, 6);
+    let html = std::fs::read_to_string(dir.join("a.html")).expect("html");
+    assert!(html.contains("<canvas") || html.contains("<svg"));
+    drop(ws);
+    drop(studio);
+    let again = Studio::start(&dir, Some("anim.json"));
+    let mut ws = again.socket();
+    let (state, _, _) = hello(&mut ws);
+    assert_eq!(state["keyframes"].as_array().map(Vec::len), Some(2));
+    assert_eq!(state["keyframes"][0]["easing"], "ease-in-out");
+    let (_, reopened) = ask(&mut ws, r#"{"op":"scrub","seq":1,"time":1.0}"#, 3);
+    assert_eq!(positions(&reopened), positions(&middle), "the same frame");
+}
+
+#[test]
+fn damaged_and_foreign_projects_are_refused_at_start() {
+    let dir = scratch("damaged");
+    let mesh = generate::disk(4, 0.1);
+    let good = bdmorph::studio::Project::new(&mesh, None);
+    let text = String::from_utf8(good.to_json()).expect("utf8");
+    for (name, body, said) in [
+        (
+            "v2.json",
+            text.replacen("\"version\": 1", "\"version\": 2", 1),
+            "another version",
+        ),
+        (
+            "other.json",
+            "{\"format\": \"something\"}".to_owned(),
+            "not a bdmorph studio project",
+        ),
+        (
+            "cut.json",
+            text[..text.len() / 2].to_owned(),
+            "not a bdmorph studio project",
+        ),
+    ] {
+        std::fs::write(dir.join(name), body).expect("write");
+        let out = Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+            .args(["studio", name])
+            .current_dir(&dir)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{name}");
+        assert!(out.stdout.is_empty(), "{name}: no URL");
+        assert!(err.contains(said), "{name}: {err}");
+    }
+}

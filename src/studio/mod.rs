@@ -117,6 +117,13 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
             session: Mutex::new(session),
             texture_png,
         });
+        // Small frames go out at once (no Nagle delay): latency is the point.
+        use axum::serve::ListenerExt as _;
+        let listener = listener.tap_io(|stream| {
+            if let Err(e) = stream.set_nodelay(true) {
+                eprintln!("studio: TCP_NODELAY not set: {e}");
+            }
+        });
         axum::serve(listener, server::router(app))
             .with_graceful_shutdown(async {
                 let _ = tokio::signal::ctrl_c().await;

@@ -1,7 +1,7 @@
-//! The studio's engine state: one project, the keyframe being posed with its
-//! [`Deformer`](crate::deform::Deformer), the compiled [`Path`](crate::Path) through the
-//! keyframes for playback, and undo. Every operation the page asks for is a method here,
-//! answering with the new state (JSON) or a frame (binary), so the server only moves bytes.
+//! The studio's engine state: one project, the keyframe being posed with its [`Deformer`], the
+//! compiled [`Path`] through the keyframes for playback, and undo. Every operation the page asks
+//! for is a method here, answering with the new state (JSON) or a frame (binary), so the server
+//! only moves bytes.
 //!
 //! Frames travel as little-endian binary ([`frame_bytes`]): a 32-byte header (kind, sequence
 //! number, vertices, faces, largest distortion, flipped triangles, time) and then the

@@ -442,3 +442,41 @@ fn damaged_and_foreign_projects_are_refused_at_start() {
         assert!(err.contains(said), "{name}: {err}");
     }
 }
+
+#[test]
+fn ctrl_c_stops_the_studio_cleanly() {
+    let dir = scratch("ctrl-c");
+    let mut studio = Studio::start(&dir, None);
+    assert!(studio.page_is_served());
+    let pid = studio.child.id().to_string();
+    let sent = Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .expect("kill runs");
+    assert!(sent.success());
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    let status = loop {
+        if let Some(status) = studio.child.try_wait().expect("waits") {
+            break status;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "still running after Ctrl-C"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "{status:?}");
+    let mut ws_dir = std::fs::read_dir(&dir).expect("dir");
+    assert!(ws_dir.next().is_none(), "nothing written");
+    // The frame rate is the project's, within bounds.
+    let studio = Studio::start(&dir, None);
+    let mut ws = studio.socket();
+    hello(&mut ws);
+    let (states, _) = ask(&mut ws, r#"{"op":"fps","fps":12}"#, 0);
+    assert_eq!(states[0]["fps"], 12.0);
+    let (states, _) = ask(&mut ws, r#"{"op":"fps","fps":0}"#, 0);
+    assert!(states[0]["message"]
+        .as_str()
+        .unwrap_or_default()
+        .starts_with("error"));
+}

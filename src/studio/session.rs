@@ -97,6 +97,11 @@ pub enum Request {
         /// Seconds.
         time: f64,
     },
+    /// The frame rate of playback and exports.
+    Fps {
+        /// Frames per second, in (0, 240].
+        fps: f64,
+    },
     /// The animation's frame at `time`.
     Scrub {
         /// Echoed in the answer.
@@ -780,6 +785,13 @@ impl Session {
                 vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
             }
             Request::Scrub { seq, time } => vec![Binary(self.scrub(seq, time)?)],
+            Request::Fps { fps } => {
+                if !(fps > 0.0 && fps <= 240.0) {
+                    return refused(format!("frame rate {fps}: give one in (0, 240]"));
+                }
+                self.project.fps = fps;
+                vec![Text(self.state_json(None))]
+            }
             Request::Save { name } => {
                 let path = self.save(name.as_deref())?;
                 let said = format!("saved {}", path.display());

@@ -634,6 +634,7 @@ $("add-key").onclick = () => {
 };
 $("frame-key").onclick = () => send({ op: "frame_to_keyframe", time: sliderTime() });
 $("delete-key").onclick = () => send({ op: "delete_keyframe", keyframe: S.state.current });
+$("fps").addEventListener("change", () => send({ op: "fps", fps: Number($("fps").value) }));
 $("key-time").addEventListener("change", () => send({ op: "set_time", keyframe: S.state.current, time: Number($("key-time").value) }));
 $("key-easing").addEventListener("change", () => send({ op: "set_easing", keyframe: S.state.current, easing: $("key-easing").value }));
 

@@ -251,7 +251,7 @@ fn bad_messages_are_refused_and_the_server_keeps_serving() {
         other => panic!("{other:?}"),
     }
     // An oversized message closes that socket; the server goes on.
-    let big = format!(r#"{{"op":"pins","pins":[{}0]}}"#, "0,".repeat(600_000));
+    let big = format!(r#"{{"op":"pins","pins":[{}0]}}"#, "0,".repeat(4_500_000));
     let _ = ws.send(Message::Text(big.into()));
     let closed = (0..5).any(|_| ws.read().is_err());
     assert!(closed, "the oversized message's socket is closed");
@@ -479,4 +479,69 @@ fn ctrl_c_stops_the_studio_cleanly() {
         .as_str()
         .unwrap_or_default()
         .starts_with("error"));
+}
+
+#[test]
+fn a_keyframe_loads_from_a_mesh_file_with_the_same_triangles() {
+    let dir = scratch("load-keyframe");
+    let rest = generate::disk(6, 0.1);
+    bdmorph::io::write_obj_2d(&dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
+        .expect("write");
+    let studio = Studio::start(&dir, Some("rest.obj"));
+    let mut ws = studio.socket();
+    let (state, _, _) = hello(&mut ws);
+    let anchors = state["anchors"].as_array().expect("anchors");
+    assert_eq!(anchors.len(), 1, "one piece, one anchor edge");
+    // The bent pose with its triangles listed in another order, corners rotated.
+    let bent = generate::bend(&rest, 0.5);
+    let mut text = String::new();
+    for p in &bent.positions {
+        text += &format!("v {} {} 0\n", p[0], p[1]);
+    }
+    for f in bent.faces.iter().rev() {
+        text += &format!("f {} {} {}\n", f[1] + 1, f[2] + 1, f[0] + 1);
+    }
+    let request =
+        serde_json::json!({"op": "load_keyframe", "name": "bent.obj", "text": text, "time": 1.0});
+    let (states, pose) = ask(&mut ws, &request.to_string(), 1);
+    assert!(
+        states[0]["message"]
+            .as_str()
+            .unwrap_or_default()
+            .starts_with("loaded"),
+        "{states:?}"
+    );
+    assert_eq!(states[0]["keyframes"].as_array().map(Vec::len), Some(2));
+    let got = positions(&pose);
+    assert!((got[10][0] - bent.positions[10][0] as f32).abs() < 1e-6);
+    // Another mesh's file, a reversed triangle, or an unknown format is refused.
+    let small = generate::disk(3, 0.1);
+    let mut other = String::new();
+    for p in &small.positions {
+        other += &format!("v {} {} 0\n", p[0], p[1]);
+    }
+    for f in &small.faces {
+        other += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+    }
+    let mut reversed = text.clone();
+    let last = bent.faces[0];
+    reversed = reversed.replace(
+        &format!("f {} {} {}\n", last[1] + 1, last[2] + 1, last[0] + 1),
+        &format!("f {} {} {}\n", last[0] + 1, last[2] + 1, last[1] + 1),
+    );
+    for (name, body) in [
+        ("small.obj", other),
+        ("flip.obj", reversed),
+        ("x.stl", text),
+    ] {
+        let request =
+            serde_json::json!({"op": "load_keyframe", "name": name, "text": body, "time": 2.0});
+        let (states, _) = ask(&mut ws, &request.to_string(), 0);
+        let said = states[0]["message"].as_str().unwrap_or_default();
+        assert!(
+            said.starts_with("error") && said.contains(name),
+            "{name}: {said}"
+        );
+        assert_eq!(states[0]["keyframes"].as_array().map(Vec::len), Some(2));
+    }
 }

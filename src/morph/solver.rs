@@ -59,6 +59,8 @@ pub struct PieceInfo {
     /// Its anchor vertex (0-based, in the mesh): the frame places it, and the direction of
     /// its first edge, by blending the keyframes' rigid motions.
     pub anchor: u32,
+    /// That first edge: the anchor and its neighbour (mesh vertices).
+    pub anchor_edge: [u32; 2],
 }
 
 /// One piece's solver and where its vertices and faces go in the mesh.
@@ -246,7 +248,9 @@ impl Solver {
                 // Pieces are disks with holes (checked above) and the hidden triangles add
                 // no edge the piece has: this compiles. A piece alone is numbered as the mesh.
                 .map_err(MeshError::from)?;
-            let anchor = piece.vertices[program.embed_root().p0 as usize];
+            let root = program.embed_root();
+            let anchor = piece.vertices[root.p0 as usize];
+            let anchor_edge = [anchor, piece.vertices[root.p1 as usize]];
             let engine = Engine::new(program, &local_meshes, visible, unwrap, options)?;
             infos.push(PieceInfo {
                 vertices: piece.vertices.len(),
@@ -257,6 +261,7 @@ impl Solver {
                     .map(|f| f.map(|v| piece.vertices[v as usize]))
                     .collect(),
                 anchor,
+                anchor_edge,
             });
             pieces.push(PieceSolver {
                 engine,
@@ -304,7 +309,8 @@ impl Solver {
     ) -> Result<Solver, MorphError> {
         let first = &keyframes[0];
         let n = first.positions.len();
-        let anchor = program.embed_root().p0;
+        let root = program.embed_root();
+        let anchor = root.p0;
         let engine = Engine::new(program, keyframes, first.faces.len(), unwrap, options)?;
         Ok(Solver {
             direct: true,
@@ -325,6 +331,7 @@ impl Solver {
                     holes: 0,
                     hidden: Vec::new(),
                     anchor,
+                    anchor_edge: [root.p0, root.p1],
                 }],
                 inverted,
             },

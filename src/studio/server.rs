@@ -27,8 +27,9 @@ use axum::Router;
 use super::guard::{host_is_ours, origin_is_ours, token_in_query, Token};
 use super::session::{Answer, Request, Session};
 
-/// The largest WebSocket message accepted from the page (1 MiB: a drag of 10,000 handles).
-pub const MAX_MESSAGE: usize = 1 << 20;
+/// The largest WebSocket message accepted from the page (8 MiB: a keyframe's mesh file of
+/// about 100,000 vertices).
+pub const MAX_MESSAGE: usize = 8 << 20;
 
 /// Requests read in one batch at most.
 const BATCH: usize = 256;

@@ -97,6 +97,16 @@ pub enum Request {
         /// Seconds.
         time: f64,
     },
+    /// A keyframe read from a mesh file's text (OBJ or OFF, by the name's extension) with
+    /// the project's triangles (in any order), at `time`.
+    LoadKeyframe {
+        /// The file's name (for its format and in messages).
+        name: String,
+        /// Its text.
+        text: String,
+        /// Seconds.
+        time: f64,
+    },
     /// The frame rate of playback and exports.
     Fps {
         /// Frames per second, in (0, 240].
@@ -173,6 +183,8 @@ pub struct Session {
     workspace: PathBuf,
     project_file: Option<PathBuf>,
     texture: Option<Image>,
+    /// Each piece's anchor edge: where the morph places and turns the piece.
+    anchors: Vec<[u32; 2]>,
 }
 
 impl std::fmt::Debug for Session {
@@ -202,6 +214,13 @@ impl Session {
         let deformer = Deformer::new(&rest, method_of(&project)?)?;
         let shape = RestShape::new(&rest.positions, &rest.faces);
         let m = rest.faces.len();
+        // The anchors depend on the triangles only: the rest shape twice compiles them.
+        let anchors = Path::new(&[rest.clone(), rest.clone()])?
+            .structure()
+            .pieces
+            .iter()
+            .map(|p| p.anchor_edge)
+            .collect();
         let mut session = Session {
             distortion: vec![1.0; m],
             frame: rest.positions.clone(),
@@ -218,6 +237,7 @@ impl Session {
             workspace,
             project_file,
             texture,
+            anchors,
         };
         session.select(0)?;
         Ok(session)
@@ -251,6 +271,7 @@ impl Session {
             "fps": self.project.fps,
             "duration": self.duration(),
             "textured": self.texture.is_some() && self.project.mesh.texcoords.is_some(),
+            "anchors": self.anchors,
             "can_undo": !self.undo.is_empty(),
             "can_redo": !self.redo.is_empty(),
             "project": self.project_file.as_ref().map(|p| p.display().to_string()),
@@ -556,6 +577,48 @@ impl Session {
         Ok(bytes)
     }
 
+    /// A keyframe from a mesh file's text, at `time`.
+    pub fn load_keyframe(&mut self, name: &str, text: &str, time: f64) -> Result<(), SessionError> {
+        let path = FsPath::new(name);
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        let surface = match ext.as_str() {
+            "obj" => crate::io::parse_obj(text, path),
+            "off" => crate::io::parse_off(text, path),
+            _ => {
+                return refused(format!(
+                    "{name}: a keyframe is read from an .obj or .off file"
+                ))
+            }
+        }
+        .map_err(|e| SessionError::Refused(e.to_string()))?;
+        let planar = PlanarMesh::from_surface(surface, path)
+            .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
+        if planar.positions.len() != self.rest.positions.len() {
+            return refused(format!(
+                "{name} has {} vertices; the project has {}",
+                planar.positions.len(),
+                self.rest.positions.len()
+            ));
+        }
+        self.rest
+            .match_faces(&planar.faces)
+            .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
+        planar
+            .validate()
+            .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
+        let key = Keyframe {
+            time,
+            easing: "linear".into(),
+            positions: planar.positions,
+            pins: Vec::new(),
+        };
+        self.insert(key)
+    }
+
     /// The frame at `time` becomes a keyframe there (and is posed).
     pub fn frame_to_keyframe(&mut self, time: f64) -> Result<(), SessionError> {
         let time = self.compute(time)?;
@@ -785,6 +848,14 @@ impl Session {
                 vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
             }
             Request::Scrub { seq, time } => vec![Binary(self.scrub(seq, time)?)],
+            Request::LoadKeyframe { name, text, time } => {
+                self.load_keyframe(&name, &text, time)?;
+                let said = format!("loaded {name} as a keyframe at {time} s");
+                vec![
+                    Text(self.state_json(Some(&said))),
+                    Binary(self.pose_bytes(0)),
+                ]
+            }
             Request::Fps { fps } => {
                 if !(fps > 0.0 && fps <= 240.0) {
                     return refused(format!("frame rate {fps}: give one in (0, 240]"));

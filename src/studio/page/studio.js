@@ -261,6 +261,17 @@ function paint() {
 
 function drawPins() {
   const P = S.pose;
+  if ($("anchor").checked && S.state && S.state.anchors) {
+    ctx.lineWidth = 4 * dpr();
+    ctx.strokeStyle = "#e0102a";
+    ctx.fillStyle = "#e0102a";
+    for (const [a, b] of S.state.anchors) {
+      const [x0, y0] = toCanvas(P[2 * a], P[2 * a + 1]);
+      const [x1, y1] = toCanvas(P[2 * b], P[2 * b + 1]);
+      ctx.beginPath(); ctx.moveTo(x0, y0); ctx.lineTo(x1, y1); ctx.stroke();
+      ctx.beginPath(); ctx.arc(x0, y0, 5 * dpr(), 0, 2 * Math.PI); ctx.fill();
+    }
+  }
   if (S.showing === "pose") {
     for (let i = 0; i < S.pins.length; i++) {
       const v = S.pins[i];
@@ -616,7 +627,16 @@ $("undo").onclick = () => send({ op: "undo" });
 $("redo").onclick = () => send({ op: "redo" });
 $("reset").onclick = () => send({ op: "reset" });
 $("unpin").onclick = () => { S.pins = []; send({ op: "pins", pins: [] }); draw(); };
-for (const id of ["edges", "colours", "texture", "overlay"]) $(id).addEventListener("change", draw);
+for (const id of ["edges", "colours", "texture", "overlay", "anchor"]) $(id).addEventListener("change", draw);
+$("load-key").onclick = () => $("load-file").click();
+$("load-file").addEventListener("change", async () => {
+  const file = $("load-file").files[0];
+  if (!file) return;
+  const last = S.state.keyframes[S.state.keyframes.length - 1].time;
+  status(`reading ${file.name}…`);
+  send({ op: "load_keyframe", name: file.name, text: await file.text(), time: Math.round((last + 1) * 1000) / 1000 });
+  $("load-file").value = "";
+});
 $("fit").onclick = fit;
 $("save").onclick = () => send({ op: "save", name: $("save-name").value });
 $("export-format").addEventListener("change", () => {

@@ -545,3 +545,146 @@ fn a_keyframe_loads_from_a_mesh_file_with_the_same_triangles() {
         assert_eq!(states[0]["keyframes"].as_array().map(Vec::len), Some(2));
     }
 }
+
+/// A picture of a disk with a square hole, on transparency (`size` pixels square).
+fn write_ring_picture(path: &Path, size: u32) {
+    let s = f64::from(size);
+    let image = generate::picture(size, size, |x, y| {
+        let (dx, dy) = (x - 0.5 * s, y - 0.5 * s);
+        let disk = dx.hypot(dy) - 0.4 * s;
+        let hole = 0.1 * s - dx.abs().max(dy.abs());
+        disk.max(hole)
+    });
+    std::fs::write(
+        path,
+        bdmorph::render::raster::encode_png(&image).expect("png"),
+    )
+    .expect("write");
+}
+
+#[test]
+fn the_outline_is_traced_drawn_imported_and_meshed_over_the_picture() {
+    let dir = scratch("outline");
+    write_ring_picture(&dir.join("ring.png"), 200);
+    let studio = Studio::start(&dir, Some("ring.png"));
+    let mut ws = studio.socket();
+    let (state, _, _) = hello(&mut ws);
+    assert_eq!(state["picture"], serde_json::json!([200, 200]));
+    // Traced: the disk's outline and the hole's, in the picture's pixels.
+    let (answers, _) = ask(&mut ws, r#"{"op":"trace_outline"}"#, 0);
+    let answer = &answers[0];
+    assert_eq!(answer["type"], "outline", "{answer}");
+    let loops = answer["loops"].as_array().expect("loops");
+    assert_eq!(loops.len(), 2, "the disk and its hole");
+    let mut extents = Vec::new();
+    for l in loops {
+        let points: Vec<[f64; 2]> = serde_json::from_value(l.clone()).expect("points");
+        assert!(points.len() >= 4, "{} points", points.len());
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in &points {
+            let r = (p[0] - 100.0).hypot(p[1] - 100.0);
+            lo = lo.min(r);
+            hi = hi.max(r);
+        }
+        extents.push((lo, hi));
+    }
+    extents.sort_by(|a, b| a.1.total_cmp(&b.1));
+    // The hole: a 40-pixel square (corners at 28 pixels from the centre).
+    assert!(extents[0].0 > 17.0 && extents[0].1 < 31.0, "{extents:?}");
+    // The disk: radius 80.
+    assert!(extents[1].0 > 77.0 && extents[1].1 < 82.0, "{extents:?}");
+
+    // Meshed as traced, at two densities: a new project (one keyframe), textured.
+    for vertices in [300, 1500] {
+        let request =
+            serde_json::json!({"op": "mesh_outline", "loops": loops, "vertices": vertices});
+        let (states, mesh) = ask(&mut ws, &request.to_string(), 2);
+        let n = u32::from_le_bytes(mesh[4..8].try_into().expect("n")) as usize;
+        assert!(
+            n as f64 > 0.7 * vertices as f64 && (n as f64) < 1.4 * vertices as f64,
+            "{n} vertices for {vertices}"
+        );
+        let s = &states[0];
+        assert_eq!(s["vertices"].as_u64(), Some(n as u64));
+        assert_eq!(s["keyframes"].as_array().map(Vec::len), Some(1));
+        assert_eq!(s["textured"], true, "the picture stays on the new mesh");
+        let (_, pose) = ask_more(&mut ws, 1);
+        let p = positions(&pose);
+        // No vertex in the hole, none outside the disk.
+        for q in &p {
+            let (dx, dy) = (f64::from(q[0]) - 100.0, f64::from(q[1]) - 100.0);
+            assert!(dx.hypot(dy) < 81.0, "{q:?} outside");
+            assert!(dx.abs().max(dy.abs()) > 19.0, "{q:?} in the hole");
+        }
+    }
+    // The new mesh poses.
+    ask(&mut ws, r#"{"op":"pins","pins":[0,5]}"#, 0);
+    let (_, pose) = ask(&mut ws, r#"{"op":"select","keyframe":0}"#, 1);
+    let p = positions(&pose);
+    let request = serde_json::json!({
+        "op": "drag", "seq": 1, "targets": [p[0], [p[5][0] + 4.0, p[5][1] + 3.0]]
+    });
+    let (_, moved) = ask(&mut ws, &request.to_string(), 1);
+    let moved = positions(&moved);
+    assert!((moved[5][0] - p[5][0] - 4.0).abs() < 0.5, "{:?}", moved[5]);
+
+    // A hand-drawn triangle with a triangular hole, and an SVG file.
+    let drawn = serde_json::json!({"op": "mesh_outline", "vertices": 400, "loops": [
+        [[10, 10], [190, 10], [100, 180]], [[80, 50], [120, 50], [100, 90]]]});
+    let (_, mesh) = ask(&mut ws, &drawn.to_string(), 2);
+    let n = u32::from_le_bytes(mesh[4..8].try_into().expect("n")) as usize;
+    assert!(n > 250, "{n}");
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 200 200">
+        <rect x="20" y="20" width="160" height="120"/></svg>"#;
+    let import = serde_json::json!({"op": "import_outline", "name": "box.svg", "text": svg, "vertices": 600});
+    let (states, mesh) = ask(&mut ws, &import.to_string(), 2);
+    let n = u32::from_le_bytes(mesh[4..8].try_into().expect("n")) as usize;
+    assert!(n > 400, "{n}");
+    assert!(
+        states[0]["message"]
+            .as_str()
+            .unwrap_or_default()
+            .contains("box.svg"),
+        "{states:?}"
+    );
+
+    // Refused, each with its reason, and the project as it was.
+    for (request, reason) in [
+        (
+            serde_json::json!({"op": "mesh_outline", "vertices": 400, "loops": [[[0, 0], [1, 1]]]}),
+            "three points",
+        ),
+        (
+            serde_json::json!({"op": "mesh_outline", "vertices": 400, "loops": [
+                [[0, 0], [100, 100], [100, 0], [0, 100]]]}),
+            "cross",
+        ),
+        (
+            serde_json::json!({"op": "mesh_outline", "vertices": 10_000_000, "loops": loops}),
+            "between",
+        ),
+        (
+            serde_json::json!({"op": "import_outline", "name": "x.dxf", "text": "0", "vertices": 400}),
+            "x.dxf",
+        ),
+        (
+            serde_json::json!({"op": "import_outline", "name": "bad.svg", "text": "<svg", "vertices": 400}),
+            "bad.svg",
+        ),
+    ] {
+        let (states, _) = ask(&mut ws, &request.to_string(), 0);
+        let said = states[0]["message"].as_str().unwrap_or_default();
+        assert!(said.starts_with("error") && said.contains(reason), "{said}");
+        assert_eq!(states[0]["vertices"].as_u64(), Some(n as u64), "unchanged");
+    }
+    assert!(studio.page_is_served());
+
+    // Without a picture there is nothing to trace.
+    let plain = Studio::start(&dir, None);
+    let mut ws = plain.socket();
+    let (state, _, _) = hello(&mut ws);
+    assert!(state["picture"].is_null());
+    let (states, _) = ask(&mut ws, r#"{"op":"trace_outline"}"#, 0);
+    let said = states[0]["message"].as_str().unwrap_or_default();
+    assert!(said.contains("no picture"), "{said}");
+}

@@ -199,6 +199,33 @@ fn release(tab: &Tab, at: [f64; 2]) {
     );
 }
 
+fn right_click(tab: &Tab, at: [f64; 2]) {
+    for kind in [
+        Input::DispatchMouseEventTypeOption::MousePressed,
+        Input::DispatchMouseEventTypeOption::MouseReleased,
+    ] {
+        tab.call_method(Input::DispatchMouseEvent {
+            Type: kind,
+            x: at[0],
+            y: at[1],
+            modifiers: None,
+            timestamp: None,
+            button: Some(Input::MouseButton::Right),
+            buttons: Some(2),
+            click_count: Some(1),
+            force: None,
+            tangential_pressure: None,
+            tilt_x: None,
+            tilt_y: None,
+            twist: None,
+            delta_x: None,
+            delta_y: None,
+            pointer_Type: None,
+        })
+        .expect("mouse event");
+    }
+}
+
 fn drag_through(tab: &Tab, from: [f64; 2], to: [f64; 2], moves: usize) {
     press(tab, from);
     for k in 1..=moves {
@@ -575,6 +602,180 @@ fn a_picture_becomes_a_posed_keyframed_exported_and_reopened_animation() {
 /// The mouse is driven from inside the page (DOM mouse and input events every 8 ms, for 3
 /// seconds; the waits yield through a message channel, which background timers' throttling
 /// does not slow), so the rate is the studio's and not the DevTools round trip's.
+/// A picture of a disk with a square hole, on transparency (300 pixels square).
+fn write_ring_picture(dir: &Path) {
+    let image = generate::picture(300, 300, |x, y| {
+        let (dx, dy) = (x - 150.0, y - 150.0);
+        (dx.hypot(dy) - 120.0).max(30.0 - dx.abs().max(dy.abs()))
+    });
+    std::fs::write(
+        dir.join("ring.png"),
+        raster::encode_png(&image).expect("png"),
+    )
+    .expect("write");
+}
+
+/// The page position of outline loop `l`'s point `p`.
+fn outline_point_on_page(tab: &Tab, l: usize, p: usize) -> [f64; 2] {
+    let q = eval(
+        tab,
+        &format!("studio.toPage(...studio.outline.loops[{l}][{p}])"),
+    );
+    [q[0].as_f64().expect("x"), q[1].as_f64().expect("y")]
+}
+
+#[test]
+fn the_outline_is_traced_edited_drawn_and_meshed_in_the_browser() {
+    let Some(chromium) = chromium() else { return };
+    let dir = scratch("outline");
+    write_ring_picture(&dir);
+    let studio = Studio::start(&dir, "ring.png");
+    let browser = browser(chromium);
+    let tab = browser.new_tab().expect("tab");
+    tab.set_default_timeout(Duration::from_secs(60));
+    tab.navigate_to(&studio.url).expect("navigates");
+    tab.wait_until_navigated().expect("loaded");
+    wait_for(
+        &tab,
+        "!!(window.studio && studio.pose && studio.state && studio.texture)",
+        30,
+    );
+    let first_n = eval_f64(&tab, "studio.n");
+
+    // Outline mode traces the picture: the disk and its hole, drawn over the dimmed picture.
+    click_element(&tab, "#outline-mode");
+    wait_for(&tab, "studio.outline.loops.length === 2", 10);
+    let rect = canvas_rect(&tab);
+    let shot = Shot::take(&tab, &dir.join("0-outline.png"));
+    let blue = shot.count_in(rect, |p| {
+        p[2] > 130 && p[0] < 80 && p[1] < 120 && p[2] > p[1] + 40
+    });
+    assert!(blue > 500, "the loops are drawn: {blue} pixels");
+    // The outer loop (the longer one) lies on the picture's edge: just inside it the
+    // picture shows, just outside it is blank.
+    let outer = eval_f64(
+        &tab,
+        "studio.outline.loops[0].length >= studio.outline.loops[1].length ? 0 : 1",
+    ) as usize;
+    let count = eval_f64(&tab, &format!("studio.outline.loops[{outer}].length")) as usize;
+    let centre = eval(&tab, "studio.toPage(150, 150)");
+    let centre = [0, 1].map(|i| centre[i].as_f64().expect("centre"));
+    let (mut inside, mut outside) = (0, 0);
+    for k in (0..count).step_by((count / 12).max(1)) {
+        let q = outline_point_on_page(&tab, outer, k);
+        let (dx, dy) = (centre[0] - q[0], centre[1] - q[1]);
+        let len = dx.hypot(dy);
+        let at = |s: f64| {
+            let x = (q[0] + s * dx / len) as usize;
+            let y = (q[1] + s * dy / len) as usize;
+            shot.rgb[y * shot.width + x]
+        };
+        let blank = |p: [u8; 3]| p.iter().all(|&c| c > 245);
+        inside += usize::from(!blank(at(8.0)));
+        outside += usize::from(blank(at(-8.0)));
+    }
+    let samples = count.div_ceil((count / 12).max(1));
+    assert_eq!(
+        (inside, outside),
+        (samples, samples),
+        "the outline fits the picture"
+    );
+
+    // A point of the outer loop dragged outwards by the mouse.
+    let q = outline_point_on_page(&tab, outer, 0);
+    let (dx, dy) = (q[0] - centre[0], q[1] - centre[1]);
+    let len = dx.hypot(dy);
+    let to = [q[0] + 30.0 * dx / len, q[1] + 30.0 * dy / len];
+    drag_through(&tab, q, to, 6);
+    let moved = outline_point_on_page(&tab, outer, 0);
+    assert!(
+        (moved[0] - to[0]).abs() < 1.5 && (moved[1] - to[1]).abs() < 1.5,
+        "{moved:?} for {to:?}"
+    );
+    let moved_world = eval(&tab, &format!("studio.outline.loops[{outer}][0]"));
+    let moved_world = [0, 1].map(|i| moved_world[i].as_f64().expect("point"));
+
+    // Create mesh at 800 vertices: the new mesh reaches the moved point and leaves the hole.
+    tab.evaluate("document.getElementById('density').value = 800", false)
+        .expect("density");
+    click_element(&tab, "#create-mesh");
+    wait_for(
+        &tab,
+        "!studio.outline.on && studio.state.vertices !== undefined",
+        20,
+    );
+    wait_for(&tab, &format!("studio.n !== {first_n}"), 20);
+    let n = eval_f64(&tab, "studio.n");
+    assert!((560.0..1120.0).contains(&n), "{n} vertices for 800");
+    let p = pose(&tab);
+    let reach = p
+        .chunks(2)
+        .map(|v| (v[0] - moved_world[0]).hypot(v[1] - moved_world[1]))
+        .fold(f64::INFINITY, f64::min);
+    // The page holds positions as 32-bit floats.
+    assert!(reach < 1e-3, "a vertex at the moved point ({reach} away)");
+    assert!(
+        p.chunks(2)
+            .all(|v| (v[0] - 150.0).abs().max((v[1] - 150.0).abs()) > 29.0),
+        "no vertex in the hole"
+    );
+    assert_eq!(eval(&tab, "studio.state.textured"), true);
+    let meshed = Shot::take(&tab, &dir.join("1-meshed.png"));
+    assert!(
+        meshed.differing(&shot, rect) as f64 > 0.01 * (rect[2] - rect[0]) * (rect[3] - rect[1]),
+        "the new mesh is drawn"
+    );
+
+    // A loop drawn by clicks (a triangle), meshed: every vertex inside that triangle.
+    click_element(&tab, "#outline-mode");
+    click_element(&tab, "#clear-outline");
+    click_element(&tab, "#new-loop");
+    let corners = [[60.0, 60.0], [240.0, 60.0], [150.0, 240.0]];
+    for c in corners {
+        let at = eval(&tab, &format!("studio.toPage({}, {})", c[0], c[1]));
+        let at = [0, 1].map(|i| at[i].as_f64().expect("corner"));
+        press(&tab, at);
+        release(&tab, at);
+    }
+    assert_eq!(eval_f64(&tab, "studio.outline.loops[0].length"), 3.0);
+    // Clicking the first point again closes the loop; a click on a segment adds a point
+    // there, and a right-click removes it.
+    let first = outline_point_on_page(&tab, 0, 0);
+    press(&tab, first);
+    release(&tab, first);
+    assert_eq!(
+        eval(&tab, "studio.outline.drawing"),
+        serde_json::Value::Null
+    );
+    let [a, b] = [0, 1].map(|p| outline_point_on_page(&tab, 0, p));
+    let middle = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    press(&tab, middle);
+    release(&tab, middle);
+    assert_eq!(eval_f64(&tab, "studio.outline.loops[0].length"), 4.0);
+    let added = eval(&tab, "studio.outline.loops[0][1]");
+    assert!(
+        (added[0].as_f64().expect("x") - 150.0).abs() < 1.0,
+        "{added}"
+    );
+    right_click(&tab, middle);
+    assert_eq!(eval_f64(&tab, "studio.outline.loops[0].length"), 3.0);
+    tab.evaluate("document.getElementById('density').value = 300", false)
+        .expect("density");
+    click_element(&tab, "#create-mesh");
+    wait_for(&tab, "!studio.outline.on", 20);
+    wait_for(&tab, &format!("studio.n !== {n}"), 20);
+    let p = pose(&tab);
+    let slack = 2.0;
+    for v in p.chunks(2) {
+        assert!(v[1] > 60.0 - slack && v[1] < 240.0 + slack, "{v:?}");
+        // Inside both slanted sides.
+        let left = (v[0] - 60.0) * 180.0 - (v[1] - 60.0) * 90.0;
+        let right = (240.0 - v[0]) * 180.0 - (v[1] - 60.0) * 90.0;
+        assert!(left > -slack * 200.0 && right > -slack * 200.0, "{v:?}");
+    }
+    Shot::take(&tab, &dir.join("2-drawn.png"));
+}
+
 #[test]
 fn drag_and_scrub_rates_are_measured_in_the_browser() {
     let Some(chromium) = chromium() else { return };

@@ -107,6 +107,29 @@ pub enum Request {
         /// Seconds.
         time: f64,
     },
+    /// The picture's outline, traced and simplified to `tolerance` pixels (default 1), as
+    /// loops to edit (answered with `{"type": "outline", "loops": [...]}`).
+    TraceOutline {
+        /// Pixels.
+        tolerance: Option<f64>,
+    },
+    /// A new mesh from closed loops (the region of odd winding: outlines, holes, pieces),
+    /// about `vertices` vertices; the project starts over from it (the picture kept).
+    MeshOutline {
+        /// Each loop's points, in the mesh's frame (the picture's pixels, y up).
+        loops: Vec<Vec<[f64; 2]>>,
+        /// About how many vertices.
+        vertices: usize,
+    },
+    /// A new mesh from an outline file's text (`.svg` or `.poly`, by the name's extension).
+    ImportOutline {
+        /// The file's name.
+        name: String,
+        /// Its text.
+        text: String,
+        /// About how many vertices.
+        vertices: usize,
+    },
     /// The frame rate of playback and exports.
     Fps {
         /// Frames per second, in (0, 240].
@@ -272,6 +295,7 @@ impl Session {
             "duration": self.duration(),
             "textured": self.texture.is_some() && self.project.mesh.texcoords.is_some(),
             "anchors": self.anchors,
+            "picture": self.texture.as_ref().map(|t| [t.width, t.height]),
             "can_undo": !self.undo.is_empty(),
             "can_redo": !self.redo.is_empty(),
             "project": self.project_file.as_ref().map(|p| p.display().to_string()),
@@ -577,6 +601,54 @@ impl Session {
         Ok(bytes)
     }
 
+    /// The picture's traced outline as loops.
+    pub fn trace_outline(
+        &self,
+        tolerance: Option<f64>,
+    ) -> Result<Vec<Vec<[f64; 2]>>, SessionError> {
+        let Some(image) = &self.texture else {
+            return refused("there is no picture to trace: open one (bdmorph studio picture.png)");
+        };
+        let traced = crate::meshing::picture_outline(
+            image,
+            &crate::meshing::PictureOptions::default(),
+            tolerance,
+        )
+        .map_err(|e| SessionError::Refused(e.to_string()))?;
+        Ok(loops_of(&traced.outline))
+    }
+
+    /// Starts the project over from `outline`, meshed with about `vertices` vertices; the
+    /// picture (if any) stays, spanning its own pixels.
+    pub fn remesh(
+        &mut self,
+        mut outline: crate::meshing::Outline,
+        vertices: usize,
+    ) -> Result<(), SessionError> {
+        if !(MIN_MESH_VERTICES..=MAX_MESH_VERTICES).contains(&vertices) {
+            return refused(format!(
+                "{vertices} vertices: the studio meshes between {MIN_MESH_VERTICES} and {MAX_MESH_VERTICES} (use bdmorph mesh for more)"
+            ));
+        }
+        if let Some(t) = &self.texture {
+            outline.texture_frame = Some([0.0, 0.0, f64::from(t.width), f64::from(t.height)]);
+        }
+        let options = crate::meshing::MeshOptions::default().with_vertices(vertices);
+        let meshed = crate::meshing::mesh_outline(&outline, &options)
+            .map_err(|e| SessionError::Refused(e.to_string()))?;
+        let uv = per_vertex_uv(
+            &meshed.texcoords,
+            &meshed.mesh.faces,
+            meshed.mesh.positions.len(),
+        );
+        let mut project = Project::new(&meshed.mesh, uv);
+        project.texture = self.project.texture.clone();
+        project.method = self.project.method.clone();
+        project.fps = self.project.fps;
+        *self = Session::new(project, self.workspace.clone(), None, self.texture.clone())?;
+        Ok(())
+    }
+
     /// A keyframe from a mesh file's text, at `time`.
     pub fn load_keyframe(&mut self, name: &str, text: &str, time: f64) -> Result<(), SessionError> {
         let path = FsPath::new(name);
@@ -856,6 +928,48 @@ impl Session {
                     Binary(self.pose_bytes(0)),
                 ]
             }
+            Request::TraceOutline { tolerance } => {
+                let loops = self.trace_outline(tolerance)?;
+                vec![Text(
+                    serde_json::json!({"type": "outline", "loops": loops}).to_string(),
+                )]
+            }
+            Request::MeshOutline { loops, vertices } => {
+                if loops.iter().any(|l| l.len() < 3) || loops.is_empty() {
+                    return refused("each loop needs at least three points");
+                }
+                self.remesh(crate::meshing::Outline::from_loops(&loops), vertices)?;
+                let said = format!("meshed: {} vertices", self.rest.positions.len());
+                vec![
+                    Text(self.state_json(Some(&said))),
+                    Binary(self.mesh_bytes()),
+                    Binary(self.pose_bytes(0)),
+                ]
+            }
+            Request::ImportOutline {
+                name,
+                text,
+                vertices,
+            } => {
+                let lower = name.to_ascii_lowercase();
+                let outline = if lower.ends_with(".svg") {
+                    crate::meshing::parse_svg(&text, None)
+                } else if lower.ends_with(".poly") {
+                    crate::meshing::parse_poly(&text)
+                } else {
+                    return refused(format!(
+                        "{name}: outlines are read from .svg or .poly files"
+                    ));
+                }
+                .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
+                self.remesh(outline, vertices)?;
+                let said = format!("meshed {name}: {} vertices", self.rest.positions.len());
+                vec![
+                    Text(self.state_json(Some(&said))),
+                    Binary(self.mesh_bytes()),
+                    Binary(self.pose_bytes(0)),
+                ]
+            }
             Request::Fps { fps } => {
                 if !(fps > 0.0 && fps <= 240.0) {
                     return refused(format!("frame rate {fps}: give one in (0, 240]"));
@@ -989,6 +1103,44 @@ pub fn open(file: &FsPath) -> Result<(Project, Option<Image>), String> {
             "{shown}: the studio opens a project (.json), a mesh (.obj, .off) or a picture (.png, .jpg)"
         )),
     }
+}
+
+/// The fewest vertices the studio meshes an outline with.
+pub const MIN_MESH_VERTICES: usize = 50;
+/// The most vertices the studio meshes an outline with (one request stays interactive;
+/// `bdmorph mesh` makes larger meshes, which the studio opens).
+pub const MAX_MESH_VERTICES: usize = 200_000;
+
+/// An outline's segments as closed loops (following each vertex's outgoing segment).
+fn loops_of(outline: &crate::meshing::Outline) -> Vec<Vec<[f64; 2]>> {
+    let n = outline.vertices.len();
+    let mut next = vec![u32::MAX; n];
+    for &[a, b] in &outline.segments {
+        if let Some(slot) = next.get_mut(a as usize) {
+            *slot = b;
+        }
+    }
+    let mut seen = vec![false; n];
+    let mut loops = Vec::new();
+    for start in 0..n {
+        if seen[start] || next[start] == u32::MAX {
+            continue;
+        }
+        let mut l = Vec::new();
+        let mut v = start;
+        while !seen[v] {
+            seen[v] = true;
+            l.push(outline.vertices[v]);
+            match next[v] {
+                u32::MAX => break,
+                w => v = w as usize,
+            }
+        }
+        if l.len() >= 3 {
+            loops.push(l);
+        }
+    }
+    loops
 }
 
 /// Texture coordinates per vertex from per-corner ones (`corners` parallel to `faces`), when

@@ -33,6 +33,7 @@ const S = {
   pan: null,
   playing: false, playStart: 0, playFrom: 0,
   texture: null,
+  outline: { on: false, loops: [], drawing: null, dragPoint: null },
   stats: { poseUpdates: 0, frameUpdates: 0, latencies: [], drawMs: [], sent: new Map() },
 };
 window.studio = S;
@@ -56,6 +57,13 @@ function status(text, error = false) {
 
 function onState(msg) {
   if (msg.type === "error") { status(msg.message, true); settleAll(); return; }
+  if (msg.type === "outline") {
+    S.outline.loops = msg.loops;
+    S.outline.drawing = null;
+    status(`traced: ${msg.loops.length} loops, ${msg.loops.reduce((a, l) => a + l.length, 0)} points; drag points to edit, then Create mesh`);
+    draw();
+    return;
+  }
   if (msg.type !== "state") return;
   S.state = msg;
   S.pins = msg.keyframes[msg.current].pins.slice();
@@ -99,6 +107,8 @@ function onBinary(buffer) {
     S.dist = new Float32Array(m).fill(1);
     GL.setMesh();
     if (S.texture && GL.setTexture) GL.setTexture(S.texture);
+    if (S.outline.on) setOutlineMode(false);
+    S.pins = [];
     fit();
     return;
   }
@@ -206,6 +216,7 @@ function paint() {
   const w = canvas.width, h = canvas.height;
   ctx.setTransform(1, 0, 0, 1, 0, 0);
   ctx.clearRect(0, 0, w, h);
+  if (S.outline.on) { paintOutline(); return; }
   if (!S.pose || !S.faces) return;
   if (GL.ready()) {
     GL.draw();
@@ -285,6 +296,71 @@ function drawPins() {
       ctx.stroke();
     }
   }
+}
+
+// The outline editor: the picture under the loops, each loop's points as small squares.
+function paintOutline() {
+  ctx.fillStyle = "#fff";
+  ctx.fillRect(0, 0, canvas.width, canvas.height);
+  const pic = S.state && S.state.picture;
+  if (S.texture && pic) {
+    const [x0, y0] = toCanvas(0, pic[1]);
+    ctx.globalAlpha = 0.6;
+    ctx.drawImage(S.texture, x0, y0, S.view.scale * pic[0], S.view.scale * pic[1]);
+    ctx.globalAlpha = 1;
+  }
+  S.outline.loops.forEach((loop, li) => {
+    if (!loop.length) return;
+    ctx.beginPath();
+    loop.forEach(([x, y], i) => {
+      const [px, py] = toCanvas(x, y);
+      if (i === 0) ctx.moveTo(px, py); else ctx.lineTo(px, py);
+    });
+    if (li !== S.outline.drawing) ctx.closePath();
+    ctx.lineWidth = 2 * dpr();
+    ctx.strokeStyle = li === S.outline.drawing ? "#d26a00" : "#1a4fa0";
+    ctx.stroke();
+    ctx.fillStyle = ctx.strokeStyle;
+    for (const [x, y] of loop) {
+      const [px, py] = toCanvas(x, y);
+      ctx.fillRect(px - 3 * dpr(), py - 3 * dpr(), 6 * dpr(), 6 * dpr());
+    }
+  });
+}
+
+function nearestOutlinePoint(px, py, radius) {
+  let best = null, bestD = radius * radius;
+  S.outline.loops.forEach((loop, li) => loop.forEach(([x, y], pi) => {
+    const [qx, qy] = toCanvas(x, y);
+    const d = (qx - px) ** 2 + (qy - py) ** 2;
+    if (d < bestD) { bestD = d; best = [li, pi]; }
+  }));
+  return best;
+}
+
+// The loop and segment (its first point's index) nearest to a canvas point, within `radius`.
+function nearestOutlineSegment(px, py, radius) {
+  let best = null, bestD = radius;
+  S.outline.loops.forEach((loop, li) => loop.forEach((a, pi) => {
+    if (li === S.outline.drawing && pi === loop.length - 1) return;
+    const [ax, ay] = toCanvas(...a);
+    const [bx, by] = toCanvas(...loop[(pi + 1) % loop.length]);
+    const [dx, dy] = [bx - ax, by - ay];
+    const len2 = dx * dx + dy * dy || 1;
+    const s = Math.max(0, Math.min(1, ((px - ax) * dx + (py - ay) * dy) / len2));
+    const d = Math.hypot(ax + s * dx - px, ay + s * dy - py);
+    if (d < bestD) { bestD = d; best = [li, pi]; }
+  }));
+  return best;
+}
+
+function setOutlineMode(on) {
+  S.outline.on = on;
+  $("outline-mode").classList.toggle("on", on);
+  $("outline-tools").hidden = !on;
+  if (on && S.outline.loops.length === 0 && S.state && S.state.picture) send({ op: "trace_outline" });
+  if (on) status("outline: Trace picture, or New loop and click its points (click the first to close it; a loop inside another is a hole); drag a point to move it, click a segment to add one, right-click a point to remove it; then Create mesh");
+  draw();
 }
 
 function strokeEdges(P, sx, ox, oy) {
@@ -534,6 +610,19 @@ function flushDrag() {
 
 canvas.addEventListener("contextmenu", (e) => {
   e.preventDefault();
+  if (S.outline.on) {
+    const [px, py] = eventCanvas(e);
+    const hit = nearestOutlinePoint(px, py, 10 * dpr());
+    if (!hit) return;
+    const [li, pi] = hit;
+    S.outline.loops[li].splice(pi, 1);
+    if (S.outline.loops[li].length < 3 && li !== S.outline.drawing) {
+      S.outline.loops.splice(li, 1);
+      if (S.outline.drawing !== null && S.outline.drawing > li) S.outline.drawing--;
+    }
+    draw();
+    return;
+  }
   if (S.showing !== "pose") return;
   const [px, py] = eventCanvas(e);
   const i = nearestPin(px, py, 12 * dpr());
@@ -550,6 +639,23 @@ canvas.addEventListener("mousedown", (e) => {
   if (e.button === 1 || (e.button === 0 && e.shiftKey)) {
     S.pan = { px, py, x: S.view.x, y: S.view.y };
     e.preventDefault();
+    return;
+  }
+  if (e.button === 0 && S.outline.on) {
+    const hit = nearestOutlinePoint(px, py, 10 * dpr());
+    const d = S.outline.drawing;
+    if (hit && d !== null && hit[0] === d && hit[1] === 0 && S.outline.loops[d].length >= 3) {
+      S.outline.drawing = null; // the first point clicked again closes the loop
+    } else if (hit) S.outline.dragPoint = hit;
+    else if (d !== null) S.outline.loops[S.outline.drawing].push(toWorld(px, py));
+    else {
+      const on = nearestOutlineSegment(px, py, 8 * dpr());
+      if (on) {
+        S.outline.loops[on[0]].splice(on[1] + 1, 0, toWorld(px, py));
+        S.outline.dragPoint = [on[0], on[1] + 1];
+      }
+    }
+    draw();
     return;
   }
   if (e.button !== 0 || !S.pose) return;
@@ -574,6 +680,12 @@ window.addEventListener("mousemove", (e) => {
     draw();
     return;
   }
+  if (S.outline.dragPoint) {
+    const [li, pi] = S.outline.dragPoint;
+    S.outline.loops[li][pi] = toWorld(px, py);
+    draw();
+    return;
+  }
   if (!S.drag) return;
   S.drag.targets[S.drag.pin] = toWorld(px, py);
   requestDrag(S.drag.targets.map((t) => t.slice()));
@@ -581,6 +693,7 @@ window.addEventListener("mousemove", (e) => {
 
 window.addEventListener("mouseup", () => {
   if (S.pan) { S.pan = null; return; }
+  if (S.outline.dragPoint) { S.outline.dragPoint = null; return; }
   if (!S.drag) return;
   S.drag = null;
   send({ op: "drag_end" });
@@ -628,6 +741,30 @@ $("redo").onclick = () => send({ op: "redo" });
 $("reset").onclick = () => send({ op: "reset" });
 $("unpin").onclick = () => { S.pins = []; send({ op: "pins", pins: [] }); draw(); };
 for (const id of ["edges", "colours", "texture", "overlay", "anchor"]) $(id).addEventListener("change", draw);
+$("outline-mode").onclick = () => setOutlineMode(!S.outline.on);
+$("trace").onclick = () => send({ op: "trace_outline" });
+$("new-loop").onclick = () => {
+  S.outline.loops = S.outline.loops.filter((l) => l.length >= 3);
+  S.outline.loops.push([]);
+  S.outline.drawing = S.outline.loops.length - 1;
+  draw();
+};
+$("clear-outline").onclick = () => { S.outline.loops = []; S.outline.drawing = null; draw(); };
+const density = () => Math.max(50, Math.round(Number($("density").value) || 2000));
+$("create-mesh").onclick = () => {
+  const loops = S.outline.loops.filter((l) => l.length >= 3);
+  if (!loops.length) { status("draw or trace a loop first", true); return; }
+  status("meshing…");
+  send({ op: "mesh_outline", loops, vertices: density() });
+};
+$("import-outline").onclick = () => $("outline-file").click();
+$("outline-file").addEventListener("change", async () => {
+  const file = $("outline-file").files[0];
+  if (!file) return;
+  status(`meshing ${file.name}…`);
+  send({ op: "import_outline", name: file.name, text: await file.text(), vertices: density() });
+  $("outline-file").value = "";
+});
 $("load-key").onclick = () => $("load-file").click();
 $("load-file").addEventListener("change", async () => {
   const file = $("load-file").files[0];

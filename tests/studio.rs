@@ -396,6 +396,29 @@ fn the_engine_poses_plays_saves_and_reopens_the_same_frames() {
     assert_eq!(frames, 6);
     let html = std::fs::read_to_string(dir.join("a.html")).expect("html");
     assert!(html.contains("<canvas") || html.contains("<svg"));
+    // Screenshots: the keyframe being posed, and the frame at 1 s; drawn, and different.
+    let mut stills = Vec::new();
+    for (name, time) in [("posed.png", None), ("at1.png", Some(1.0))] {
+        let request =
+            serde_json::json!({"op": "export", "format": "still", "name": name, "time": time});
+        let (states, _) = ask(&mut ws, &request.to_string(), 0);
+        let said = states[0]["message"].as_str().unwrap_or_default();
+        assert!(said.starts_with("exported"), "{name}: {said}");
+        let png = std::fs::read(dir.join(name)).expect("still");
+        let image = bdmorph::render::raster::decode_image(&png).expect("a PNG");
+        assert_eq!((image.width, image.height), (800, 800));
+        let drawn = image
+            .rgba
+            .chunks(4)
+            .filter(|p| p[3] > 0 && p[..3].iter().any(|&c| c < 200))
+            .count();
+        assert!(drawn > 800 * 800 / 20, "{name}: {drawn} pixels drawn");
+        stills.push(image.rgba);
+    }
+    assert_ne!(
+        stills[0], stills[1],
+        "the posed keyframe is not the middle frame"
+    );
     drop(ws);
     drop(studio);
     let again = Studio::start(&dir, Some("anim.json"));
@@ -687,4 +710,74 @@ fn the_outline_is_traced_drawn_imported_and_meshed_over_the_picture() {
     let (states, _) = ask(&mut ws, r#"{"op":"trace_outline"}"#, 0);
     let said = states[0]["message"].as_str().unwrap_or_default();
     assert!(said.contains("no picture"), "{said}");
+}
+
+#[test]
+fn keyframes_reorder_and_move_in_time() {
+    let dir = scratch("reorder");
+    let rest = generate::disk(5, 0.1);
+    bdmorph::io::write_obj_2d(&dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
+        .expect("write");
+    let studio = Studio::start(&dir, Some("rest.obj"));
+    let mut ws = studio.socket();
+    hello(&mut ws);
+    let obj = |m: &bdmorph::mesh::PlanarMesh| {
+        let mut text = String::new();
+        for p in &m.positions {
+            text += &format!("v {} {} 0\n", p[0], p[1]);
+        }
+        for f in &m.faces {
+            text += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+        }
+        text
+    };
+    let (half, full) = (generate::bend(&rest, 0.5), generate::bend(&rest, 1.0));
+    for (mesh, time) in [(&half, 1.0), (&full, 2.0)] {
+        let request = serde_json::json!({"op": "load_keyframe", "name": "k.obj", "text": obj(mesh), "time": time});
+        ask(&mut ws, &request.to_string(), 1);
+    }
+    let pose_of = |ws: &mut WebSocket<_>, k: usize| {
+        let (states, pose) = ask(ws, &format!(r#"{{"op":"select","keyframe":{k}}}"#), 1);
+        (states, positions(&pose))
+    };
+    let is = |got: &[[f32; 2]], want: &bdmorph::mesh::PlanarMesh| {
+        got.iter().zip(&want.positions).all(|(g, w)| {
+            (f64::from(g[0]) - w[0]).abs() < 1e-6 && (f64::from(g[1]) - w[1]).abs() < 1e-6
+        })
+    };
+    // The last pose moves to the middle: poses rest, full, half; times stay 0, 1, 2.
+    let (states, _) = ask(&mut ws, r#"{"op":"move_keyframe","keyframe":2,"to":1}"#, 1);
+    assert_eq!(states[0]["current"], 1);
+    let times: Vec<f64> = states[0]["keyframes"]
+        .as_array()
+        .expect("keyframes")
+        .iter()
+        .map(|k| k["time"].as_f64().expect("time"))
+        .collect();
+    assert_eq!(times, [0.0, 1.0, 2.0]);
+    assert!(is(&pose_of(&mut ws, 1).1, &full));
+    assert!(is(&pose_of(&mut ws, 2).1, &half));
+    // The first pose to the end: full, half, rest.
+    ask(&mut ws, r#"{"op":"move_keyframe","keyframe":0,"to":2}"#, 1);
+    assert!(is(&pose_of(&mut ws, 0).1, &full));
+    assert!(is(&pose_of(&mut ws, 2).1, &rest));
+    // The middle keyframe moves in time between its neighbours, and not past them.
+    let (states, _) = ask(&mut ws, r#"{"op":"set_time","keyframe":1,"time":1.5}"#, 0);
+    assert_eq!(states[0]["keyframes"][1]["time"], 1.5);
+    for bad in [
+        r#"{"op":"set_time","keyframe":1,"time":2.5}"#,
+        r#"{"op":"set_time","keyframe":0,"time":0.5}"#,
+        r#"{"op":"move_keyframe","keyframe":5,"to":0}"#,
+        r#"{"op":"move_keyframe","keyframe":0,"to":3}"#,
+    ] {
+        let (states, _) = ask(&mut ws, bad, 0);
+        let said = states[0]["message"].as_str().unwrap_or_default();
+        assert!(said.starts_with("error"), "{bad}: {said}");
+        assert_eq!(states[0]["keyframes"][1]["time"], 1.5);
+    }
+    // The animation plays the new order: halfway between keyframes 0 (full) and 1 (half).
+    let (_, frame) = ask(&mut ws, r#"{"op":"scrub","seq":1,"time":0.0}"#, 3);
+    assert!(is(&positions(&frame), &full));
+    let (_, frame) = ask(&mut ws, r#"{"op":"scrub","seq":2,"time":1.5}"#, 3);
+    assert!(is(&positions(&frame), &half));
 }

@@ -774,6 +774,29 @@ fn the_outline_is_traced_edited_drawn_and_meshed_in_the_browser() {
         assert!(left > -slack * 200.0 && right > -slack * 200.0, "{v:?}");
     }
     Shot::take(&tab, &dir.join("2-drawn.png"));
+
+    // Timeline: two more keyframes (1 s, 2 s); the middle key dragged with the mouse to a
+    // quarter of the bar (0.5 s), then moved later in the order (its pose to place 2).
+    click_element(&tab, "#add-key");
+    wait_for(&tab, "studio.state.keyframes.length === 2", 10);
+    click_element(&tab, "#add-key");
+    wait_for(&tab, "studio.state.keyframes.length === 3", 10);
+    let bar = eval(
+        &tab,
+        "(() => { const r = document.getElementById('keys').getBoundingClientRect(); return [r.left, r.top, r.width, r.height]; })()",
+    );
+    let [left, top, width, height] = [0, 1, 2, 3].map(|i| bar[i].as_f64().expect("bar"));
+    let y = top + height / 2.0;
+    drag_through(&tab, [left + width / 2.0, y], [left + width / 4.0, y], 8);
+    wait_for(
+        &tab,
+        "Math.abs(studio.state.keyframes[1].time - 0.5) < 0.01 && studio.state.current === 1",
+        10,
+    );
+    click_element(&tab, "#key-later");
+    wait_for(&tab, "studio.state.current === 2", 10);
+    let times = eval(&tab, "studio.state.keyframes.map((k) => k.time)");
+    assert_eq!(times[2], 2.0, "times stay: {times}");
 }
 
 #[test]

@@ -78,6 +78,13 @@ pub enum Request {
         /// Its index.
         keyframe: usize,
     },
+    /// Reorder: keyframe `keyframe`'s pose moves to place `to` (times and easings stay).
+    MoveKeyframe {
+        /// Its index.
+        keyframe: usize,
+        /// Its new index.
+        to: usize,
+    },
     /// Move a keyframe in time (not the first).
     SetTime {
         /// Its index.
@@ -157,6 +164,9 @@ pub enum Request {
         name: String,
         /// Frames (default: the duration times the frame rate, at least 2).
         frames: Option<u32>,
+        /// For `still`: the animation's frame at this time (default: the keyframe being
+        /// posed).
+        time: Option<f64>,
     },
 }
 
@@ -516,6 +526,38 @@ impl Session {
         self.select(self.current.min(self.project.keyframes.len() - 1))
     }
 
+    /// Moves keyframe `k`'s pose (positions and pins) to place `to` in the order, the poses
+    /// between shifting by one; the times and easings stay where they are on the timeline.
+    pub fn move_keyframe(&mut self, k: usize, to: usize) -> Result<(), SessionError> {
+        let n = self.project.keyframes.len();
+        if k >= n || to >= n {
+            return refused(format!(
+                "keyframe {k} cannot move to place {to}: there are {n} keyframes"
+            ));
+        }
+        let mut poses: Vec<_> = self
+            .project
+            .keyframes
+            .iter_mut()
+            .map(|key| {
+                (
+                    std::mem::take(&mut key.positions),
+                    std::mem::take(&mut key.pins),
+                )
+            })
+            .collect();
+        let moved = poses.remove(k);
+        poses.insert(to, moved);
+        for (key, (positions, pins)) in self.project.keyframes.iter_mut().zip(poses) {
+            key.positions = positions;
+            key.pins = pins;
+        }
+        self.undo.clear();
+        self.redo.clear();
+        self.path = None;
+        self.select(to)
+    }
+
     /// Moves keyframe `k` to `time`, keeping the order (between its neighbours).
     pub fn set_time(&mut self, k: usize, time: f64) -> Result<(), SessionError> {
         let keys = &self.project.keyframes;
@@ -749,6 +791,7 @@ impl Session {
             "png" => &[".png"],
             "html" => &[".html"],
             "obj" => &[],
+            "still" => return self.export_still(name, None),
             other => return refused(format!("unknown export format '{other}'")),
         };
         let path = self.workspace_file(name, endings)?;
@@ -845,6 +888,58 @@ impl Session {
         Ok(path)
     }
 
+    /// One frame as a PNG picture (a screenshot of the shape, 800 pixels square): the
+    /// animation at `time`, or the keyframe being posed; drawn with the picture when the
+    /// project has one, else coloured by distortion.
+    pub fn export_still(&mut self, name: &str, time: Option<f64>) -> Result<PathBuf, SessionError> {
+        let path = self.workspace_file(name, &[".png"])?;
+        let positions = match time {
+            Some(t) => {
+                if !(t.is_finite() && t >= 0.0) {
+                    return refused(format!("time {t}: give one of 0 or more seconds"));
+                }
+                self.compute(t.min(self.duration()))?;
+                self.frame.clone()
+            }
+            None => self.deformer.positions().to_vec(),
+        };
+        self.shape.distortion_into(&positions, &mut self.distortion);
+        let faces = &self.rest.faces;
+        let corner_uv: Option<Vec<[[f64; 2]; 3]>> = self
+            .project
+            .mesh
+            .texcoords
+            .as_ref()
+            .map(|uv| faces.iter().map(|f| f.map(|v| uv[v as usize])).collect());
+        let texture = self.texture.as_ref().filter(|_| corner_uv.is_some());
+        let shades = match texture {
+            Some(_) => None,
+            None => {
+                let max = colour::distortion_scale(std::iter::once(self.distortion.as_slice()));
+                Some(colour::shade_colours(&colour::distortion_shades(
+                    &self.distortion,
+                    max,
+                )))
+            }
+        };
+        let drawing = Drawing {
+            faces,
+            corner_uv: corner_uv.as_deref(),
+            texture,
+            face_colours: shades.as_deref(),
+        };
+        let view = Viewport::fit(std::iter::once(positions.as_slice()));
+        let size = ImageSize {
+            width: 800,
+            height: 800,
+        };
+        let image = raster::render(&positions, &drawing, &view, size);
+        let failed = |e: &dyn std::fmt::Display| SessionError::Refused(format!("export: {e}"));
+        let bytes = raster::encode_png(&image).map_err(|e| failed(&e))?;
+        crate::io::write_bytes_atomic(&path, &bytes).map_err(|e| failed(&e))?;
+        Ok(path)
+    }
+
     /// Carries out a request: the answers to send, in order (text is JSON state, bytes are
     /// binary frames). A failed request changes nothing and answers with the state and the
     /// reason.
@@ -905,6 +1000,10 @@ impl Session {
             }
             Request::DeleteKeyframe { keyframe } => {
                 self.delete_keyframe(keyframe)?;
+                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
+            }
+            Request::MoveKeyframe { keyframe, to } => {
+                self.move_keyframe(keyframe, to)?;
                 vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
             }
             Request::SetTime { keyframe, time } => {
@@ -986,8 +1085,13 @@ impl Session {
                 format,
                 name,
                 frames,
+                time,
             } => {
-                let path = self.export(&format, &name, frames)?;
+                let path = if format == "still" {
+                    self.export_still(&name, time)?
+                } else {
+                    self.export(&format, &name, frames)?
+                };
                 let said = format!("exported {}", path.display());
                 vec![Text(self.state_json(Some(&said)))]
             }

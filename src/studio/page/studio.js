@@ -28,6 +28,7 @@ const S = {
   pins: [],
   drag: null,             // { pin, targets } while dragging
   dragSeq: 0, dragInFlight: false, dragWaiting: null,
+  keyDrag: null,
   scrubSeq: 0, scrubInFlight: false, scrubWaiting: null,
   view: { scale: 1, x: 0, y: 0 },
   pan: null,
@@ -778,12 +779,16 @@ $("fit").onclick = fit;
 $("save").onclick = () => send({ op: "save", name: $("save-name").value });
 $("export-format").addEventListener("change", () => {
   const f = $("export-format").value;
-  const ext = { gif: ".gif", mp4: ".mp4", png: ".png", html: ".html", obj: "" }[f];
-  $("export-name").value = "animation" + (f === "obj" ? "-frames" : ext);
+  const ext = { gif: ".gif", mp4: ".mp4", png: ".png", html: ".html", obj: "", still: ".png" }[f];
+  $("export-name").value = f === "still" ? "frame.png" : "animation" + (f === "obj" ? "-frames" : ext);
 });
 $("export").onclick = () => {
   status("exporting…");
-  send({ op: "export", format: $("export-format").value, name: $("export-name").value });
+  const format = $("export-format").value;
+  const request = { op: "export", format, name: $("export-name").value };
+  // A screenshot is of what is shown: the scrubbed frame, or the keyframe being posed.
+  if (format === "still" && S.showing === "frame") request.time = sliderTime();
+  send(request);
 };
 $("add-key").onclick = () => {
   const last = S.state.keyframes[S.state.keyframes.length - 1].time;
@@ -791,6 +796,14 @@ $("add-key").onclick = () => {
 };
 $("frame-key").onclick = () => send({ op: "frame_to_keyframe", time: sliderTime() });
 $("delete-key").onclick = () => send({ op: "delete_keyframe", keyframe: S.state.current });
+$("key-earlier").onclick = () => {
+  const k = S.state.current;
+  if (k > 0) send({ op: "move_keyframe", keyframe: k, to: k - 1 });
+};
+$("key-later").onclick = () => {
+  const k = S.state.current;
+  if (k + 1 < S.state.keyframes.length) send({ op: "move_keyframe", keyframe: k, to: k + 1 });
+};
 $("fps").addEventListener("change", () => send({ op: "fps", fps: Number($("fps").value) }));
 $("key-time").addEventListener("change", () => send({ op: "set_time", keyframe: S.state.current, time: Number($("key-time").value) }));
 $("key-easing").addEventListener("change", () => send({ op: "set_easing", keyframe: S.state.current, easing: $("key-easing").value }));
@@ -805,10 +818,45 @@ function drawTimeline() {
     el.style.left = `${(100 * k.time) / duration}%`;
     el.title = `keyframe ${i + 1} at ${k.time} s (${k.easing})`;
     el.dataset.index = String(i);
-    el.onclick = () => send({ op: "select", keyframe: i });
+    el.onmousedown = (e) => {
+      if (e.button !== 0) return;
+      e.preventDefault();
+      S.keyDrag = { index: i, startX: e.clientX, moved: false };
+    };
     keys.appendChild(el);
   });
 }
+
+// A key on the timeline: a click selects it, a drag moves it in time (between its neighbours).
+function keyDragTime(clientX) {
+  const st = S.state, k = S.keyDrag.index;
+  const r = $("keys").getBoundingClientRect();
+  const duration = Math.max(st.duration, 1e-9);
+  let time = Math.max(0, ((clientX - r.left) / r.width) * duration);
+  const after = st.keyframes[k - 1].time;
+  const before = k + 1 < st.keyframes.length ? st.keyframes[k + 1].time : Infinity;
+  const gap = 1e-3;
+  time = Math.min(Math.max(time, after + gap), before - gap);
+  return Math.round(time * 1000) / 1000;
+}
+window.addEventListener("mousemove", (e) => {
+  if (!S.keyDrag || S.keyDrag.index === 0) return;
+  if (Math.abs(e.clientX - S.keyDrag.startX) < 3 && !S.keyDrag.moved) return;
+  S.keyDrag.moved = true;
+  const el = $("keys").children[S.keyDrag.index];
+  const time = keyDragTime(e.clientX);
+  el.style.left = `${Math.min(100, (100 * time) / Math.max(S.state.duration, 1e-9))}%`;
+  el.title = `${time} s`;
+});
+window.addEventListener("mouseup", (e) => {
+  if (!S.keyDrag) return;
+  const { index, moved } = S.keyDrag;
+  if (moved) {
+    send({ op: "set_time", keyframe: index, time: keyDragTime(e.clientX) });
+    send({ op: "select", keyframe: index });
+  } else send({ op: "select", keyframe: index });
+  S.keyDrag = null;
+});
 
 // ---- playback -----------------------------------------------------------------------------
 function sliderTime() {

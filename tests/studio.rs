@@ -780,4 +780,14 @@ fn keyframes_reorder_and_move_in_time() {
     assert!(is(&positions(&frame), &full));
     let (_, frame) = ask(&mut ws, r#"{"op":"scrub","seq":2,"time":1.5}"#, 3);
     assert!(is(&positions(&frame), &half));
+    // Clone the keyframe being posed (half), and add a copy of the first (full).
+    pose_of(&mut ws, 1);
+    let (_, pose) = ask(&mut ws, r#"{"op":"add_keyframe","time":3}"#, 1);
+    assert!(is(&positions(&pose), &half));
+    let (states, pose) = ask(&mut ws, r#"{"op":"add_keyframe","time":4,"copy":0}"#, 1);
+    assert!(is(&positions(&pose), &full));
+    assert_eq!(states[0]["current"], 4);
+    let (states, _) = ask(&mut ws, r#"{"op":"add_keyframe","time":5,"copy":9}"#, 0);
+    let said = states[0]["message"].as_str().unwrap_or_default();
+    assert!(said.contains("no keyframe 9"), "{said}");
 }

@@ -68,10 +68,13 @@ pub enum Request {
     Redo,
     /// The keyframe being posed back to the rest shape.
     Reset,
-    /// A copy of the keyframe being posed, at `time`.
+    /// A new keyframe at `time`: a copy of keyframe `copy` (default: the one being posed,
+    /// a clone; the page's "add" copies the first).
     AddKeyframe {
         /// Seconds.
         time: f64,
+        /// The keyframe to copy.
+        copy: Option<usize>,
     },
     /// Delete a keyframe (not the first).
     DeleteKeyframe {
@@ -481,12 +484,20 @@ impl Session {
     }
 
     /// Adds a copy of the keyframe being posed at `time` and poses it.
-    pub fn add_keyframe(&mut self, time: f64) -> Result<(), SessionError> {
+    pub fn add_keyframe(&mut self, time: f64, copy: Option<usize>) -> Result<(), SessionError> {
+        let from = copy.unwrap_or(self.current);
+        let Some(source) = self.project.keyframes.get(from) else {
+            return refused(format!("there is no keyframe {from} to copy"));
+        };
         let key = Keyframe {
             time,
             easing: "linear".into(),
-            positions: self.project.keyframes[self.current].positions.clone(),
-            pins: self.pins.clone(),
+            positions: source.positions.clone(),
+            pins: if from == self.current {
+                self.pins.clone()
+            } else {
+                source.pins.clone()
+            },
         };
         self.insert(key)
     }
@@ -994,8 +1005,8 @@ impl Session {
                 self.path = None;
                 vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
             }
-            Request::AddKeyframe { time } => {
-                self.add_keyframe(time)?;
+            Request::AddKeyframe { time, copy } => {
+                self.add_keyframe(time, copy)?;
                 vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
             }
             Request::DeleteKeyframe { keyframe } => {

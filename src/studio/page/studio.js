@@ -790,10 +790,14 @@ $("export").onclick = () => {
   if (format === "still" && S.showing === "frame") request.time = sliderTime();
   send(request);
 };
-$("add-key").onclick = () => {
+// A new keyframe one second after the last: a copy of the first ("add") or of the one being
+// posed ("clone").
+function addKeyframe(copy) {
   const last = S.state.keyframes[S.state.keyframes.length - 1].time;
-  send({ op: "add_keyframe", time: Math.round((last + 1) * 1000) / 1000 });
-};
+  send({ op: "add_keyframe", time: Math.round((last + 1) * 1000) / 1000, copy });
+}
+$("add-key").onclick = () => addKeyframe(0);
+$("clone-key").onclick = () => addKeyframe(S.state.current);
 $("frame-key").onclick = () => send({ op: "frame_to_keyframe", time: sliderTime() });
 $("delete-key").onclick = () => send({ op: "delete_keyframe", keyframe: S.state.current });
 $("key-earlier").onclick = () => {

@@ -4,26 +4,19 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 
 use bdmorph::param::bounded::{self, BoundedDistortion, BoundedOptions, BoundedReport, Flattening};
-use bdmorph::param::{
-    Energies, Method, ParamOptions, Parameterization, SolveReport, COLLAPSE_RATIO, STALL_DECREASE,
-    STALL_ITERATIONS, STALL_STEP,
+use bdmorph::param::messages::{
+    flattening_message, fmt_distortion, param_failure, worst_faces, Spelling,
 };
+use bdmorph::param::{Method, ParamOptions, Parameterization};
 use bdmorph::render::{raster, surface, Drawing, Image, Viewport};
 
 use super::morph::progress_bar;
 use super::output;
 use super::{DeformArgs, InitArg, ParamArgs, ParamMethod};
 
+/// The method's command-line name.
 fn method_name(m: Method) -> &'static str {
-    match m {
-        Method::Tutte => "tutte",
-        Method::Lscm => "lscm",
-        Method::Asap => "asap",
-        Method::Arap => "arap",
-        Method::SymmetricDirichlet => "sd",
-        Method::Mips => "mips",
-        Method::ArapNewton => "arap-newton",
-    }
+    m.name()
 }
 
 /// A JSON number, `null` when not finite.
@@ -98,7 +91,7 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
                 write!(std::io::stdout().lock(), "{lines}").map_err(|e| e.to_string())?;
             }
             let energies = p.energies();
-            let unmet = param_failure(name, &report, &energies, options);
+            let unmet = param_failure(name, &report, &energies, options, Spelling::CLI);
             (
                 name,
                 p.uv().to_vec(),
@@ -135,7 +128,8 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
                     .map_err(|e| e.to_string())?;
             }
             let report = flat.report();
-            let unmet = (!report.converged).then(|| flattening_message(&flat, &line));
+            let unmet =
+                (!report.converged).then(|| flattening_message(&flat, &line, Spelling::CLI));
             let stop = if report.converged {
                 "converged"
             } else if report.stalled {
@@ -224,42 +218,6 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     unmet.map_or(Ok(()), Err)
 }
 
-/// What went wrong with a parameterisation, if anything: a stall (the map is not a minimum)
-/// or collapsed triangles (the map is degenerate there).
-fn param_failure(
-    name: &str,
-    report: &SolveReport,
-    e: &Energies,
-    options: ParamOptions,
-) -> Option<String> {
-    let mut parts = Vec::new();
-    if report.stalled() {
-        let held = report
-            .limiting_face
-            .map(|f| format!(", held back by face {f} about to collapse or invert"))
-            .unwrap_or_default();
-        parts.push(format!(
-            "{name} stalled after {} iterations: {STALL_ITERATIONS} steps in a row below {STALL_STEP} of the Newton step lowered the energy by less than {STALL_DECREASE} of it while the gradient norm was still {:.3e}{held}; the map is not a minimum",
-            report.iterations, report.gradient_norm
-        ));
-    }
-    if e.collapsed > 0 {
-        parts.push(format!(
-            "{} collapsed triangles (conformal distortion above {COLLAPSE_RATIO:e}; largest {:.3e})",
-            e.collapsed, e.max_distortion
-        ));
-    }
-    if parts.is_empty() {
-        return None;
-    }
-    let hint = if name == "arap-newton" && options.collapse_barrier == 0.0 {
-        ": ARAP is finite on degenerate triangles, so the flip-free line search keeps them from inverting but not from collapsing; a collapse barrier (--collapse-barrier 1e-4, the default) keeps them open"
-    } else {
-        ""
-    };
-    Some(format!("{}{hint}", parts.join("; ")))
-}
-
 /// Runs the bounded-distortion iterations with a progress bar (showing the largest
 /// distortion) and, with `stats`, prints the report as JSON.
 fn run_bounded(
@@ -341,90 +299,6 @@ fn flattening_json(flat: &Flattening) -> String {
             .map_or("null".to_string(), |v| v.to_string()),
         flat.infeasible()
     )
-}
-
-/// Why a bounded-distortion parameterisation did not meet its bound: the evidence that the
-/// bound is infeasible when there is some, otherwise every start tried and how it ended.
-fn flattening_message(flat: &Flattening, line: &dyn Fn(usize) -> Option<usize>) -> String {
-    let k = flat.bound;
-    let r = flat.report();
-    let lb = flat.lower_bound;
-    let tried: Vec<String> = flat
-        .attempts
-        .iter()
-        .map(|a| {
-            format!(
-                "from {} {} after {} iterations ({} Newton) at largest distortion {}",
-                method_name(a.start),
-                if a.report.stalled {
-                    "stalled"
-                } else {
-                    "stopped at the iteration limit"
-                },
-                a.report.iterations,
-                a.report.newton_iterations,
-                fmt_distortion(a.report.max_distortion)
-            )
-        })
-        .collect();
-    let kept = format!(
-        "kept the {} map: largest distortion {}, {} inverted triangles; worst (0-based): {}",
-        method_name(flat.attempts[flat.kept].start),
-        fmt_distortion(r.max_distortion),
-        r.inverted,
-        worst_faces(r, line)
-    );
-    if flat.infeasible() {
-        let vertex = lb
-            .vertex
-            .map_or(String::new(), |v| format!("interior vertex {v}"));
-        return format!(
-            "the distortion bound {k} is infeasible for this mesh: {vertex} has an angle sum of {:.4}π, and no corner angle can change by more than a bound of K allows (from θ to between 2 atan(tan(θ/2)/K) and 2 atan(K tan(θ/2))), so flattening it to 2π needs K >= {:.4}; {}; {kept}",
-            lb.angle_sum / std::f64::consts::PI,
-            lb.bound,
-            tried.join("; ")
-        );
-    }
-    let more = if r.stalled {
-        "; --iterations does not help a stall"
-    } else {
-        "; --iterations raises the limit"
-    };
-    format!(
-        "the distortion bound {k} was not met (not proved infeasible: the mesh's angle sums only show K >= {:.4}): tried {}; {kept}{more}",
-        lb.bound,
-        tried.join(", then ")
-    )
-}
-
-/// A distortion for messages: four decimals, or "infinite".
-fn fmt_distortion(d: f64) -> String {
-    if d.is_finite() {
-        format!("{d:.4}")
-    } else {
-        "infinite".into()
-    }
-}
-
-/// The three worst faces of a report (and their lines in the file, by `line`), for messages.
-fn worst_faces(r: &BoundedReport, line: &dyn Fn(usize) -> Option<usize>) -> String {
-    let worst: Vec<String> = r
-        .worst
-        .iter()
-        .take(3)
-        .map(|&(f, d)| {
-            format!(
-                "face {f}{} ({})",
-                line(f).map_or(String::new(), |l| format!(" on line {l}")),
-                if d.is_finite() {
-                    format!("{d:.3}")
-                } else {
-                    "inverted".into()
-                }
-            )
-        })
-        .collect();
-    worst.join(", ")
 }
 
 /// Why the bound was not met, naming the worst triangles (and their lines in the file, by

@@ -33,6 +33,7 @@ pub mod energy;
 pub(crate) mod frames;
 mod linear;
 pub(crate) mod local_global;
+pub mod messages;
 pub(crate) mod newton;
 
 use std::time::Instant;
@@ -65,6 +66,21 @@ pub enum Method {
     Mips,
     /// ARAP by projected Newton.
     ArapNewton,
+}
+
+impl Method {
+    /// The method's name on the command line (what [`str::parse`] reads back).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Tutte => "tutte",
+            Method::Lscm => "lscm",
+            Method::Asap => "asap",
+            Method::Arap => "arap",
+            Method::SymmetricDirichlet => "sd",
+            Method::Mips => "mips",
+            Method::ArapNewton => "arap-newton",
+        }
+    }
 }
 
 impl std::str::FromStr for Method {

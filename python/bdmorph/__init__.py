@@ -1,0 +1,474 @@
+"""bdmorph: bounded-distortion planar shape interpolation (BDMORPH), heat-method geodesics,
+parameterisation and posing by handles, on a compiled Rust engine.
+
+Arrays follow potpourri3d / libigl conventions: ``V`` is an ``n x 2`` or ``n x 3`` array of
+vertex positions, ``F`` an ``m x 3`` array of vertex indices (numbered from 0). Any numeric
+dtype and memory order is accepted for ``V`` (converted to C-ordered float64) and any integer
+dtype for ``F`` (converted to int64); anything else is refused with a :class:`MeshError`.
+Results are new float64 NumPy arrays. Every solve releases the GIL.
+
+>>> import numpy as np, bdmorph
+>>> V0 = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+>>> F = np.array([[0, 1, 2], [0, 2, 3]])
+>>> V1 = V0 @ np.array([[0, 1], [-1, 0]])      # the square turned by 90 degrees
+>>> m = bdmorph.Morph(V0, V1, F)
+>>> m.frame(0.5).shape
+(4, 2)
+>>> m.stats["flipped_triangles"]
+0
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _bdmorph as _native
+from ._bdmorph import (
+    DeformError,
+    Error,
+    FileError,
+    GeodesicError,
+    MeshError,
+    MeshingError,
+    MorphError,
+    ParamError,
+)
+
+__version__ = _native.__version__
+
+__all__ = [
+    "Morph",
+    "Blend",
+    "Path",
+    "HeatGeodesics",
+    "parameterize",
+    "bounded_distortion",
+    "Deformer",
+    "mesh_from_image",
+    "read_mesh",
+    "write_obj",
+    "Error",
+    "MeshError",
+    "MorphError",
+    "GeodesicError",
+    "ParamError",
+    "DeformError",
+    "MeshingError",
+    "FileError",
+    "SolverWarning",
+]
+
+
+class SolverWarning(UserWarning):
+    """A solver stopped short of what was asked (a stall, collapsed triangles, an unmet
+    distortion bound); the result is returned, and the warning says why, in the command
+    line's words."""
+
+
+# ---- input checks -------------------------------------------------------------------------
+
+def _points(V, name: str = "V") -> np.ndarray:
+    a = np.asarray(V)
+    if a.dtype.kind not in "fiu":
+        raise MeshError(f"{name} must be an array of numbers, not of {a.dtype}")
+    if a.ndim != 2 or a.shape[1] not in (2, 3):
+        raise MeshError(f"{name} must be n x 2 or n x 3, not an array of shape {a.shape}")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _points2(P, name: str) -> np.ndarray:
+    a = np.asarray(P)
+    if a.dtype.kind not in "fiu":
+        raise Error(f"{name} must be an array of numbers, not of {a.dtype}")
+    if a.ndim == 1 and a.shape == (2,):
+        a = a.reshape(1, 2)
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise Error(f"{name} must be k x 2, not an array of shape {a.shape}")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _faces(F) -> np.ndarray:
+    a = np.asarray(F)
+    if a.dtype.kind not in "iu":
+        raise MeshError(f"F must be an array of integers (vertex indices), not of {a.dtype}")
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise MeshError(f"F must be m x 3 (one row per triangle), not an array of shape {a.shape}")
+    if a.dtype.kind == "u" and a.size and a.max() > np.iinfo(np.int64).max:
+        raise MeshError(f"F: vertex index {a.max()} is too large")
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _indices(S, name: str) -> np.ndarray:
+    a = np.atleast_1d(np.asarray(S))
+    if a.dtype.kind not in "iu":
+        raise Error(f"{name} must be vertex indices (integers), not {a.dtype}")
+    if a.ndim != 1:
+        raise Error(f"{name} must be a list of vertex indices, not an array of shape {a.shape}")
+    if a.dtype.kind == "u" and a.size and a.max() > np.iinfo(np.int64).max:
+        raise Error(f"{name}: vertex index {a.max()} is too large")
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _numbers(X, name: str) -> np.ndarray:
+    a = np.atleast_1d(np.asarray(X))
+    if a.dtype.kind not in "fiu" or a.ndim != 1:
+        raise Error(f"{name} must be a 1-D array of numbers, not {a.dtype} of shape {a.shape}")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _keyframes(Vs, name: str = "keyframes") -> list:
+    if isinstance(Vs, np.ndarray) and Vs.ndim == 3:
+        Vs = list(Vs)
+    Vs = list(Vs)
+    if len(Vs) < 2:
+        raise MorphError(f"{name}: give at least two poses, not {len(Vs)}")
+    return [_points(V, f"keyframe {i}") for i, V in enumerate(Vs)]
+
+
+def _warn(info: dict) -> None:
+    message = info.get("message")
+    if message:
+        warnings.warn(message, SolverWarning, stacklevel=3)
+
+
+# ---- morphing -----------------------------------------------------------------------------
+
+class Morph:
+    """A bounded-distortion morph between two poses ``V0`` and ``V1`` of one planar mesh
+    (same triangles ``F``; ``V1`` may list them in any order, corners rotated). The mesh is
+    compiled once; each :meth:`frame` is a few Newton iterations, warm-started from the
+    previous frame.
+
+    Options: ``tolerance`` (Newton's gradient-norm stop, default 1e-10), ``max_iterations``
+    (default 50), ``allow_inverted`` (accept a few clockwise triangles in the keyframes),
+    ``warm_start`` (default True).
+
+    >>> import numpy as np, bdmorph
+    >>> V0 = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], dtype=float)
+    >>> F = [[0, 1, 2], [0, 2, 3]]
+    >>> V1 = V0 * [1, 2]
+    >>> m = bdmorph.Morph(V0, V1, F)
+    >>> bool(np.allclose(m.frame(1.0), V1 - V1.mean(0) + m.frame(1.0).mean(0)))
+    True
+    >>> m.frames([0, 0.5, 1]).shape
+    (3, 4, 2)
+    """
+
+    def __init__(self, V0, V1, F, *, tolerance: Optional[float] = None,
+                 max_iterations: Optional[int] = None, allow_inverted: bool = False,
+                 warm_start: bool = True):
+        self._m = _native.Morph(_points(V0, "V0"), _points(V1, "V1"), _faces(F), tolerance,
+                                max_iterations, allow_inverted, warm_start)
+
+    def frame(self, t: float) -> np.ndarray:
+        """The frame at ``t`` (0 is ``V0``'s shape, 1 is ``V1``'s; outside [0, 1] is
+        refused) as an ``n x 2`` array."""
+        return self._m.frame(float(t))
+
+    def frames(self, ts) -> np.ndarray:
+        """The frames at each of ``ts`` as a ``k x n x 2`` array (one call, the GIL released
+        throughout)."""
+        return self._m.frames(_numbers(ts, "ts"))
+
+    @property
+    def stats(self) -> Optional[dict]:
+        """The last frame's statistics: ``t``, ``newton_iterations``, ``factorizations``,
+        ``cg_iterations``, ``gradient_norm``, ``flipped_triangles``,
+        ``max_conformal_distortion``, ``seconds`` (None before the first frame)."""
+        return self._m.stats
+
+    @property
+    def distortion(self) -> np.ndarray:
+        """Each triangle's conformal distortion in the last frame, from ``V0``."""
+        return self._m.distortion
+
+    @property
+    def n_vertices(self) -> int:
+        return self._m.n_vertices
+
+    def __repr__(self) -> str:
+        return f"bdmorph.Morph({self.n_vertices} vertices)"
+
+
+class Blend:
+    """A bounded-distortion blend of several poses of one planar mesh by weights (one per
+    pose, summing to 1).
+
+    >>> import numpy as np, bdmorph
+    >>> V0 = np.array([[0, 0], [1, 0], [0, 1]], dtype=float)
+    >>> b = bdmorph.Blend([V0, V0 * 2, V0 * [1, 3]], [[0, 1, 2]])
+    >>> b.frame([0.5, 0.25, 0.25]).shape
+    (3, 2)
+    """
+
+    def __init__(self, keyframes: Sequence, F, *, tolerance: Optional[float] = None,
+                 max_iterations: Optional[int] = None, allow_inverted: bool = False,
+                 warm_start: bool = True):
+        self._b = _native.Blend(_keyframes(keyframes), _faces(F), tolerance, max_iterations,
+                                allow_inverted, warm_start)
+
+    def frame(self, weights) -> np.ndarray:
+        """The blend with ``weights`` as an ``n x 2`` array."""
+        return self._b.frame(_numbers(weights, "weights"))
+
+    def frames(self, weights) -> np.ndarray:
+        """The blends for each row of ``weights`` (``k x poses``) as a ``k x n x 2`` array."""
+        w = np.asarray(weights)
+        if w.dtype.kind not in "fiu" or w.ndim != 2:
+            raise MorphError(f"weights must be a k x {self.n_keyframes} array of numbers")
+        return self._b.frames(np.ascontiguousarray(w, dtype=np.float64))
+
+    @property
+    def stats(self) -> Optional[dict]:
+        """The last frame's statistics (see :attr:`Morph.stats`)."""
+        return self._b.stats
+
+    @property
+    def n_keyframes(self) -> int:
+        return self._b.n_keyframes
+
+    def __repr__(self) -> str:
+        return f"bdmorph.Blend({self.n_keyframes} poses)"
+
+
+class Path:
+    """A morph along several poses, each reached exactly, each segment with its duration
+    (relative; default equal) and easing (``"linear"``, ``"ease-in-out"`` or
+    ``"cubic-bezier(x1,y1,x2,y2)"``; one for all segments or one per segment). ``t`` runs
+    over [0, 1] along the whole path.
+
+    >>> import numpy as np, bdmorph
+    >>> V0 = np.array([[0, 0], [1, 0], [0, 1]], dtype=float)
+    >>> p = bdmorph.Path([V0, V0 * 2, V0], [[0, 1, 2]], durations=[1, 3], easings="ease-in-out")
+    >>> p.keyframe_times
+    [0.0, 0.25, 1.0]
+    >>> bool(np.allclose(p.frame(0.25) - p.frame(0.25).mean(0), 2 * (V0 - V0.mean(0))))
+    True
+    """
+
+    def __init__(self, keyframes: Sequence, F, *, durations=None,
+                 easings: Union[None, str, Sequence[str]] = None,
+                 tolerance: Optional[float] = None, max_iterations: Optional[int] = None,
+                 allow_inverted: bool = False, warm_start: bool = True):
+        keys = _keyframes(keyframes)
+        if isinstance(easings, str):
+            easings = [easings] * (len(keys) - 1)
+        if durations is not None:
+            durations = [float(d) for d in durations]
+        if easings is not None:
+            easings = [str(e) for e in easings]
+        self._p = _native.Path(keys, _faces(F), durations, easings, tolerance, max_iterations,
+                               allow_inverted, warm_start)
+
+    def frame(self, t: float) -> np.ndarray:
+        """The frame at ``t`` in [0, 1] as an ``n x 2`` array."""
+        return self._p.frame(float(t))
+
+    def frames(self, ts) -> np.ndarray:
+        """The frames at each of ``ts`` as a ``k x n x 2`` array."""
+        return self._p.frames(_numbers(ts, "ts"))
+
+    @property
+    def keyframe_times(self) -> list:
+        """The ``t`` of each pose."""
+        return self._p.keyframe_times
+
+    @property
+    def stats(self) -> Optional[dict]:
+        """The last frame's statistics (see :attr:`Morph.stats`)."""
+        return self._p.stats
+
+    def __repr__(self) -> str:
+        return f"bdmorph.Path({len(self.keyframe_times)} poses)"
+
+
+# ---- geodesics ----------------------------------------------------------------------------
+
+class HeatGeodesics:
+    """Geodesic distances on a triangle mesh (``V`` n x 3, or n x 2 for a planar one) by the
+    heat method, prefactored once; each query is a few back-substitutions.
+
+    Options: ``time_factor`` (the heat time's ``m`` in ``t = m h^2``, default 0.5),
+    ``boundary`` (``"robin"`` (default), ``"neumann"``, ``"dirichlet"`` or ``"average"``),
+    ``intrinsic_delaunay`` (default True).
+
+    >>> import numpy as np, bdmorph
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    >>> g = bdmorph.HeatGeodesics(V, [[0, 1, 2], [0, 2, 3]])
+    >>> d = g.distance([0])
+    >>> float(d[0])
+    0.0
+    >>> g.distances_each([0, 2]).shape
+    (2, 4)
+    """
+
+    def __init__(self, V, F, *, time_factor: Optional[float] = None, boundary: str = "robin",
+                 intrinsic_delaunay: bool = True):
+        self._g = _native.HeatGeodesics(_points(V), _faces(F), time_factor, boundary,
+                                        intrinsic_delaunay)
+
+    def distance(self, sources) -> np.ndarray:
+        """Distances from the nearest of ``sources`` (a vertex or a list), an array of n."""
+        return self._g.distance(_indices(sources, "sources"))
+
+    def distances_each(self, sources) -> np.ndarray:
+        """The distances from each source alone, a ``k x n`` array."""
+        return self._g.distances_each(_indices(sources, "sources"))
+
+    @property
+    def stats(self) -> dict:
+        """What the set-up did: vertices, faces, flips, time, mean_edge, spacing,
+        has_boundary."""
+        return self._g.stats
+
+    def __repr__(self) -> str:
+        return f"bdmorph.HeatGeodesics({self._g.n_vertices} vertices)"
+
+
+# ---- parameterisation ---------------------------------------------------------------------
+
+def parameterize(V, F, method: str = "arap", *, iterations: Optional[int] = None,
+                 tolerance: Optional[float] = None, collapse_barrier: Optional[float] = None,
+                 full_output: bool = False):
+    """Flattens a disk-topology mesh into the plane: an ``n x 2`` array of texture
+    coordinates (with ``full_output``, also a dict: iterations, stop, energies, flipped and
+    collapsed triangles, seconds, ``message``).
+
+    ``method``: ``"tutte"``, ``"lscm"``, ``"asap"``, ``"arap"``, ``"sd"`` (symmetric
+    Dirichlet), ``"mips"`` or ``"arap-newton"``. A stall or collapsed triangles are reported
+    by a :class:`SolverWarning` (and ``info["message"]``).
+
+    >>> import numpy as np, bdmorph
+    >>> V = np.array([[0, 0, 0], [1, 0, 0.2], [1, 1, 0], [0, 1, 0.2], [0.5, 0.5, 0.5]])
+    >>> F = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]
+    >>> UV, info = bdmorph.parameterize(V, F, "lscm", full_output=True)
+    >>> UV.shape, info["flipped"]
+    ((5, 2), 0)
+    """
+    uv, info = _native.parameterize(_points(V), _faces(F), method, iterations, tolerance,
+                                    collapse_barrier)
+    _warn(info)
+    return (uv, info) if full_output else uv
+
+
+def bounded_distortion(V, F, max_distortion: float, *, pins=None, init: str = "tutte",
+                       iterations: Optional[int] = None, full_output: bool = False):
+    """Flattens a disk-topology mesh with every triangle's conformal distortion at most
+    ``max_distortion`` (K >= 1), from a Tutte (or ``init="lscm"``) start, trying the other
+    start when the first does not meet the bound. ``pins``: ``(vertices, targets)``, targets
+    ``k x 2``. Returns the ``n x 2`` map (with ``full_output``, also a dict: converged,
+    max_distortion, inverted, iterations, lower_bound, infeasible, worst, ``message``). An
+    unmet bound is reported by a :class:`SolverWarning` saying why.
+
+    >>> import numpy as np, bdmorph
+    >>> V = np.array([[0, 0, 0], [1, 0, 0.2], [1, 1, 0], [0, 1, 0.2], [0.5, 0.5, 0.5]])
+    >>> F = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]
+    >>> UV, info = bdmorph.bounded_distortion(V, F, 2.0, full_output=True)
+    >>> bool(info["converged"] and info["max_distortion"] <= 2.0 * 1.001)
+    True
+    """
+    pv = pt = None
+    if pins is not None:
+        vertices, targets = pins
+        pv, pt = _indices(vertices, "pins"), _points2(targets, "pin targets")
+    uv, info = _native.bounded_distortion(_points(V), _faces(F), float(max_distortion), pv, pt,
+                                          init, iterations)
+    _warn(info)
+    return (uv, info) if full_output else uv
+
+
+# ---- posing -------------------------------------------------------------------------------
+
+class Deformer:
+    """Poses a planar mesh by handles: ``method`` ``"kvf"`` (as-Killing-as-possible fields,
+    soft handles with ``weight``, default 100), ``"arap"`` or ``"bounded"`` (with
+    ``max_distortion``). :meth:`set_pins` factors once; each :meth:`drag` is cheap and
+    warm-started from the last pose. ``iterations`` per drag (kvf steps, default 2; arap
+    local/global iterations, default 10; bounded projections, default 100) and ``tolerance``
+    (kvf, arap: stop when no vertex moves more than this fraction of the mesh's size) trade
+    speed for convergence; drag again to the same targets to go on converging.
+
+    >>> import numpy as np, bdmorph
+    >>> V = np.array([[0, 0], [1, 0], [2, 0], [0, 1], [1, 1], [2, 1]], dtype=float)
+    >>> F = [[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]]
+    >>> d = bdmorph.Deformer(V, F, method="arap")
+    >>> d.set_pins([0, 3, 5])
+    >>> P = d.drag([[0, 0], [0, 1], [2.2, 1.3]])
+    >>> bool(np.allclose(P[5], [2.2, 1.3])), d.report["flipped_triangles"]
+    (True, 0)
+    """
+
+    def __init__(self, V, F, method: str = "kvf", *, weight: Optional[float] = None,
+                 max_distortion: Optional[float] = None, iterations: Optional[int] = None,
+                 tolerance: Optional[float] = None):
+        self._d = _native.Deformer(_points(V), _faces(F), method, weight, max_distortion,
+                                   iterations, tolerance)
+
+    def set_pins(self, pins) -> None:
+        """Sets the handles (vertex indices)."""
+        self._d.set_pins(_indices(pins, "pins"))
+
+    def drag(self, targets) -> np.ndarray:
+        """Moves the handles to ``targets`` (``k x 2``, in the pins' order); the pose,
+        ``n x 2``."""
+        return self._d.drag(_points2(targets, "targets"))
+
+    def set_weight(self, weight: float) -> None:
+        """KVF's handle weight (refactors; the pins stay)."""
+        self._d.set_weight(float(weight))
+
+    def reset(self) -> None:
+        """Back to the rest shape."""
+        self._d.reset()
+
+    def set_positions(self, positions) -> None:
+        """Replaces the pose (``n x 2``), e.g. to undo."""
+        self._d.set_positions(_points(positions, "positions"))
+
+    @property
+    def positions(self) -> np.ndarray:
+        """The pose, ``n x 2``."""
+        return self._d.positions
+
+    @property
+    def pins(self) -> list:
+        return self._d.pins
+
+    @property
+    def method(self) -> str:
+        return self._d.method
+
+    @property
+    def report(self) -> Optional[dict]:
+        """What the last drag did: iterations, energy, last_change, flipped_triangles,
+        pin_residual, max_distortion, bound_met."""
+        return self._d.report
+
+    def __repr__(self) -> str:
+        return f"bdmorph.Deformer({self.method}, {len(self.pins)} pins)"
+
+
+# ---- files and pictures -------------------------------------------------------------------
+
+def mesh_from_image(path, vertices: int = 2000, *, tolerance: Optional[float] = None,
+                    min_angle: Optional[float] = None,
+                    threshold: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
+    """Meshes a picture's subject (its opaque part; for an opaque picture, what differs from
+    the background): ``(V, F)`` with about ``vertices`` vertices, ``V`` ``n x 2`` in the
+    picture's pixels (y up), ready to morph or pose."""
+    return _native.mesh_from_image(str(path), int(vertices), tolerance, min_angle, threshold)
+
+
+def read_mesh(path) -> Tuple[np.ndarray, np.ndarray]:
+    """Reads an OBJ or OFF triangle mesh: ``(V, F)``, ``V`` ``n x 3`` float64, ``F``
+    ``m x 3`` int64."""
+    return _native.read_mesh(str(path))
+
+
+def write_obj(path, V, F) -> None:
+    """Writes ``V`` (``n x 2`` or ``n x 3``) and ``F`` as OBJ, atomically (a reader sees the
+    old file or the new one, never half of one); coordinates read back bit for bit."""
+    _native.write_obj(str(path), _points(V), _faces(F))

@@ -1,0 +1,107 @@
+//! The package's exceptions: `bdmorph.Error` (a `ValueError`) and one subclass per system,
+//! each carrying the library's message (the command line's).
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+create_exception!(
+    _bdmorph,
+    Error,
+    PyValueError,
+    "Any error of bdmorph (a ValueError): the message says what and where."
+);
+create_exception!(
+    _bdmorph,
+    MeshError,
+    Error,
+    "A mesh that cannot be used: shapes, indices, non-finite or inverted triangles..."
+);
+create_exception!(
+    _bdmorph,
+    MorphError,
+    Error,
+    "A morph, blend or path that cannot be prepared or computed."
+);
+create_exception!(
+    _bdmorph,
+    GeodesicError,
+    Error,
+    "Heat-method geodesics that cannot be prepared or queried."
+);
+create_exception!(
+    _bdmorph,
+    ParamError,
+    Error,
+    "A parameterisation that cannot be computed."
+);
+create_exception!(
+    _bdmorph,
+    DeformError,
+    Error,
+    "Posing by handles: bad pins, targets or options."
+);
+create_exception!(
+    _bdmorph,
+    MeshingError,
+    Error,
+    "A picture or outline that cannot be meshed."
+);
+create_exception!(
+    _bdmorph,
+    FileError,
+    Error,
+    "A file that cannot be read or written."
+);
+
+/// Adds the exceptions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("Error", py.get_type::<Error>())?;
+    m.add("MeshError", py.get_type::<MeshError>())?;
+    m.add("MorphError", py.get_type::<MorphError>())?;
+    m.add("GeodesicError", py.get_type::<GeodesicError>())?;
+    m.add("ParamError", py.get_type::<ParamError>())?;
+    m.add("DeformError", py.get_type::<DeformError>())?;
+    m.add("MeshingError", py.get_type::<MeshingError>())?;
+    m.add("FileError", py.get_type::<FileError>())?;
+    Ok(())
+}
+
+/// A mesh error as `MeshError`.
+pub fn mesh(e: impl std::fmt::Display) -> PyErr {
+    MeshError::new_err(e.to_string())
+}
+
+/// A morph error as `MorphError`, or `MeshError` when it is about the meshes.
+pub fn morph(e: bdmorph::MorphError) -> PyErr {
+    match e {
+        bdmorph::MorphError::Mesh(m) => MeshError::new_err(m.to_string()),
+        other => MorphError::new_err(other.to_string()),
+    }
+}
+
+/// A geodesic error.
+pub fn geodesic(e: impl std::fmt::Display) -> PyErr {
+    GeodesicError::new_err(e.to_string())
+}
+
+/// A parameterisation error.
+pub fn param(e: impl std::fmt::Display) -> PyErr {
+    ParamError::new_err(e.to_string())
+}
+
+/// A posing error.
+pub fn deform(e: impl std::fmt::Display) -> PyErr {
+    DeformError::new_err(e.to_string())
+}
+
+/// A meshing error.
+pub fn meshing(e: impl std::fmt::Display) -> PyErr {
+    MeshingError::new_err(e.to_string())
+}
+
+/// A file error.
+pub fn file(e: impl std::fmt::Display) -> PyErr {
+    FileError::new_err(e.to_string())
+}

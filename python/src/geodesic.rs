@@ -1,0 +1,110 @@
+//! `HeatGeodesics`: the heat method, prefactored once, each query a few back-substitutions.
+
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use bdmorph::geodesic::{Boundary, HeatGeodesics as Heat, HeatOptions};
+
+use crate::arrays;
+use crate::errors;
+
+/// Geodesic distances on a triangle mesh by the heat method.
+#[pyclass(module = "bdmorph._bdmorph")]
+pub struct HeatGeodesics {
+    inner: Heat,
+    n: usize,
+}
+
+#[pymethods]
+impl HeatGeodesics {
+    #[new]
+    #[pyo3(signature = (v, f, time_factor=None, boundary="robin", intrinsic_delaunay=true))]
+    fn new(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        f: PyReadonlyArray2<'_, i64>,
+        time_factor: Option<f64>,
+        boundary: &str,
+        intrinsic_delaunay: bool,
+    ) -> PyResult<HeatGeodesics> {
+        let mesh = arrays::surface(&v, &f)?;
+        let boundary = match boundary {
+            "robin" => Boundary::Robin,
+            "neumann" => Boundary::Neumann,
+            "dirichlet" => Boundary::Dirichlet,
+            "average" => Boundary::Average,
+            other => {
+                return Err(errors::GeodesicError::new_err(format!(
+                "unknown boundary condition '{other}' (use robin, neumann, dirichlet or average)"
+            )))
+            }
+        };
+        let mut options = HeatOptions::default()
+            .with_boundary(boundary)
+            .with_intrinsic_delaunay(intrinsic_delaunay);
+        if let Some(m) = time_factor {
+            options = options.with_time_factor(m);
+        }
+        let n = mesh.positions.len();
+        let inner = py
+            .detach(|| Heat::new(&mesh, options))
+            .map_err(errors::geodesic)?;
+        Ok(HeatGeodesics { inner, n })
+    }
+
+    /// The distance of every vertex from the nearest of `sources`, as an array of n.
+    fn distance<'py>(
+        &mut self,
+        py: Python<'py>,
+        sources: PyReadonlyArray1<'_, i64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let sources = arrays::indices(&sources, self.n, "sources")?;
+        let inner = &mut self.inner;
+        let d = py
+            .detach(|| inner.distance(&sources))
+            .map_err(errors::geodesic)?;
+        Ok(arrays::out1(py, d))
+    }
+
+    /// The distances from each source alone, as a k x n array.
+    fn distances_each<'py>(
+        &mut self,
+        py: Python<'py>,
+        sources: PyReadonlyArray1<'_, i64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let sources = arrays::indices(&sources, self.n, "sources")?;
+        let inner = &mut self.inner;
+        let rows = py
+            .detach(|| inner.distances_each(&sources))
+            .map_err(errors::geodesic)?;
+        let k = rows.len();
+        let flat: Vec<f64> = rows.into_iter().flatten().collect();
+        Ok(numpy::ndarray::Array2::from_shape_vec((k, self.n), flat)
+            .expect("k x n values")
+            .into_pyarray(py))
+    }
+
+    /// What the set-up did: vertices, faces, flips, time, mean_edge, spacing, has_boundary.
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.inner.stats();
+        let d = PyDict::new(py);
+        d.set_item("vertices", s.vertices)?;
+        d.set_item("faces", s.faces)?;
+        d.set_item("flips", s.flips)?;
+        d.set_item("time", s.time)?;
+        d.set_item("mean_edge", s.mean_edge)?;
+        d.set_item("spacing", s.spacing)?;
+        d.set_item("has_boundary", s.has_boundary)?;
+        Ok(d)
+    }
+
+    /// Vertices.
+    #[getter]
+    fn n_vertices(&self) -> usize {
+        self.n
+    }
+}
+
+use numpy::IntoPyArray;

@@ -164,8 +164,9 @@ class Morph:
                                 max_iterations, allow_inverted, warm_start)
 
     def frame(self, t: float) -> np.ndarray:
-        """The frame at ``t`` (0 is ``V0``'s shape, 1 is ``V1``'s; outside [0, 1] is
-        refused) as an ``n x 2`` array."""
+        """The frame at ``t`` (0 is ``V0``'s shape, 1 is ``V1``'s; slightly outside [0, 1]
+        extrapolates while the edge lengths stay Euclidean, as the command line's ``--t``)
+        as an ``n x 2`` array."""
         return self._m.frame(float(t))
 
     def frames(self, ts) -> np.ndarray:

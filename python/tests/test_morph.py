@@ -33,6 +33,16 @@ def test_frames_equal_the_command_lines(tmp_path, cli, strip):
         assert np.abs(ours[i] - theirs[:, :2]).max() <= 1e-12 * size_of(V0), i
 
 
+def test_extrapolation_equals_the_command_lines(tmp_path, cli, strip):
+    V0, V1, _, F = strip
+    bdmorph.write_obj(tmp_path / "a.obj", V0, F)
+    bdmorph.write_obj(tmp_path / "b.obj", V1, F)
+    cli("morph", tmp_path / "a.obj", tmp_path / "b.obj", "--t", 1.1, "-o", tmp_path / "x.obj")
+    theirs, _ = bdmorph.read_mesh(tmp_path / "x.obj")
+    ours = bdmorph.Morph(V0, V1, F).frame(1.1)
+    assert np.abs(ours - theirs[:, :2]).max() <= 1e-12 * size_of(V0)
+
+
 def test_a_path_equals_the_command_lines(tmp_path, cli, strip):
     V0, V1, V2, F = strip
     for name, V in [("a", V0), ("b", V1), ("c", V2)]:

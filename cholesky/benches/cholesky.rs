@@ -8,7 +8,11 @@
 //! - `factorize/simplicial/<size>`: faer's column-by-column factorisation of the same matrix
 //!   (`Supernodal::Never`; `Auto` is supernodal);
 //! - `solve/{own,faer,simplicial}/<size>`: one solve with one right-hand side;
-//! - `solve4/{own,faer}/<size>`: one solve with four right-hand sides.
+//! - `solve4/{own,faer}/<size>`: one solve with four right-hand sides;
+//! - `factorize_threads/<threads>/<size>`: the engine's factorisation split over 1, 2 (and,
+//!   where the machine has them, 4) threads (independent subtrees of the elimination tree).
+//!
+//! The groups against faer run on one thread (faer's kernels here are sequential).
 //!
 //! ```sh
 //! cargo bench -p bdmorph-cholesky --bench cholesky
@@ -34,6 +38,7 @@ fn setup(side: u32, dofs: u32, supernodal: Supernodal) -> (Cholesky, Vec<f64>, L
     let options = CholeskyOptions::default()
         .with_supernodal(supernodal)
         .with_columns(4);
+    // Analysed for the current pool: split over its threads where that pays.
     let mut chol = Cholesky::with_options(&pattern, options).expect("analysed");
     chol.factorize(&values).expect("positive definite");
     (chol, values, pattern)
@@ -43,7 +48,37 @@ fn rhs(n: usize) -> Vec<f64> {
     (0..n).map(|i| (i as f64 * 0.37).sin()).collect()
 }
 
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+}
+
 fn benches(c: &mut Criterion) {
+    against_faer(c);
+    let mut threads = c.benchmark_group("factorize_threads");
+    threads.sample_size(20);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for (name, side, dofs) in CASES {
+        for count in [1, 2, 4] {
+            if count > 1 && count > cores.max(2) {
+                continue;
+            }
+            let pool = pool(count);
+            let (mut chol, values, _) = pool.install(|| setup(side, dofs, Supernodal::Always));
+            threads.bench_with_input(BenchmarkId::new(count.to_string(), name), &(), |b, _| {
+                pool.install(|| b.iter(|| chol.factorize(black_box(&values)).expect("definite")))
+            });
+        }
+    }
+    threads.finish();
+}
+
+/// The engine against faer, each analysed for one thread.
+fn against_faer(c: &mut Criterion) {
+    let one = pool(1);
+    let setup = |side, dofs, supernodal| one.install(|| setup(side, dofs, supernodal));
     let mut factorize = c.benchmark_group("factorize");
     factorize.sample_size(20);
     for (name, side, dofs) in CASES {

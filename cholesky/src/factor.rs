@@ -132,6 +132,10 @@ pub struct Cholesky {
     single_failed: bool,
     /// The ready factor, if any: `Some(true)` for the single-precision one.
     ready: Option<bool>,
+    /// Scratch copies of the factor's top for a factorisation on several threads, in the
+    /// precision in use (empty when it stays on one thread).
+    scratch_double: Vec<f64>,
+    scratch_single: Vec<f32>,
 }
 
 impl std::fmt::Debug for Cholesky {
@@ -181,6 +185,8 @@ impl Cholesky {
             want_single,
             single_failed: false,
             ready: None,
+            scratch_double: Vec::new(),
+            scratch_single: Vec::new(),
         };
         this.allocate();
         Ok(this)
@@ -218,16 +224,21 @@ impl Cholesky {
     /// hundreds of megabytes. A fresh zeroed allocation is untouched pages until used.
     fn allocate(&mut self) {
         let (len_val, nnz, n) = (self.factor_nnz(), self.pattern.nnz(), self.dim());
+        let scratch = self.analysis.plan.as_ref().map_or(0, |p| p.scratch_len());
         if self.want_single {
             zeroed(&mut self.single, len_val);
             zeroed(&mut self.values32, nnz);
             zeroed(&mut self.rhs32, n * self.columns);
+            zeroed(&mut self.scratch_single, scratch);
             self.double = Vec::new();
+            self.scratch_double = Vec::new();
         } else {
             zeroed(&mut self.double, len_val);
+            zeroed(&mut self.scratch_double, scratch);
             self.single = Vec::new();
             self.values32 = Vec::new();
             self.rhs32 = Vec::new();
+            self.scratch_single = Vec::new();
         }
     }
 
@@ -244,6 +255,13 @@ impl Cholesky {
     /// Stored values of the factor `L`.
     pub fn factor_nnz(&self) -> usize {
         self.analysis.symbolic.len_val()
+    }
+
+    /// Threads a factorisation uses: the bins of independent subtrees it was split into for
+    /// the threads of rayon's pool when it was analysed (1 when a split does not pay: small
+    /// factors, one thread, simplicial factors).
+    pub fn factor_threads(&self) -> usize {
+        self.analysis.plan.as_ref().map_or(1, |p| p.threads())
     }
 
     /// Whether the factor is supernodal (the engine's own kernels factor and solve) rather
@@ -380,16 +398,26 @@ impl Cholesky {
     fn factorize_double(&mut self, values: &[f64], kernels: Kernels) -> Result<(), CholeskyError> {
         let len_val = self.factor_nnz();
         zeroed(&mut self.double, len_val);
+        let scratch = self.analysis.plan.as_ref().map_or(0, |p| p.scratch_len());
+        zeroed(&mut self.scratch_double, scratch);
         let Cholesky {
             analysis,
             double,
             pattern,
             workspace,
             solver,
+            scratch_double,
             ..
         } = self;
         factor_into(
-            analysis, solver, kernels, pattern, workspace, values, double, values,
+            analysis,
+            solver,
+            kernels,
+            pattern,
+            workspace,
+            values,
+            (double, scratch_double),
+            values,
         )
     }
 
@@ -402,6 +430,7 @@ impl Cholesky {
             pattern,
             workspace,
             solver,
+            scratch_single,
             ..
         } = self;
         if !own_kernels(analysis, solver, kernels) {
@@ -414,7 +443,14 @@ impl Cholesky {
             }
         }
         factor_into(
-            analysis, solver, kernels, pattern, workspace, values, single, values32,
+            analysis,
+            solver,
+            kernels,
+            pattern,
+            workspace,
+            values,
+            (single, scratch_single),
+            values32,
         )
     }
 
@@ -561,12 +597,17 @@ fn factor_into<T: Real + ComplexField + Into<f64>>(
     pattern: &LowerPattern,
     workspace: &mut MemBuffer,
     values: &[f64],
-    factor: &mut [T],
+    (factor, scratch): (&mut [T], &mut [T]),
     faer_values: &[T],
 ) -> Result<(), CholeskyError> {
     match (&analysis.plan, solver, kernels) {
         (Some(plan), Some(solver), Kernels::Own) => plan
-            .factorize(values, factor, &mut analysis.pivots(solver.inv_diag_mut()))
+            .factorize(
+                values,
+                factor,
+                &mut analysis.pivots(solver.inv_diag_mut()),
+                scratch,
+            )
             .map_err(failure),
         (_, solver, _) => {
             let matrix = SparseColMatRef::new(pattern.pattern.as_ref(), faer_values);

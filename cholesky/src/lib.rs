@@ -70,6 +70,7 @@ mod factor;
 pub mod fixtures;
 mod numeric;
 mod pattern;
+mod subtrees;
 mod supernodes;
 mod triangular;
 

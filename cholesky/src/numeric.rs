@@ -37,6 +37,9 @@
 
 use std::sync::Arc;
 
+use rayon::prelude::*;
+
+use crate::subtrees::Subtrees;
 use crate::supernodes::{Supernode, Supernodes};
 
 /// Columns factored one by one before their trailing update is applied in tiles.
@@ -47,6 +50,8 @@ const NR: usize = 4;
 /// A value type of the factor: `f64` or `f32`.
 pub(crate) trait Real:
     Copy
+    + Send
+    + Sync
     + Default
     + PartialOrd
     + std::ops::Mul<Output = Self>
@@ -302,6 +307,8 @@ pub(crate) struct SupernodalLlt {
     rel: Vec<u32>,
     /// Whether the processor has AVX2 and FMA (checked once).
     avx2_fma: bool,
+    /// The split for factoring on several threads, when it pays (see [`crate::subtrees`]).
+    subtrees: Option<Subtrees>,
 }
 
 impl SupernodalLlt {
@@ -394,7 +401,7 @@ impl SupernodalLlt {
         opens.sort_by_key(|&t| first_writer[t as usize]);
         let open_start = group_starts(first_writer.iter().copied(), supernodes);
         Some(SupernodalLlt {
-            structure,
+            structure: structure.clone(),
             assembly,
             assembly_start,
             opens,
@@ -403,6 +410,7 @@ impl SupernodalLlt {
             updates,
             rel,
             avx2_fma: avx2_fma(),
+            subtrees: Subtrees::new(&structure, rayon::current_num_threads()),
         })
     }
 
@@ -413,17 +421,36 @@ impl SupernodalLlt {
             + self.update_start.len() * 4
             + self.updates.len() * std::mem::size_of::<Update>()
             + self.rel.len() * 4
+            + self.subtrees.as_ref().map_or(0, |t| t.scratch_at.len() * 8)
+    }
+
+    /// Values of the scratch space a factorisation on several threads needs (one copy of the
+    /// top per bin; 0 when it stays on one thread).
+    pub fn scratch_len(&self) -> usize {
+        self.subtrees
+            .as_ref()
+            .map_or(0, |t| t.scratch_len * t.bins.len())
+    }
+
+    /// Bins (threads) a factorisation uses: 1 when it stays on one thread.
+    pub fn threads(&self) -> usize {
+        self.subtrees.as_ref().map_or(1, |t| t.bins.len())
     }
 
     /// Factors the matrix whose lower-triangle values (in the pattern given to
     /// [`SupernodalLlt::new`]) are `matrix` into `values`, rounded to `T`, checking every
     /// pivot by `pivots` (whose arrays have one entry per column) and writing the
     /// reciprocals of the diagonal there. Allocates nothing.
+    ///
+    /// With a `scratch` of [`SupernodalLlt::scratch_len`] values and more than one thread in
+    /// rayon's current pool, independent subtrees are factored in parallel (see
+    /// [`crate::subtrees`]); with an empty one, on this thread.
     pub fn factorize<T: Real>(
         &self,
         matrix: &[f64],
         values: &mut [T],
         pivots: &mut Pivots<'_>,
+        scratch: &mut [T],
     ) -> Result<(), Failure> {
         let n = self.structure.n();
         assert!(
@@ -443,24 +470,198 @@ impl SupernodalLlt {
         if !matrix.iter().all(|&v| T::from_f64(v).finite()) {
             return Err(Failure::NonFinite(self.first_non_finite(matrix, values)));
         }
+        if let Some(split) = &self.subtrees {
+            if scratch.len() == self.scratch_len() && rayon::current_num_threads() > 1 {
+                return self.in_parallel(split, matrix, values, pivots, scratch);
+            }
+        }
+        let all = 0..self.structure.list.len();
+        let targets = |_: usize| false;
         #[cfg(target_arch = "x86_64")]
         if self.avx2_fma {
             // SAFETY: the processor has AVX2 and FMA (`avx2_fma` was detected at run time).
-            return unsafe { self.supernodes_avx2(matrix, values, pivots) };
+            return unsafe {
+                self.range_avx2(
+                    all,
+                    &targets,
+                    matrix,
+                    values,
+                    (0, 0),
+                    pivots,
+                    &mut Scratch::default(),
+                )
+            };
         }
-        self.supernodes::<T, false>(matrix, values, pivots)
+        self.range::<T, false>(
+            all,
+            &targets,
+            matrix,
+            values,
+            (0, 0),
+            pivots,
+            &mut Scratch::default(),
+        )
+    }
+
+    /// The factorisation on several threads: the top's blocks opened, the bins' subtrees in
+    /// parallel (their updates of the top into their scratch copies), the copies added to the
+    /// top, then the top.
+    fn in_parallel<T: Real>(
+        &self,
+        split: &Subtrees,
+        matrix: &[f64],
+        values: &mut [T],
+        pivots: &mut Pivots<'_>,
+        scratch: &mut [T],
+    ) -> Result<(), Failure> {
+        let st = &*self.structure;
+        for &t in &split.top {
+            self.open(t, matrix, values);
+        }
+        // Each subtree's values and columns: consecutive, disjoint, in column order.
+        let mut ranges: Vec<(usize, std::ops::Range<usize>)> = split
+            .bins
+            .iter()
+            .enumerate()
+            .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
+            .collect();
+        ranges.sort_by_key(|(_, r)| r.start);
+        let mut work: Vec<Vec<Share<'_, T>>> = (0..split.bins.len()).map(|_| Vec::new()).collect();
+        let (mut vals, mut diag) = (&mut *values, &mut *pivots.inv_diag);
+        let (mut v_at, mut c_at) = (0, 0);
+        for (b, r) in ranges {
+            let (v0, v1) = (
+                st.list[r.start].values_start,
+                st.list[r.end - 1].values().end,
+            );
+            let (c0, c1) = (st.list[r.start].begin as usize, st.list[r.end - 1].end());
+            let (_, rest) = std::mem::take(&mut vals).split_at_mut(v0 - v_at);
+            let (mine, rest) = rest.split_at_mut(v1 - v0);
+            vals = rest;
+            v_at = v1;
+            let (_, rest) = std::mem::take(&mut diag).split_at_mut(c0 - c_at);
+            let (my_diag, rest) = rest.split_at_mut(c1 - c0);
+            diag = rest;
+            c_at = c1;
+            work[b].push((r, mine, my_diag));
+        }
+        let (slot, scale, floor) = (pivots.slot, pivots.scale, pivots.floor);
+        let in_top = |t: usize| split.in_top(t);
+        let failures: Vec<Result<(), Failure>> = work
+            .into_par_iter()
+            .zip(scratch.par_chunks_mut(split.scratch_len))
+            .map(|(subtrees, copy)| {
+                copy.fill(T::default());
+                for (r, mine, my_diag) in subtrees {
+                    let base = st.list[r.start].values_start;
+                    let col0 = st.list[r.start].begin as usize;
+                    let mut pivots = Pivots {
+                        slot: &slot[col0..],
+                        scale: &scale[col0..],
+                        floor,
+                        inv_diag: my_diag,
+                    };
+                    let mut copy = Scratch {
+                        values: &mut *copy,
+                        at: &split.scratch_at,
+                    };
+                    #[cfg(target_arch = "x86_64")]
+                    if self.avx2_fma {
+                        // SAFETY: the processor has AVX2 and FMA (detected at run time).
+                        unsafe {
+                            self.range_avx2(
+                                r,
+                                &in_top,
+                                matrix,
+                                mine,
+                                (base, col0),
+                                &mut pivots,
+                                &mut copy,
+                            )
+                        }?;
+                        continue;
+                    }
+                    self.range::<T, false>(
+                        r,
+                        &in_top,
+                        matrix,
+                        mine,
+                        (base, col0),
+                        &mut pivots,
+                        &mut copy,
+                    )?;
+                }
+                Ok(())
+            })
+            .collect();
+        // The failure of the first column, as on one thread.
+        let first = failures
+            .into_iter()
+            .filter_map(Result::err)
+            .min_by_key(|f| f.column());
+        if let Some(f) = first {
+            return Err(f);
+        }
+        for copy in scratch.chunks(split.scratch_len) {
+            for &t in &split.top {
+                let range = st.list[t].values();
+                let at = split.scratch_at[t];
+                for (v, c) in values[range.clone()]
+                    .iter_mut()
+                    .zip(&copy[at..at + range.len()])
+                {
+                    *v = *v + *c;
+                }
+            }
+        }
+        for &t in &split.top {
+            let never = |_: usize| true;
+            #[cfg(target_arch = "x86_64")]
+            if self.avx2_fma {
+                // SAFETY: the processor has AVX2 and FMA (detected at run time).
+                unsafe {
+                    self.range_avx2(
+                        t..t + 1,
+                        &never,
+                        matrix,
+                        values,
+                        (0, 0),
+                        pivots,
+                        &mut Scratch::default(),
+                    )
+                }?;
+                continue;
+            }
+            self.range::<T, false>(
+                t..t + 1,
+                &never,
+                matrix,
+                values,
+                (0, 0),
+                pivots,
+                &mut Scratch::default(),
+            )?;
+        }
+        Ok(())
     }
 
     /// Zeroes supernode `t`'s block of `values` and writes `matrix`'s values into it.
     #[inline(always)]
     fn open<T: Real>(&self, t: usize, matrix: &[f64], values: &mut [T]) {
-        values[self.structure.list[t].values()].fill(T::default());
+        self.open_at(t, matrix, values, 0);
+    }
+
+    /// [`SupernodalLlt::open`] into `values` starting at the factor's value `base`.
+    #[inline(always)]
+    fn open_at<T: Real>(&self, t: usize, matrix: &[f64], values: &mut [T], base: usize) {
+        let range = self.structure.list[t].values();
+        values[range.start - base..range.end - base].fill(T::default());
         let (a0, a1) = (
             self.assembly_start[t] as usize,
             self.assembly_start[t + 1] as usize,
         );
         for &[i, at] in &self.assembly[a0..a1] {
-            values[at as usize] = T::from_f64(matrix[i as usize]);
+            values[at as usize - base] = T::from_f64(matrix[i as usize]);
         }
     }
 
@@ -488,23 +689,36 @@ impl SupernodalLlt {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn supernodes_avx2<T: Real>(
+    #[allow(clippy::too_many_arguments)]
+    fn range_avx2<T: Real>(
         &self,
+        range: std::ops::Range<usize>,
+        opened: &impl Fn(usize) -> bool,
         matrix: &[f64],
         values: &mut [T],
+        base: (usize, usize),
         pivots: &mut Pivots<'_>,
+        top: &mut Scratch<'_, T>,
     ) -> Result<(), Failure> {
-        self.supernodes::<T, true>(matrix, values, pivots)
+        self.range::<T, true>(range, opened, matrix, values, base, pivots, top)
     }
 
-    /// The supernodes in column order: the blocks it is the first to write zeroed and
-    /// assembled from `matrix`, then its panel, then its updates of its ancestors.
+    /// The supernodes `range` in column order: the blocks each is the first to write zeroed
+    /// and assembled from `matrix` (but those `opened` already), then its panel, then its
+    /// updates of its ancestors. `values` holds the factor's values from `base` on, as far as
+    /// the range's own blocks and the ancestors it updates outside `top`; `top` receives the
+    /// updates of the ancestors it holds. `pivots`' arrays start at column `col0`.
     #[inline(always)]
-    fn supernodes<T: Real, const FMA: bool>(
+    #[allow(clippy::too_many_arguments)]
+    fn range<T: Real, const FMA: bool>(
         &self,
+        range: std::ops::Range<usize>,
+        opened: &impl Fn(usize) -> bool,
         matrix: &[f64],
         values: &mut [T],
+        (base, col0): (usize, usize),
         pivots: &mut Pivots<'_>,
+        top: &mut Scratch<'_, T>,
     ) -> Result<(), Failure> {
         let st = &*self.structure;
         // The least bound on a pivot in double precision (none in single).
@@ -513,17 +727,20 @@ impl SupernodalLlt {
         } else {
             pivots.floor
         };
-        for (k, s) in st.list.iter().enumerate() {
+        for k in range {
+            let s = &st.list[k];
             let (o0, o1) = (self.open_start[k] as usize, self.open_start[k + 1] as usize);
             for &t in &self.opens[o0..o1] {
-                self.open(t as usize, matrix, values);
+                if !opened(t as usize) {
+                    self.open_at(t as usize, matrix, values, base);
+                }
             }
-            let range = s.values();
-            let (done, rest) = values.split_at_mut(range.end);
-            let block = &mut done[range.start..];
+            let own = s.values();
+            let (done, rest) = values.split_at_mut(own.end - base);
+            let block = &mut done[own.start - base..];
             let (w, ld) = (s.width as usize, s.ld());
             let b = s.begin as usize;
-            let columns = b..b + w;
+            let columns = b - col0..b - col0 + w;
             let checks = PanelChecks {
                 matrix,
                 slot: &pivots.slot[columns.clone()],
@@ -545,7 +762,10 @@ impl SupernodalLlt {
             );
             for u in &self.updates[u0..u1] {
                 let t = &st.list[u.target as usize];
-                let target = &mut rest[t.values_start - range.end..t.values().end - range.end];
+                let target = match top.at.get(u.target as usize) {
+                    Some(&at) if at != usize::MAX => &mut top.values[at..at + t.values().len()],
+                    _ => &mut rest[t.values_start - own.end..t.values().end - own.end],
+                };
                 let (first, count) = (u.first as usize, u.count as usize);
                 let rel = &self.rel[u.rel_start..u.rel_start + h - first];
                 let columns = |j: usize| (rows[first + j] - t.begin) as usize * t.ld();
@@ -564,6 +784,35 @@ impl SupernodalLlt {
             }
         }
         Ok(())
+    }
+}
+
+/// A subtree's share of a factorisation: its supernodes, their values, their columns'
+/// reciprocal pivots.
+type Share<'a, T> = (std::ops::Range<usize>, &'a mut [T], &'a mut [f64]);
+
+/// A bin's scratch copy of the top's blocks: `values`, and per supernode where its block
+/// starts in them (`usize::MAX` outside the top). Empty on one thread.
+pub(crate) struct Scratch<'a, T> {
+    values: &'a mut [T],
+    at: &'a [usize],
+}
+
+impl<T> Default for Scratch<'_, T> {
+    fn default() -> Self {
+        Scratch {
+            values: &mut [],
+            at: &[],
+        }
+    }
+}
+
+impl Failure {
+    /// The column it is about.
+    fn column(&self) -> usize {
+        match *self {
+            Failure::Pivot(c) | Failure::Singular(c, _) | Failure::NonFinite(c) => c,
+        }
     }
 }
 
@@ -813,7 +1062,17 @@ impl SupernodalLlt {
         values: &mut [f64],
         pivots: &mut Pivots<'_>,
     ) -> Result<(), Failure> {
-        self.supernodes::<f64, false>(matrix, values, pivots)
+        let all = 0..self.structure.list.len();
+        let targets = |_: usize| false;
+        self.range::<f64, false>(
+            all,
+            &targets,
+            matrix,
+            values,
+            (0, 0),
+            pivots,
+            &mut Scratch::default(),
+        )
     }
 
     /// Checks that the plan places each of a matrix's `nnz` values exactly once, inside its

@@ -103,7 +103,7 @@ fn the_portable_loops_match_the_vector_ones() {
     let mut portable = fresh.clone();
     let mut inv = vec![0.0; chol.dim()];
     let mut pivots = chol.analysis().pivots(&mut inv);
-    plan.factorize(&values, &mut fresh, &mut pivots)
+    plan.factorize(&values, &mut fresh, &mut pivots, &mut [])
         .expect("definite");
     plan.factorize_portable(&values, &mut portable, &mut pivots)
         .expect("definite");

@@ -9,6 +9,7 @@ use bdmorph::render::{raster, Image};
 use bdmorph::PlanarMesh;
 use bdmorph::{Located, MeshError, MeshFile, Morph, MorphError, MorphOptions, Path, PathOptions};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
 
 use super::output::{self, Look, Plan};
 use super::{times, MorphArgs, OutputArgs, SolverArgs};
@@ -271,29 +272,42 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     };
     let keys = &inputs.keyframes;
     let as_path = keys.len() > 2 || !args.easing.is_empty() || !args.durations.is_empty();
-    let animation = if as_path {
-        let path_options = PathOptions::default()
-            .with_morph(options)
-            .with_durations(args.durations.clone())
-            .with_easings(args.easing.clone());
-        match program {
-            Some(p) => Path::with_program(p, keys, path_options),
-            None => Path::with_options(keys, path_options),
+    let path_options = PathOptions::default()
+        .with_morph(options)
+        .with_durations(args.durations.clone())
+        .with_easings(args.easing.clone());
+    let build = |program: Option<bdmorph::Program>| {
+        if as_path {
+            match program {
+                Some(p) => Path::with_program(p, keys, path_options.clone()),
+                None => Path::with_options(keys, path_options.clone()),
+            }
+            .map(Animation::Path)
+        } else {
+            match program {
+                Some(p) => Morph::with_program(p, &keys[0], &keys[1], options),
+                None => Morph::new(&keys[0], &keys[1], options),
+            }
+            .map(Animation::Morph)
         }
-        .map(Animation::Path)
-    } else {
-        match program {
-            Some(p) => Morph::with_program(p, &keys[0], &keys[1], options),
-            None => Morph::new(&keys[0], &keys[1], options),
-        }
-        .map(Animation::Morph)
     };
-    let mut animation = animation.map_err(|e| inputs.setup_error(e))?;
+    // Stretches of t solved in parallel, each by its own engine warm-started from its own
+    // first frame (one stretch, today's sequence, with one thread).
+    let stretches = stretch_count(times.len(), rayon::current_num_threads());
+    let mut engines = Vec::with_capacity(stretches);
+    engines.push(build(program.clone()).map_err(|e| inputs.setup_error(e))?);
+    if stretches > 1 {
+        let more: Result<Vec<Animation>, MorphError> = (1..stretches)
+            .into_par_iter()
+            .map(|_| build(program.clone()))
+            .collect();
+        engines.extend(more.map_err(|e| inputs.setup_error(e))?);
+    }
 
     let colour = args.out.color_by.is_some();
     // Keyframes with inverted triangles (--allow-inverted), by the time they are at.
-    let inverted = animation.inverted().to_vec();
-    let folded: Vec<(f64, usize)> = animation
+    let inverted = engines[0].inverted().to_vec();
+    let folded: Vec<(f64, usize)> = engines[0]
         .keyframe_times()
         .into_iter()
         .enumerate()
@@ -301,11 +315,43 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         .map(|(k, t)| (t, k))
         .collect();
     let bar = progress_bar(times.len(), args.out.quiet, "morphing");
+    let keep = plan.is_some();
+    let solve = |engine: &mut Animation, range: std::ops::Range<usize>| {
+        range
+            .map(|index| {
+                let t = times[index];
+                let solved = engine.frame(t).map(|frame| Solved {
+                    stats: frame.stats,
+                    positions: keep.then(|| frame.positions.to_vec()),
+                    distortion: (keep && colour).then(|| frame.distortion.to_vec()),
+                    at_folded: folded.iter().find(|&&(at, _)| at == t).map(|&(_, k)| {
+                        (
+                            k,
+                            max_distance(frame.positions, &inputs.keyframes[k].positions),
+                        )
+                    }),
+                });
+                bar.inc(1);
+                solved
+            })
+            .collect::<Vec<_>>()
+    };
+    let ranges = stretch_ranges(times.len(), stretches);
+    let solved: Vec<Result<Solved, MorphError>> = engines
+        .par_iter_mut()
+        .zip(ranges)
+        .map(|(engine, range)| solve(engine, range))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect();
+    bar.finish_and_clear();
+    let animation = &engines[0];
     let mut frames = Vec::with_capacity(if plan.is_some() { times.len() } else { 0 });
     let mut stdout = std::io::stdout().lock();
     let mut failed = 0usize;
-    for (index, &t) in times.iter().enumerate() {
-        let frame = match animation.frame(t) {
+    for ((index, &t), solved) in times.iter().enumerate().zip(solved) {
+        let frame = match solved {
             Ok(frame) => frame,
             // One frame: its error is the command's. Several: report it, write the others.
             Err(e) if times.len() == 1 => return Err(inputs.frame_error(e)),
@@ -316,15 +362,11 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
                     writeln!(stdout, "{{\"t\":{t},\"error\":\"{}\"}}", json_escape(&e))
                         .map_err(|e| e.to_string())?;
                 }
-                bar.suspend(|| eprintln!("bdmorph: error: {e}; frame skipped"));
-                bar.inc(1);
+                eprintln!("bdmorph: error: {e}; frame skipped");
                 continue;
             }
         };
-        let at_folded = folded.iter().find(|&&(at, _)| at == t).map(|&(_, k)| {
-            let deviation = max_distance(frame.positions, &inputs.keyframes[k].positions);
-            (k, deviation)
-        });
+        let at_folded = frame.at_folded;
         if args.out.stats {
             let mut json = frame.stats.to_json();
             if let Some((k, deviation)) = at_folded {
@@ -339,39 +381,33 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         if let (Some((k, deviation)), false) = (at_folded, args.out.quiet) {
             let size = inputs.keyframes[k].diameter();
             let inverted = &inverted[k];
-            bar.suspend(|| {
-                eprintln!(
-                    "bdmorph: note: t = {t} is keyframe {k} ({}), which has {} inverted \
-                     triangle{} (face {}, 0-based): the frame is the flat shape nearest its side \
-                     lengths, not that pose; it differs from it by up to {deviation:.3e} ({:.2}% \
-                     of its size)",
-                    inputs.paths[k].display(),
-                    inverted.len(),
-                    if inverted.len() == 1 { "" } else { "s" },
-                    listed(inverted),
-                    100.0 * deviation / size.max(f64::MIN_POSITIVE)
-                );
-            });
+            eprintln!(
+                "bdmorph: note: t = {t} is keyframe {k} ({}), which has {} inverted \
+                 triangle{} (face {}, 0-based): the frame is the flat shape nearest its side \
+                 lengths, not that pose; it differs from it by up to {deviation:.3e} ({:.2}% \
+                 of its size)",
+                inputs.paths[k].display(),
+                inverted.len(),
+                if inverted.len() == 1 { "" } else { "s" },
+                listed(inverted),
+                100.0 * deviation / size.max(f64::MIN_POSITIVE)
+            );
         }
         if frame.stats.flipped_triangles > 0 && !args.out.quiet {
-            bar.suspend(|| {
-                eprintln!(
-                    "bdmorph: warning: t = {t}: {} flipped triangles",
-                    frame.stats.flipped_triangles
-                );
-            });
+            eprintln!(
+                "bdmorph: warning: t = {t}: {} flipped triangles",
+                frame.stats.flipped_triangles
+            );
         }
-        if plan.is_some() {
+        if let Some(positions) = frame.positions {
             frames.push(output::Frame {
                 index,
                 t,
-                positions: frame.positions.to_vec(),
-                distortion: colour.then(|| frame.distortion.to_vec()),
+                positions,
+                distortion: frame.distortion,
             });
         }
-        bar.inc(1);
     }
-    bar.finish_and_clear();
     let n_times = times.len();
     let writes = plan.is_some();
     let failures = move || {
@@ -407,6 +443,43 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         return Err(failures());
     }
     Ok(())
+}
+
+/// One solved frame, as the command reports and writes it.
+struct Solved {
+    stats: bdmorph::FrameStats,
+    /// Its positions, when written.
+    positions: Option<Vec<[f64; 2]>>,
+    /// Its triangles' distortion, when pictures are coloured by it.
+    distortion: Option<Vec<f64>>,
+    /// At a keyframe with inverted triangles: the keyframe and the frame's largest distance
+    /// from it.
+    at_folded: Option<(usize, f64)>,
+}
+
+/// Frames per stretch below which another engine (its set-up, its cold first frame, its
+/// memory) does not pay.
+const MIN_STRETCH: usize = 8;
+
+/// How many stretches of `frames` frames to solve in parallel on `threads` threads: one per
+/// thread, each of at least [`MIN_STRETCH`] frames (one stretch with one thread).
+pub(super) fn stretch_count(frames: usize, threads: usize) -> usize {
+    threads.min(frames / MIN_STRETCH).max(1)
+}
+
+/// `stretches` consecutive ranges covering `0..frames`, as equal as can be (the first ones
+/// one longer).
+pub(super) fn stretch_ranges(frames: usize, stretches: usize) -> Vec<std::ops::Range<usize>> {
+    let (each, extra) = (frames / stretches, frames % stretches);
+    let mut start = 0;
+    (0..stretches)
+        .map(|k| {
+            let len = each + usize::from(k < extra);
+            let range = start..start + len;
+            start += len;
+            range
+        })
+        .collect()
 }
 
 /// Renders and writes computed frames as `plan` says, then tells where (unless quiet).

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use bdmorph::io::{self, TexCoords};
 use bdmorph::render::{colour, html, raster, svg, video, Drawing, Image, ImageSize, Viewport};
+use rayon::prelude::*;
 
 /// An output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -159,12 +160,17 @@ fn distortion_shading(frames: &[Frame]) -> Option<(Vec<Vec<u8>>, f64)> {
     Some((shades, max))
 }
 
-/// Renders every frame into files in memory: `(path, bytes)`.
+/// Makes frame `i`'s file: its path and bytes.
+type MakeFile<'a> = dyn Fn(usize, &Frame) -> Result<(PathBuf, Vec<u8>), String> + Sync + 'a;
+
+/// Renders every frame into files in memory: `(path, bytes)`. Frames are drawn and encoded
+/// in parallel on rayon's pool (each on its own, so the bytes do not depend on the number of
+/// threads); `progress` is called once per frame, from any thread.
 pub fn render(
     plan: &Plan,
     look: &Look,
     frames: &[Frame],
-    mut progress: impl FnMut(),
+    progress: impl Fn() + Sync,
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, String> {
     let view = Viewport::fit(frames.iter().map(|f| f.positions.as_slice()));
     let shading = distortion_shading(frames);
@@ -192,10 +198,33 @@ pub fn render(
         }
     };
     let err = |e: raster::RenderError| e.to_string();
+    // Every frame's file (or picture), in order, made in parallel.
+    let each = |make: &MakeFile| {
+        frames
+            .par_iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let file = make(i, f);
+                progress();
+                file
+            })
+            .collect::<Result<Vec<_>, String>>()
+    };
+    let pictures = || -> Vec<Image> {
+        frames
+            .par_iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let img = raster::render(&f.positions, &drawing(i), &view, look.size);
+                progress();
+                img
+            })
+            .collect()
+    };
     let mut files = Vec::new();
     match plan.format {
         Format::Obj => {
-            for f in frames {
+            files = each(&|_, f| {
                 let mut bytes = Vec::new();
                 let t_line = if f.t.is_nan() {
                     String::new()
@@ -210,41 +239,28 @@ pub fn render(
                     &[look.title, &t_line],
                 )
                 .map_err(|e| format!("{}: {e}", name(f.index).display()))?;
-                files.push((name(f.index), bytes));
-                progress();
-            }
+                Ok((name(f.index), bytes))
+            })?;
         }
         Format::Svg => {
-            for (i, f) in frames.iter().enumerate() {
-                files.push((
-                    name(f.index),
-                    svg::svg(&f.positions, &drawing(i), &view, look.size).into_bytes(),
-                ));
-                progress();
-            }
+            files = each(&|i, f| {
+                let svg = svg::svg(&f.positions, &drawing(i), &view, look.size);
+                Ok((name(f.index), svg.into_bytes()))
+            })?;
         }
         Format::Png => {
-            for (i, f) in frames.iter().enumerate() {
+            files = each(&|i, f| {
                 let img = raster::render(&f.positions, &drawing(i), &view, look.size);
-                files.push((name(f.index), raster::encode_png(&img).map_err(err)?));
-                progress();
-            }
+                Ok((name(f.index), raster::encode_png(&img).map_err(err)?))
+            })?;
         }
         Format::Gif => {
-            let mut images = Vec::with_capacity(frames.len());
-            for (i, f) in frames.iter().enumerate() {
-                images.push(raster::render(&f.positions, &drawing(i), &view, look.size));
-                progress();
-            }
+            let images = pictures();
             let delay = (100 / look.fps.clamp(1, 100)) as u16;
             files.push((name(0), raster::encode_gif(&images, delay).map_err(err)?));
         }
         Format::Mp4 => {
-            let mut images = Vec::with_capacity(frames.len());
-            for (i, f) in frames.iter().enumerate() {
-                images.push(raster::render(&f.positions, &drawing(i), &view, look.size));
-                progress();
-            }
+            let images = pictures();
             let bytes = video::encode_mp4(&images, look.fps)
                 .map_err(|e| format!("{}: {e}", name(0).display()))?;
             files.push((name(0), bytes));

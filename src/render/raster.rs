@@ -22,6 +22,7 @@
 //! ```
 
 use super::{Drawing, Image, ImageSize, Viewport};
+use rayon::prelude::*;
 use std::error::Error as StdError;
 use std::fmt;
 use std::io::Cursor;
@@ -711,12 +712,20 @@ pub fn encode_gif(frames: &[Image], delay_centiseconds: u16) -> Result<Vec<u8>, 
     let mut out = Vec::new();
     let mut encoder = gif::Encoder::new(&mut out, w, h, &[]).map_err(fail)?;
     encoder.set_repeat(gif::Repeat::Infinite).map_err(fail)?;
-    let mut pixels = Vec::new();
-    for f in frames {
-        pixels.clone_from(&f.rgba);
-        let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
-        frame.delay = delay_centiseconds;
-        encoder.write_frame(&frame).map_err(fail)?;
+    // Each frame is quantised to its palette and LZW-compressed on its own (in parallel on
+    // rayon's pool), then written in order: the bytes do not depend on the thread count.
+    let encoded: Vec<gif::Frame<'static>> = frames
+        .par_iter()
+        .map(|f| {
+            let mut pixels = f.rgba.clone();
+            let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
+            frame.delay = delay_centiseconds;
+            frame.make_lzw_pre_encoded();
+            frame
+        })
+        .collect();
+    for frame in &encoded {
+        encoder.write_lzw_pre_encoded_frame(frame).map_err(fail)?;
     }
     encoder.into_inner().map_err(fail)?;
     Ok(out)

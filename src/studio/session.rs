@@ -9,6 +9,7 @@
 
 use std::path::{Path as FsPath, PathBuf};
 
+use rayon::prelude::*;
 use serde::Deserialize;
 
 use super::project::{Keyframe, Project, ProjectError};
@@ -847,7 +848,7 @@ impl Session {
                     let max = colour::distortion_scale(poses.iter().map(|p| p.2.as_slice()));
                     let picks = [0, count / 4, count / 2, 3 * count / 4, count - 1];
                     picks
-                        .iter()
+                        .par_iter()
                         .map(|&i| {
                             let shades =
                                 colour::shade_colours(&colour::distortion_shades(&poses[i].2, max));
@@ -855,7 +856,7 @@ impl Session {
                         })
                         .collect()
                 } else {
-                    poses.iter().map(|p| render(&p.1, None)).collect()
+                    poses.par_iter().map(|p| render(&p.1, None)).collect()
                 };
                 let bytes = match format {
                     "gif" => {

@@ -38,7 +38,10 @@
 //!   solution), the ratio being what they buy; `warm_frame_f64` and `warm_frame_f32` the
 //!   default with the factor's precision forced (the default picks single precision from
 //!   [`bdmorph::SINGLE_FROM_VALUES`] stored values);
-//! - `cold_frame`: the frame `t = 0.5` from `u = 0` with a factorisation per step.
+//! - `cold_frame`: the frame `t = 0.5` from `u = 0` with a factorisation per step;
+//! - `frame_threads/<threads>/<n>`: `warm_frame_one_way` with the morph set up and run in a
+//!   pool of 1, 2 (and 4 where the machine has them) threads. Every other group runs on one
+//!   thread.
 //!
 //! Every case is built on first use, so a filter (`cargo bench --bench frame -- warm_frame`)
 //! only pays for what it runs. Program sizes and the Newton iterations of a warm frame are
@@ -501,7 +504,66 @@ fn bench_symbolic(c: &mut Criterion, cases: &mut [Case]) {
     group.finish();
 }
 
+/// One frame of one-way sweeps (as `warm_frame_one_way`) with the morph set up and run in a
+/// pool of 1, 2 (and 4, where the machine has them) threads: the factorisation split over
+/// independent subtrees where that pays.
+fn bench_frame_threads(c: &mut Criterion, cases: &mut [Case]) {
+    let name = "frame_threads";
+    let mut group = c.benchmark_group(name);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for case in cases.iter() {
+        configure(&mut group, case.n);
+        for threads in [1, 2, 4] {
+            if threads > cores.max(2) {
+                continue;
+            }
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            let mut state: Option<(Morph, Vec<[f64; 2]>, u32)> = None;
+            let mut counts = Counts::default();
+            let id = BenchmarkId::new(threads.to_string(), case.n);
+            group.bench_function(id, |b| {
+                let (morph, out, at) = state.get_or_insert_with(|| {
+                    let m = case.meshes();
+                    let morph = pool
+                        .install(|| Morph::new(&m.source, &m.target, MorphOptions::default()))
+                        .expect("morph");
+                    (morph, vec![[0.0; 2]; m.source.positions.len()], 0)
+                });
+                b.iter_custom(|iters| {
+                    pool.install(|| {
+                        let mut timed = Duration::ZERO;
+                        for _ in 0..iters {
+                            if *at == 0 {
+                                morph.forget_solutions();
+                                morph.frame_into(0.0, out).expect("frame");
+                                *at = 1;
+                            }
+                            let started = Instant::now();
+                            let stats =
+                                morph.frame_into(f64::from(*at) / 10.0, out).expect("frame");
+                            timed += started.elapsed();
+                            *at = (*at + 1) % 11;
+                            counts.add(black_box(&stats));
+                        }
+                        timed
+                    })
+                });
+            });
+            counts.report(case.n, &format!("{name}/{threads}"));
+        }
+    }
+    group.finish();
+}
+
 fn benches(c: &mut Criterion) {
+    // Every group but `frame_threads` runs on one thread, as the C++ reference does.
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .expect("the global pool is set once, first");
     let mut cases: Vec<Case> = SIZES
         .iter()
         .map(|&n| Case {
@@ -516,6 +578,7 @@ fn benches(c: &mut Criterion) {
     bench_factorization(c, &mut cases);
     bench_distortion(c, &mut cases);
     bench_warm_frame(c, &mut cases);
+    bench_frame_threads(c, &mut cases);
 }
 
 criterion_group!(frame, benches);

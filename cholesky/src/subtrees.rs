@@ -24,7 +24,7 @@ use crate::supernodes::Supernodes;
 const LEAST_GAIN: f64 = 1.15;
 /// Estimated work (multiply-adds) below which a factorisation stays on one thread: waking
 /// a second thread and adding the scratch copies costs tens of microseconds.
-const LEAST_WORK: f64 = 2.0e6;
+const LEAST_WORK: f64 = 1.5e7;
 /// Splits tried at most.
 const MOST_SPLITS: usize = 256;
 /// No supernode: the parent of a root.

@@ -451,22 +451,7 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
                     Morph::new(&m.source, &m.target, MorphOptions::default()).expect("morph");
                 (morph, vec![[0.0; 2]; m.source.positions.len()], 0)
             });
-            b.iter_custom(|iters| {
-                let mut timed = Duration::ZERO;
-                for _ in 0..iters {
-                    if *at == 0 {
-                        morph.forget_solutions();
-                        morph.frame_into(0.0, out).expect("frame");
-                        *at = 1;
-                    }
-                    let started = Instant::now();
-                    let stats = morph.frame_into(f64::from(*at) / 10.0, out).expect("frame");
-                    timed += started.elapsed();
-                    *at = (*at + 1) % 11;
-                    counts.add(black_box(&stats));
-                }
-                timed
-            });
+            b.iter_custom(|iters| one_way_frames(morph, out, at, &mut counts, iters));
         });
         counts.report(case.n, name);
     }
@@ -504,6 +489,31 @@ fn bench_symbolic(c: &mut Criterion, cases: &mut [Case]) {
     group.finish();
 }
 
+/// The time of `iters` frames of one-way sweeps `t = 0.1, ..., 1`: at each sweep's start the
+/// solutions are forgotten and `t = 0` is solved untimed; `at` is the next frame's tenth.
+fn one_way_frames(
+    morph: &mut Morph,
+    out: &mut [[f64; 2]],
+    at: &mut u32,
+    counts: &mut Counts,
+    iters: u64,
+) -> Duration {
+    let mut timed = Duration::ZERO;
+    for _ in 0..iters {
+        if *at == 0 {
+            morph.forget_solutions();
+            morph.frame_into(0.0, out).expect("frame");
+            *at = 1;
+        }
+        let started = Instant::now();
+        let stats = morph.frame_into(f64::from(*at) / 10.0, out).expect("frame");
+        timed += started.elapsed();
+        *at = (*at + 1) % 11;
+        counts.add(black_box(&stats));
+    }
+    timed
+}
+
 /// One frame of one-way sweeps (as `warm_frame_one_way`) with the morph set up and run in a
 /// pool of 1, 2 (and 4, where the machine has them) threads: the factorisation split over
 /// independent subtrees where that pays.
@@ -533,23 +543,7 @@ fn bench_frame_threads(c: &mut Criterion, cases: &mut [Case]) {
                     (morph, vec![[0.0; 2]; m.source.positions.len()], 0)
                 });
                 b.iter_custom(|iters| {
-                    pool.install(|| {
-                        let mut timed = Duration::ZERO;
-                        for _ in 0..iters {
-                            if *at == 0 {
-                                morph.forget_solutions();
-                                morph.frame_into(0.0, out).expect("frame");
-                                *at = 1;
-                            }
-                            let started = Instant::now();
-                            let stats =
-                                morph.frame_into(f64::from(*at) / 10.0, out).expect("frame");
-                            timed += started.elapsed();
-                            *at = (*at + 1) % 11;
-                            counts.add(black_box(&stats));
-                        }
-                        timed
-                    })
+                    pool.install(|| one_way_frames(morph, out, at, &mut counts, iters))
                 });
             });
             counts.report(case.n, &format!("{name}/{threads}"));

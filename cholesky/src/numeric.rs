@@ -477,30 +477,8 @@ impl SupernodalLlt {
         }
         let all = 0..self.structure.list.len();
         let targets = |_: usize| false;
-        #[cfg(target_arch = "x86_64")]
-        if self.avx2_fma {
-            // SAFETY: the processor has AVX2 and FMA (`avx2_fma` was detected at run time).
-            return unsafe {
-                self.range_avx2(
-                    all,
-                    &targets,
-                    matrix,
-                    values,
-                    (0, 0),
-                    pivots,
-                    &mut Scratch::default(),
-                )
-            };
-        }
-        self.range::<T, false>(
-            all,
-            &targets,
-            matrix,
-            values,
-            (0, 0),
-            pivots,
-            &mut Scratch::default(),
-        )
+        let scratch = &mut Scratch::default();
+        self.dispatch(all, &targets, matrix, values, (0, 0), pivots, scratch)
     }
 
     /// The factorisation on several threads: the top's blocks opened, the bins' subtrees in
@@ -565,31 +543,8 @@ impl SupernodalLlt {
                         values: &mut *copy,
                         at: &split.scratch_at,
                     };
-                    #[cfg(target_arch = "x86_64")]
-                    if self.avx2_fma {
-                        // SAFETY: the processor has AVX2 and FMA (detected at run time).
-                        unsafe {
-                            self.range_avx2(
-                                r,
-                                &in_top,
-                                matrix,
-                                mine,
-                                (base, col0),
-                                &mut pivots,
-                                &mut copy,
-                            )
-                        }?;
-                        continue;
-                    }
-                    self.range::<T, false>(
-                        r,
-                        &in_top,
-                        matrix,
-                        mine,
-                        (base, col0),
-                        &mut pivots,
-                        &mut copy,
-                    )?;
+                    let at = (base, col0);
+                    self.dispatch(r, &in_top, matrix, mine, at, &mut pivots, &mut copy)?;
                 }
                 Ok(())
             })
@@ -616,31 +571,8 @@ impl SupernodalLlt {
         }
         for &t in &split.top {
             let never = |_: usize| true;
-            #[cfg(target_arch = "x86_64")]
-            if self.avx2_fma {
-                // SAFETY: the processor has AVX2 and FMA (detected at run time).
-                unsafe {
-                    self.range_avx2(
-                        t..t + 1,
-                        &never,
-                        matrix,
-                        values,
-                        (0, 0),
-                        pivots,
-                        &mut Scratch::default(),
-                    )
-                }?;
-                continue;
-            }
-            self.range::<T, false>(
-                t..t + 1,
-                &never,
-                matrix,
-                values,
-                (0, 0),
-                pivots,
-                &mut Scratch::default(),
-            )?;
+            let scratch = &mut Scratch::default();
+            self.dispatch(t..t + 1, &never, matrix, values, (0, 0), pivots, scratch)?;
         }
         Ok(())
     }
@@ -685,6 +617,27 @@ impl SupernodalLlt {
             })
             .next()
             .unwrap_or(0)
+    }
+
+    /// [`SupernodalLlt::range`] compiled for AVX2 and FMA where the processor has them, else
+    /// the portable loops.
+    #[allow(clippy::too_many_arguments)]
+    fn dispatch<T: Real>(
+        &self,
+        range: std::ops::Range<usize>,
+        opened: &impl Fn(usize) -> bool,
+        matrix: &[f64],
+        values: &mut [T],
+        base: (usize, usize),
+        pivots: &mut Pivots<'_>,
+        top: &mut Scratch<'_, T>,
+    ) -> Result<(), Failure> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2_fma {
+            // SAFETY: the processor has AVX2 and FMA (`avx2_fma` was detected at run time).
+            return unsafe { self.range_avx2(range, opened, matrix, values, base, pivots, top) };
+        }
+        self.range::<T, false>(range, opened, matrix, values, base, pivots, top)
     }
 
     #[cfg(target_arch = "x86_64")]

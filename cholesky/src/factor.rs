@@ -264,6 +264,14 @@ impl Cholesky {
         self.analysis.plan.as_ref().map_or(1, |p| p.threads())
     }
 
+    /// Threads a solve uses: the bins of independent subtrees the triangular solves were
+    /// split into for the threads of rayon's pool when this was built (1 when a split does
+    /// not pay). A solve runs split only in a pool of more than one thread, and a solve with
+    /// a sparse right-hand side ([`Cholesky::solve_in_place_sparse`]) never does.
+    pub fn solve_threads(&self) -> usize {
+        self.solver.as_ref().map_or(1, |s| s.threads())
+    }
+
     /// Whether the factor is supernodal (the engine's own kernels factor and solve) rather
     /// than simplicial (faer's).
     pub fn is_supernodal(&self) -> bool {

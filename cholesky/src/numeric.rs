@@ -39,7 +39,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use crate::subtrees::Subtrees;
+use crate::subtrees::{Subtrees, Work};
 use crate::supernodes::{Supernode, Supernodes};
 
 /// Columns factored one by one before their trailing update is applied in tiles.
@@ -410,7 +410,7 @@ impl SupernodalLlt {
             updates,
             rel,
             avx2_fma: avx2_fma(),
-            subtrees: Subtrees::new(&structure, rayon::current_num_threads()),
+            subtrees: Subtrees::new(&structure, rayon::current_num_threads(), Work::Factor),
         })
     }
 

@@ -10,7 +10,11 @@
 //! only on the split, which depends only on the structure and the number of bins: the same
 //! number of threads gives the same bits, another number agrees to rounding.
 //!
-//! The split is chosen by estimated work (`width × ld²` per supernode): the heaviest
+//! The triangular solves split the same way (see [`crate::triangular`]), by their own
+//! estimate of work.
+//!
+//! The split is chosen by estimated work (`width × ld²` per supernode for a factorisation,
+//! [`Work::Factor`]; `width × ld`, the block's entries, for a solve, [`Work::Solve`]): the heaviest
 //! subtree is replaced by its children (its root moving to the top) for as long as that
 //! lowers the estimated time `top + the heaviest bin` (bins filled heaviest subtree first,
 //! each into the lightest bin).
@@ -20,11 +24,40 @@ use std::ops::Range;
 use crate::supernodes::Supernodes;
 
 /// Below this estimated speed-up a split is not worth the scratch copies and the threads'
-/// start-up: the factorisation stays on one thread.
+/// start-up: the work stays on one thread.
 const LEAST_GAIN: f64 = 1.15;
-/// Estimated work (multiply-adds) below which a factorisation stays on one thread: waking
-/// a second thread and adding the scratch copies costs tens of microseconds.
-const LEAST_WORK: f64 = 1.5e7;
+/// Estimated multiply-adds below which a factorisation stays on one thread: waking a
+/// second thread and adding the scratch copies costs tens of microseconds (at 2M, a
+/// 3K-vertex morph frame, a split factorisation made the frame 4% slower).
+const LEAST_FACTOR_WORK: f64 = 1.5e7;
+/// Factor entries below which a solve stays on one thread (see [`LEAST_FACTOR_WORK`]).
+const LEAST_SOLVE_WORK: f64 = 2.0e5;
+
+/// What a split is for, which sets how a supernode's work is estimated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Work {
+    /// A numeric factorisation: `width × ld²` multiply-adds per supernode.
+    Factor,
+    /// A forward and backward triangular solve: `width × ld` entries of the factor read.
+    Solve,
+}
+
+impl Work {
+    fn cost(self, s: &crate::supernodes::Supernode) -> f64 {
+        let (w, ld) = (f64::from(s.width), s.ld() as f64);
+        match self {
+            Work::Factor => w * ld * ld,
+            Work::Solve => w * ld,
+        }
+    }
+
+    fn least(self) -> f64 {
+        match self {
+            Work::Factor => LEAST_FACTOR_WORK,
+            Work::Solve => LEAST_SOLVE_WORK,
+        }
+    }
+}
 /// Splits tried at most.
 const MOST_SPLITS: usize = 256;
 /// No supernode: the parent of a root.
@@ -49,9 +82,10 @@ pub(crate) struct Subtrees {
 }
 
 impl Subtrees {
-    /// The split of `st` for `threads` bins, or `None` for one thread, a small factor or an
-    /// estimated speed-up below [`LEAST_GAIN`].
-    pub fn new(st: &Supernodes, threads: usize) -> Option<Subtrees> {
+    /// The split of `st` for `threads` bins by the estimate `work`, or `None` for one
+    /// thread, a small factor or an estimated speed-up below [`LEAST_GAIN`].
+    pub fn new(st: &Supernodes, threads: usize, work: Work) -> Option<Subtrees> {
+        let kind = work;
         let m = st.list.len();
         if threads < 2 || m < 2 {
             return None;
@@ -65,14 +99,7 @@ impl Subtrees {
             .iter()
             .map(|s| st.rows_of(s).first().map_or(NONE, |&r| owner[r as usize]))
             .collect();
-        let cost: Vec<f64> = st
-            .list
-            .iter()
-            .map(|s| {
-                let ld = s.ld() as f64;
-                s.width as f64 * ld * ld
-            })
-            .collect();
+        let cost: Vec<f64> = st.list.iter().map(|s| kind.cost(s)).collect();
         // Subtree work, first supernode and size: a parent comes after its children.
         let (mut work, mut first, mut size) =
             (cost.clone(), (0..m).collect::<Vec<_>>(), vec![1; m]);
@@ -91,7 +118,7 @@ impl Subtrees {
             children[p].push(s);
         }
         let total: f64 = cost.iter().sum();
-        if total < LEAST_WORK {
+        if total < kind.least() {
             return None;
         }
         let mut candidates: Vec<usize> = (0..m).filter(|&s| parent[s] == NONE).collect();

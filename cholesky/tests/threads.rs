@@ -84,3 +84,66 @@ fn two_unknowns_per_vertex_split_too() {
     assert_eq!(used, 2);
     assert!(max_difference(&one, &two) < 1e-11);
 }
+
+/// Solves of `columns` right-hand sides with the grid's matrix (factored in double
+/// precision), built and run in a pool of `threads`: the solutions, one after another, the
+/// relative residual `max |A x - b| / max |b|` and the threads the solves used.
+fn solve_columns(side: u32, threads: usize, columns: usize) -> (Vec<f64>, f64, usize) {
+    let (pattern, values) = fixtures::grid(side, 1, 1e-2).assemble().expect("pattern");
+    pool(threads).install(|| {
+        let mut chol =
+            Cholesky::with_options(&pattern, CholeskyOptions::default()).expect("analysis");
+        chol.factorize(&values).expect("definite");
+        let n = chol.dim();
+        let b: Vec<f64> = (0..n * columns)
+            .map(|i| ((i * 53) % 97) as f64 / 97.0 - 0.5)
+            .collect();
+        let mut x = b.clone();
+        chol.reserve_columns(columns).expect("room");
+        chol.solve_in_place(&mut x, columns).expect("solve");
+        let mut residual = 0.0f64;
+        let mut ax = vec![0.0; n];
+        for (xc, bc) in x.chunks(n).zip(b.chunks(n)) {
+            pattern.symmetric_product(&values, xc, &mut ax);
+            for (a, b) in ax.iter().zip(bc) {
+                residual = residual.max((a - b).abs());
+            }
+        }
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (x, residual / scale, chol.solve_threads())
+    })
+}
+
+#[test]
+fn split_solves_are_exact_agree_with_one_thread_and_repeat() {
+    // 1, 2, 3 and 7 right-hand sides: blocks of one, two and four.
+    for columns in [1, 2, 3, 7] {
+        let (one, residual, used) = solve_columns(160, 1, columns);
+        assert_eq!(used, 1, "one thread: no split");
+        assert!(residual < 1e-12, "one thread: residual {residual:e}");
+        for threads in [2, 3] {
+            let (many, residual, used) = solve_columns(160, threads, columns);
+            assert!(
+                (2..=threads).contains(&used),
+                "{threads} threads: the solves are split ({used} bins)"
+            );
+            assert!(residual < 1e-12, "{threads} threads: residual {residual:e}");
+            let diff = max_difference(&one, &many);
+            assert!(diff < 1e-11, "{threads} threads: {diff:e} from one thread");
+            let (again, _, _) = solve_columns(160, threads, columns);
+            assert!(
+                many.iter()
+                    .zip(&again)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{threads} threads, {columns} columns: the same bits every time"
+            );
+        }
+    }
+}
+
+#[test]
+fn small_solves_stay_on_one_thread() {
+    let (_, residual, used) = solve_columns(20, 4, 1);
+    assert_eq!(used, 1, "400 unknowns are not worth a second thread");
+    assert!(residual < 1e-12);
+}

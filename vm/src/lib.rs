@@ -473,9 +473,32 @@ mod tests {
 
     #[test]
     fn the_decoded_plan_computes_exactly_what_the_interpreter_computes() {
-        // A jittered grid (interior, boundary and mixed edges, every valence), a metric that
-        // is not flat and a u that is not zero: the same bits from both executors.
-        let side = 9u32;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("pool");
+        pool.install(|| plan_matches_interpreter(9, 1));
+    }
+
+    #[test]
+    fn the_plan_split_over_threads_computes_the_same_bits() {
+        // 2 x 69^2 = 9,522 triangles: above the size from which the sweeps are split.
+        let side = 70;
+        assert!(2 * (side as usize - 1).pow(2) >= plan::PARALLEL_TRIANGLES);
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            pool.install(|| plan_matches_interpreter(side, threads));
+        }
+    }
+
+    /// A jittered grid of `side` x `side` vertices (interior, boundary and mixed edges, every
+    /// valence), a metric that is not flat and a u that is not zero: the same bits from the
+    /// plan (in the current pool, of `threads` threads) and the interpreter.
+    fn plan_matches_interpreter(side: u32, threads: usize) {
+        assert_eq!(rayon::current_num_threads(), threads);
         let mut a = Vec::new();
         for j in 0..side {
             for i in 0..side {
@@ -516,7 +539,9 @@ mod tests {
             vm.grad.clone(),
             vm.hvals.clone(),
         );
-        vm.len.fill(0.0);
+        // Slots past the iteration stream's hold l0, which neither pass writes.
+        let n_it = vm.program().n_iter_edges();
+        vm.len[..n_it].fill(0.0);
         vm.temps.fill([0.0; 3]);
         vm.grad.fill(0.0);
         vm.hvals.fill(0.0);

@@ -10,9 +10,18 @@
 //! computes, in the same order of floating-point operations (tested bit for bit); the
 //! interpreter still runs the pass that needs the energy.
 
+use std::ops::Range;
+
 use bdmorph_isa::{operand, Op, Program};
+use rayon::prelude::*;
 
 use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners_into, Corner};
+
+/// Triangles from which [`Plan::run`] splits its sweeps over rayon's threads (when there
+/// are several).
+pub(crate) const PARALLEL_TRIANGLES: usize = 8192;
+/// Edges, triangles or unknowns per piece of a split sweep.
+const CHUNK: usize = 2048;
 
 /// A verified program's iteration stream with every operand resolved.
 #[derive(Clone, Debug, Default)]
@@ -103,6 +112,11 @@ impl Plan {
     /// The gradient pass: lengths, corners, gradient and Hessian values, exactly as the
     /// interpreter's pass without the energy. `scale` has one entry per unknown and a last
     /// entry 1 (for boundary vertices).
+    ///
+    /// Every edge, triangle and vertex is computed on its own (a vertex's gradient entry and
+    /// Hessian column read its corners and write nothing else), so from [`PARALLEL_TRIANGLES`]
+    /// triangles on, with more than one thread in rayon's current pool, each of the three
+    /// sweeps is split over the threads: the same bits whatever the thread count.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
@@ -114,15 +128,86 @@ impl Plan {
         grad: &mut [f64],
         hvals: &mut [f64],
     ) {
-        for ((len, &l0), &[a, b]) in len.iter_mut().zip(l0).zip(&self.edge_scales) {
+        let n = self.lower.len();
+        assert!(
+            len.len() == self.edge_scales.len()
+                && l0.len() == len.len()
+                && temps.len() == 3 * self.triangles.len()
+                && grad.len() == n
+                && col_ptr.len() == n + 1
+                && hvals.len() == col_ptr[n] as usize,
+            "buffers of this plan"
+        );
+        if self.triangles.len() < PARALLEL_TRIANGLES || rayon::current_num_threads() < 2 {
+            self.edges(l0, scale, len, &self.edge_scales);
+            self.corners_of(len, temps, &self.triangles);
+            self.vertices(0..n, col_ptr, temps, grad, hvals);
+            return;
+        }
+        len.par_chunks_mut(CHUNK)
+            .zip(l0.par_chunks(CHUNK))
+            .zip(self.edge_scales.par_chunks(CHUNK))
+            .for_each(|((len, l0), ends)| self.edges(l0, scale, len, ends));
+        let len = &*len;
+        temps
+            .par_chunks_mut(3 * CHUNK)
+            .zip(self.triangles.par_chunks(CHUNK))
+            .for_each(|(temps, triangles)| self.corners_of(len, temps, triangles));
+        self.vertices_parallel(0..n, col_ptr, temps, grad, hvals);
+    }
+
+    /// The lengths of the edges whose ends' scale indices are `ends`.
+    #[inline]
+    fn edges(&self, l0: &[f64], scale: &[f64], len: &mut [f64], ends: &[[u32; 2]]) {
+        for ((len, &l0), &[a, b]) in len.iter_mut().zip(l0).zip(ends) {
             *len = l0 * scale[a as usize] * scale[b as usize];
         }
-        for (out, &[e0, e1, e2]) in temps.chunks_exact_mut(3).zip(&self.triangles) {
+    }
+
+    /// The corners of `triangles` (edge slots into `len`) into `temps`, three per triangle.
+    #[inline]
+    fn corners_of(&self, len: &[f64], temps: &mut [Corner], triangles: &[[u32; 3]]) {
+        for (out, &[e0, e1, e2]) in temps.chunks_exact_mut(3).zip(triangles) {
             triangle_corners_into([len[e0 as usize], len[e1 as usize], len[e2 as usize]], out);
         }
-        let temps = &*temps;
-        for (k, (w, &m)) in self.vertex_start.windows(2).zip(&self.lower).enumerate() {
-            let range = w[0] as usize..w[1] as usize;
+    }
+
+    /// [`Plan::vertices`] halved recursively (at a vertex, so that each half owns its columns
+    /// of `hvals`) down to [`CHUNK`] unknowns, the halves joined on rayon's pool.
+    fn vertices_parallel(
+        &self,
+        ks: Range<usize>,
+        col_ptr: &[u32],
+        temps: &[Corner],
+        grad: &mut [f64],
+        hvals: &mut [f64],
+    ) {
+        if ks.len() <= CHUNK {
+            return self.vertices(ks, col_ptr, temps, grad, hvals);
+        }
+        let mid = ks.start + ks.len() / 2;
+        let (g0, g1) = grad.split_at_mut(mid - ks.start);
+        let (h0, h1) = hvals.split_at_mut((col_ptr[mid] - col_ptr[ks.start]) as usize);
+        rayon::join(
+            || self.vertices_parallel(ks.start..mid, col_ptr, temps, g0, h0),
+            || self.vertices_parallel(mid..ks.end, col_ptr, temps, g1, h1),
+        );
+    }
+
+    /// The gradient entries and Hessian columns of the unknowns `ks`: `grad` holds their
+    /// entries and `hvals` their columns (from column `ks.start`'s first value).
+    fn vertices(
+        &self,
+        ks: Range<usize>,
+        col_ptr: &[u32],
+        temps: &[Corner],
+        grad: &mut [f64],
+        hvals: &mut [f64],
+    ) {
+        let base = col_ptr[ks.start] as usize;
+        for (g, k) in grad.iter_mut().zip(ks) {
+            let range = self.vertex_start[k] as usize..self.vertex_start[k + 1] as usize;
+            let m = self.lower[k] as usize;
             let corners = &self.corners[range.clone()];
             let directions = || {
                 corners.iter().map(|&c| {
@@ -132,13 +217,13 @@ impl Plan {
             };
             let angle =
                 half_angle_sum_fast(directions()).unwrap_or_else(|| half_angle_sum(directions()));
-            grad[k] = std::f64::consts::PI - angle;
-            let col = col_ptr[k] as usize;
+            *g = std::f64::consts::PI - angle;
+            let col = col_ptr[k] as usize - base;
             let mut diag = 0.0;
             for (j, &[a, b]) in self.pairs[range].iter().enumerate() {
                 let w = 0.25 * (temps[a as usize][2] + temps[b as usize][2]);
                 diag += w;
-                if j < m as usize {
+                if j < m {
                     hvals[col + 1 + j] = -w;
                 }
             }

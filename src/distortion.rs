@@ -95,32 +95,59 @@ impl RestShape {
     /// When `out` does not have one entry per face.
     pub fn distortion_into(&self, positions: &[[f64; 2]], out: &mut [f64]) -> f64 {
         assert_eq!(out.len(), self.faces.len(), "one output per face");
-        let mut max: f64 = 1.0;
-        for ((f, inv), o) in self.faces.iter().zip(&self.inverse).zip(out.iter_mut()) {
-            let p = |k: usize| positions.get(f[k] as usize).copied();
-            let k = match (p(0), p(1), p(2)) {
-                (Some(p0), Some(p1), Some(p2)) => {
-                    let (d1, d2) = (sub(p1, p0), sub(p2, p0));
-                    // J = D · M^-1 with D = [d1 d2] (columns).
-                    let j = [
-                        [
-                            d1[0] * inv[0][0] + d2[0] * inv[1][0],
-                            d1[0] * inv[0][1] + d2[0] * inv[1][1],
-                        ],
-                        [
-                            d1[1] * inv[0][0] + d2[1] * inv[1][0],
-                            d1[1] * inv[0][1] + d2[1] * inv[1][1],
-                        ],
-                    ];
-                    conformal_distortion(j)
-                }
-                _ => f64::INFINITY,
-            };
-            *o = k;
-            max = max.max(k);
+        if self.faces.len() < PARALLEL_FACES || rayon::current_num_threads() < 2 {
+            return distortions(&self.faces, &self.inverse, positions, out);
         }
-        max
+        // Each triangle on its own, the largest the same whatever the split.
+        use rayon::prelude::*;
+        self.faces
+            .par_chunks(CHUNK)
+            .zip(self.inverse.par_chunks(CHUNK))
+            .zip(out.par_chunks_mut(CHUNK))
+            .map(|((faces, inverse), out)| distortions(faces, inverse, positions, out))
+            .reduce(|| 1.0, f64::max)
     }
+}
+
+/// Faces from which [`RestShape::distortion_into`] is split over rayon's threads (when
+/// there are several).
+const PARALLEL_FACES: usize = 12_000;
+/// Faces per piece of a split.
+const CHUNK: usize = 2048;
+
+/// The conformal distortions of `faces` (with their rest shapes' `inverse`) into `out`, and
+/// the largest (1 for none).
+fn distortions(
+    faces: &[[u32; 3]],
+    inverse: &[[[f64; 2]; 2]],
+    positions: &[[f64; 2]],
+    out: &mut [f64],
+) -> f64 {
+    let mut max: f64 = 1.0;
+    for ((f, inv), o) in faces.iter().zip(inverse).zip(out.iter_mut()) {
+        let p = |k: usize| positions.get(f[k] as usize).copied();
+        let k = match (p(0), p(1), p(2)) {
+            (Some(p0), Some(p1), Some(p2)) => {
+                let (d1, d2) = (sub(p1, p0), sub(p2, p0));
+                // J = D · M^-1 with D = [d1 d2] (columns).
+                let j = [
+                    [
+                        d1[0] * inv[0][0] + d2[0] * inv[1][0],
+                        d1[0] * inv[0][1] + d2[0] * inv[1][1],
+                    ],
+                    [
+                        d1[1] * inv[0][0] + d2[1] * inv[1][0],
+                        d1[1] * inv[0][1] + d2[1] * inv[1][1],
+                    ],
+                ];
+                conformal_distortion(j)
+            }
+            _ => f64::INFINITY,
+        };
+        *o = k;
+        max = max.max(k);
+    }
+    max
 }
 
 fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {

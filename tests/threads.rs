@@ -200,3 +200,25 @@ fn a_thread_count_of_zero_is_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn frames_called_from_outside_the_pool_are_those_of_the_pool() {
+    // The library runs a split frame on rayon's global pool when called from another thread:
+    // the same split, so the same bits as the frames run inside a pool of that many threads.
+    let (a, b) = pair(10_000);
+    let threads = rayon::current_num_threads();
+    let mut morph = Morph::new(&a, &b, MorphOptions::default()).expect("morph");
+    let outside: Vec<Vec<[f64; 2]>> = (0..=10)
+        .map(|i| {
+            let frame = morph.frame(f64::from(i) / 10.0).expect("frame");
+            frame.positions.to_vec()
+        })
+        .collect();
+    let inside = frames(&a, &b, threads);
+    let same = outside
+        .iter()
+        .flatten()
+        .zip(inside.iter().flatten())
+        .all(|(p, q)| p[0].to_bits() == q[0].to_bits() && p[1].to_bits() == q[1].to_bits());
+    assert!(same, "{threads} threads: outside the pool, the pool's bits");
+}

@@ -31,7 +31,7 @@ const LEAST_GAIN: f64 = 1.15;
 /// 3K-vertex morph frame, a split factorisation made the frame 4% slower).
 const LEAST_FACTOR_WORK: f64 = 1.5e7;
 /// Factor entries below which a solve stays on one thread (see [`LEAST_FACTOR_WORK`]).
-const LEAST_SOLVE_WORK: f64 = 2.0e5;
+const LEAST_SOLVE_WORK: f64 = 2.5e5;
 
 /// What a split is for, which sets how a supernode's work is estimated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

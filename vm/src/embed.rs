@@ -119,21 +119,28 @@ pub(crate) fn run(
 
 /// Counts the triangles whose signed area in `positions` is not positive, over the embed
 /// stream's triangles (one per face, counter-clockwise as compiled).
-pub(crate) fn count_flipped(program: &Program, positions: &[[f64; 2]]) -> usize {
-    program
-        .embed()
-        .iter()
-        .filter(|s| {
-            let (a, b, c) = (
-                positions[s.a as usize],
-                positions[s.b as usize],
-                positions[s.c as usize],
-            );
-            let area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-            // NaN areas count as flipped.
-            area2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-        })
-        .count()
+pub(crate) fn count_flipped(program: &Program, positions: &[[f64; 2]], parallel: bool) -> usize {
+    let flipped = |s: &&EmbedStep| {
+        let (a, b, c) = (
+            positions[s.a as usize],
+            positions[s.b as usize],
+            positions[s.c as usize],
+        );
+        let area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        // NaN areas count as flipped.
+        area2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    };
+    if parallel {
+        use rayon::prelude::*;
+        program
+            .embed()
+            .par_iter()
+            .with_min_len(crate::plan::CHUNK)
+            .filter(flipped)
+            .count()
+    } else {
+        program.embed().iter().filter(flipped).count()
+    }
 }
 
 #[cfg(test)]

@@ -266,7 +266,22 @@ impl Vm {
 
     /// `scale = exp(u / 2)` per unknown (its last entry, for boundary vertices, stays 1).
     fn update_scale(&mut self) {
-        exp::exp_half_into(&self.u, &mut self.scale);
+        if self.splits_pass() {
+            use rayon::prelude::*;
+            let n = self.u.len();
+            self.scale[..n]
+                .par_chunks_mut(plan::CHUNK)
+                .zip(self.u.par_chunks(plan::CHUNK))
+                .for_each(|(scale, u)| exp::exp_half_into(u, scale));
+        } else {
+            exp::exp_half_into(&self.u, &mut self.scale);
+        }
+    }
+
+    /// Whether the per-triangle and per-vertex passes are split over rayon's threads (see
+    /// [`plan::PARALLEL_TRIANGLES`]).
+    fn splits_pass(&self) -> bool {
+        self.program.n_faces() >= plan::PARALLEL_TRIANGLES && rayon::current_num_threads() > 1
     }
 
     fn evaluate_with<const ENERGY: bool>(&mut self) {
@@ -406,12 +421,29 @@ impl Vm {
         &self.failure
     }
 
+    /// Threads a Newton solve splits its work over, chosen for rayon's pool when this VM was
+    /// built: the most of the gradient pass's (the current pool's threads, from 12,000
+    /// triangles on),
+    /// the factorisation's and the solves' (see
+    /// [`bdmorph_cholesky::Cholesky::factor_threads`]); 1 when nothing is split. Called from
+    /// outside the pool, each split piece of work waits for the pool's threads to wake:
+    /// run a whole solve on the pool instead (`rayon::scope`, as `bdmorph`'s frames do).
+    pub fn threads(&self) -> usize {
+        let pass = if self.program.n_faces() >= plan::PARALLEL_TRIANGLES {
+            rayon::current_num_threads()
+        } else {
+            1
+        };
+        pass.max(self.chol.factor_threads())
+            .max(self.chol.solve_threads())
+    }
+
     /// Number of triangles with non-positive signed area in `positions`.
     pub fn count_flipped(&self, positions: &[[f64; 2]]) -> usize {
         if positions.len() != self.program.n_vertices() {
             return self.program.n_faces();
         }
-        embed::count_flipped(&self.program, positions)
+        embed::count_flipped(&self.program, positions, self.splits_pass())
     }
 
     fn check_len(&self, what: &'static str, expected: usize, got: usize) -> Result<(), VmError> {
@@ -482,8 +514,8 @@ mod tests {
 
     #[test]
     fn the_plan_split_over_threads_computes_the_same_bits() {
-        // 2 x 69^2 = 9,522 triangles: above the size from which the sweeps are split.
-        let side = 70;
+        // 2 x 79^2 = 12,482 triangles: above the size from which the sweeps are split.
+        let side = 80;
         assert!(2 * (side as usize - 1).pow(2) >= plan::PARALLEL_TRIANGLES);
         for threads in [1, 2, 3] {
             let pool = rayon::ThreadPoolBuilder::new()

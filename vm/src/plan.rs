@@ -19,9 +19,9 @@ use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners_into, 
 
 /// Triangles from which [`Plan::run`] splits its sweeps over rayon's threads (when there
 /// are several).
-pub(crate) const PARALLEL_TRIANGLES: usize = 8192;
+pub(crate) const PARALLEL_TRIANGLES: usize = 12_000;
 /// Edges, triangles or unknowns per piece of a split sweep.
-const CHUNK: usize = 2048;
+pub(crate) const CHUNK: usize = 2048;
 
 /// A verified program's iteration stream with every operand resolved.
 #[derive(Clone, Debug, Default)]

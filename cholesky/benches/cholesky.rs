@@ -11,6 +11,8 @@
 //! - `solve4/{own,faer}/<size>`: one solve with four right-hand sides;
 //! - `factorize_threads/<threads>/<size>`: the engine's factorisation split over 1, 2 (and,
 //!   where the machine has them, 4) threads (independent subtrees of the elimination tree).
+//! - `solve_threads/<threads>/<size>`: one solve (forward and backward, one right-hand side)
+//!   split over the same thread counts.
 //!
 //! The groups against faer run on one thread (faer's kernels here are sequential).
 //!
@@ -73,6 +75,28 @@ fn benches(c: &mut Criterion) {
         }
     }
     threads.finish();
+    let mut solves = c.benchmark_group("solve_threads");
+    solves.sample_size(30);
+    for (name, side, dofs) in CASES {
+        for count in [1, 2, 4] {
+            if count > 1 && count > cores.max(2) {
+                continue;
+            }
+            let pool = pool(count);
+            let (mut chol, _, _) = pool.install(|| setup(side, dofs, Supernodal::Always));
+            let b0 = rhs(chol.dim());
+            let mut x = b0.clone();
+            solves.bench_with_input(BenchmarkId::new(count.to_string(), name), &(), |b, _| {
+                pool.install(|| {
+                    b.iter(|| {
+                        x.copy_from_slice(&b0);
+                        chol.solve_in_place(black_box(&mut x), 1).expect("solve");
+                    })
+                })
+            });
+        }
+    }
+    solves.finish();
 }
 
 /// The engine against faer, each analysed for one thread.

@@ -128,6 +128,16 @@ def _keyframes(Vs, name: str = "keyframes") -> list:
     return [_points(V, f"keyframe {i}") for i, V in enumerate(Vs)]
 
 
+def _threads(threads) -> Optional[int]:
+    if threads is None:
+        return None
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)):
+        raise MorphError(f"threads must be a whole number from 1 to 1024 or None, not {threads!r}")
+    if not 1 <= int(threads) <= 1024:
+        raise MorphError(f"threads must be from 1 to 1024, not {int(threads)}")
+    return int(threads)
+
+
 def _warn(info: dict) -> None:
     message = info.get("message")
     if message:
@@ -144,7 +154,9 @@ class Morph:
 
     Options: ``tolerance`` (Newton's gradient-norm stop, default 1e-10), ``max_iterations``
     (default 50), ``allow_inverted`` (accept a few clockwise triangles in the keyframes),
-    ``warm_start`` (default True).
+    ``warm_start`` (default True), ``threads`` (default None: one per core; a mesh from about
+    6K vertices splits each frame over them; 1 is the one-thread engine; the same count gives
+    the same bits, another agrees within the solver's tolerance).
 
     >>> import numpy as np, bdmorph
     >>> V0 = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], dtype=float)
@@ -159,9 +171,9 @@ class Morph:
 
     def __init__(self, V0, V1, F, *, tolerance: Optional[float] = None,
                  max_iterations: Optional[int] = None, allow_inverted: bool = False,
-                 warm_start: bool = True):
+                 warm_start: bool = True, threads: Optional[int] = None):
         self._m = _native.Morph(_points(V0, "V0"), _points(V1, "V1"), _faces(F), tolerance,
-                                max_iterations, allow_inverted, warm_start)
+                                max_iterations, allow_inverted, warm_start, _threads(threads))
 
     def frame(self, t: float) -> np.ndarray:
         """The frame at ``t`` (0 is ``V0``'s shape, 1 is ``V1``'s; slightly outside [0, 1]
@@ -187,6 +199,11 @@ class Morph:
         return self._m.distortion
 
     @property
+    def threads(self) -> int:
+        """Threads of the pool the frames are solved in."""
+        return self._m.threads
+
+    @property
     def n_vertices(self) -> int:
         return self._m.n_vertices
 
@@ -207,9 +224,9 @@ class Blend:
 
     def __init__(self, keyframes: Sequence, F, *, tolerance: Optional[float] = None,
                  max_iterations: Optional[int] = None, allow_inverted: bool = False,
-                 warm_start: bool = True):
+                 warm_start: bool = True, threads: Optional[int] = None):
         self._b = _native.Blend(_keyframes(keyframes), _faces(F), tolerance, max_iterations,
-                                allow_inverted, warm_start)
+                                allow_inverted, warm_start, _threads(threads))
 
     def frame(self, weights) -> np.ndarray:
         """The blend with ``weights`` as an ``n x 2`` array."""
@@ -230,6 +247,11 @@ class Blend:
     @property
     def n_keyframes(self) -> int:
         return self._b.n_keyframes
+
+    @property
+    def threads(self) -> int:
+        """Threads of the pool the frames are solved in."""
+        return self._b.threads
 
     def __repr__(self) -> str:
         return f"bdmorph.Blend({self.n_keyframes} poses)"
@@ -253,7 +275,8 @@ class Path:
     def __init__(self, keyframes: Sequence, F, *, durations=None,
                  easings: Union[None, str, Sequence[str]] = None,
                  tolerance: Optional[float] = None, max_iterations: Optional[int] = None,
-                 allow_inverted: bool = False, warm_start: bool = True):
+                 allow_inverted: bool = False, warm_start: bool = True,
+                 threads: Optional[int] = None):
         keys = _keyframes(keyframes)
         if isinstance(easings, str):
             easings = [easings] * (len(keys) - 1)
@@ -262,7 +285,7 @@ class Path:
         if easings is not None:
             easings = [str(e) for e in easings]
         self._p = _native.Path(keys, _faces(F), durations, easings, tolerance, max_iterations,
-                               allow_inverted, warm_start)
+                               allow_inverted, warm_start, _threads(threads))
 
     def frame(self, t: float) -> np.ndarray:
         """The frame at ``t`` in [0, 1] as an ``n x 2`` array."""
@@ -281,6 +304,11 @@ class Path:
     def stats(self) -> Optional[dict]:
         """The last frame's statistics (see :attr:`Morph.stats`)."""
         return self._p.stats
+
+    @property
+    def threads(self) -> int:
+        """Threads of the pool the frames are solved in."""
+        return self._p.threads
 
     def __repr__(self) -> str:
         return f"bdmorph.Path({len(self.keyframe_times)} poses)"

@@ -11,6 +11,7 @@ mod geodesic;
 mod morph;
 mod param;
 mod picture;
+mod threads;
 
 use pyo3::prelude::*;
 

@@ -8,6 +8,7 @@ use bdmorph::{Easing, FrameStats, MorphOptions, PathOptions, PlanarMesh};
 
 use crate::arrays;
 use crate::errors;
+use crate::threads::Threads;
 
 /// The options every morph takes.
 fn options(
@@ -74,6 +75,7 @@ fn keyframes(
 #[pyclass(module = "bdmorph._bdmorph")]
 pub struct Morph {
     inner: bdmorph::Morph,
+    threads: Threads,
     n: usize,
     buffer: Vec<[f64; 2]>,
     stats: Option<FrameStats>,
@@ -82,7 +84,7 @@ pub struct Morph {
 #[pymethods]
 impl Morph {
     #[new]
-    #[pyo3(signature = (v0, v1, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true))]
+    #[pyo3(signature = (v0, v1, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -93,16 +95,19 @@ impl Morph {
         max_iterations: Option<u32>,
         allow_inverted: bool,
         warm_start: bool,
+        threads: Option<usize>,
     ) -> PyResult<Morph> {
         let options = options(tolerance, max_iterations, allow_inverted, warm_start)?;
         let source = arrays::planar(&v0, &f, "V0", allow_inverted)?;
         let target = arrays::planar(&v1, &f, "V1", allow_inverted)?;
         let n = source.positions.len();
+        let threads = Threads::new(threads)?;
         let inner = py
-            .detach(|| bdmorph::Morph::new(&source, &target, options))
+            .detach(|| threads.run(|| bdmorph::Morph::new(&source, &target, options)))
             .map_err(errors::morph)?;
         Ok(Morph {
             inner,
+            threads,
             n,
             buffer: vec![[0.0; 2]; n],
             stats: None,
@@ -111,9 +116,9 @@ impl Morph {
 
     /// The frame at `t` (0: V0, 1: V1) as an n x 2 array.
     fn frame<'py>(&mut self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (inner, buffer) = (&mut self.inner, &mut self.buffer);
+        let (inner, buffer, threads) = (&mut self.inner, &mut self.buffer, &self.threads);
         let stats = py
-            .detach(|| inner.frame_into(t, buffer))
+            .detach(|| threads.run(|| inner.frame_into(t, buffer)))
             .map_err(errors::morph)?;
         self.stats = Some(stats);
         Ok(arrays::out2(py, &self.buffer))
@@ -127,15 +132,18 @@ impl Morph {
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let ts = ts.as_array().to_vec();
         let (n, inner, buffer) = (self.n, &mut self.inner, &mut self.buffer);
+        let threads = &self.threads;
         let (flat, last) = py
             .detach(|| {
-                let mut flat = Vec::with_capacity(ts.len() * n * 2);
-                let mut last = None;
-                for &t in &ts {
-                    last = Some(inner.frame_into(t, buffer)?);
-                    flat.extend(buffer.iter().flatten());
-                }
-                Ok::<_, bdmorph::MorphError>((flat, last))
+                threads.run(|| {
+                    let mut flat = Vec::with_capacity(ts.len() * n * 2);
+                    let mut last = None;
+                    for &t in &ts {
+                        last = Some(inner.frame_into(t, buffer)?);
+                        flat.extend(buffer.iter().flatten());
+                    }
+                    Ok::<_, bdmorph::MorphError>((flat, last))
+                })
             })
             .map_err(errors::morph)?;
         if last.is_some() {
@@ -148,6 +156,12 @@ impl Morph {
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         stats_dict(py, self.stats.as_ref())
+    }
+
+    /// Threads of the pool the frames are solved in.
+    #[getter]
+    fn threads(&self) -> usize {
+        self.threads.count()
     }
 
     /// The per-triangle conformal distortion of the last frame from V0.
@@ -167,6 +181,7 @@ impl Morph {
 #[pyclass(module = "bdmorph._bdmorph")]
 pub struct Blend {
     inner: bdmorph::Blend,
+    threads: Threads,
     n: usize,
     k: usize,
     buffer: Vec<[f64; 2]>,
@@ -176,7 +191,8 @@ pub struct Blend {
 #[pymethods]
 impl Blend {
     #[new]
-    #[pyo3(signature = (keyframes, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true))]
+    #[pyo3(signature = (keyframes, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         keyframes: Vec<PyReadonlyArray2<'_, f64>>,
@@ -185,16 +201,19 @@ impl Blend {
         max_iterations: Option<u32>,
         allow_inverted: bool,
         warm_start: bool,
+        threads: Option<usize>,
     ) -> PyResult<Blend> {
         let options = options(tolerance, max_iterations, allow_inverted, warm_start)?;
         let keys = self::keyframes(&keyframes, &f, allow_inverted)?;
         let n = keys.first().map_or(0, |k| k.positions.len());
         let k = keys.len();
+        let threads = Threads::new(threads)?;
         let inner = py
-            .detach(|| bdmorph::Blend::with_options(&keys, options))
+            .detach(|| threads.run(|| bdmorph::Blend::with_options(&keys, options)))
             .map_err(errors::morph)?;
         Ok(Blend {
             inner,
+            threads,
             n,
             k,
             buffer: vec![[0.0; 2]; n],
@@ -209,9 +228,9 @@ impl Blend {
         weights: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = weights.as_array().to_vec();
-        let (inner, buffer) = (&mut self.inner, &mut self.buffer);
+        let (inner, buffer, threads) = (&mut self.inner, &mut self.buffer, &self.threads);
         let stats = py
-            .detach(|| inner.frame_weights_into(&w, buffer))
+            .detach(|| threads.run(|| inner.frame_weights_into(&w, buffer)))
             .map_err(errors::morph)?;
         self.stats = Some(stats);
         Ok(arrays::out2(py, &self.buffer))
@@ -234,15 +253,18 @@ impl Blend {
         }
         let rows: Vec<Vec<f64>> = w.rows().into_iter().map(|r| r.to_vec()).collect();
         let (n, inner, buffer) = (self.n, &mut self.inner, &mut self.buffer);
+        let threads = &self.threads;
         let (flat, last) = py
             .detach(|| {
-                let mut flat = Vec::with_capacity(rows.len() * n * 2);
-                let mut last = None;
-                for row in &rows {
-                    last = Some(inner.frame_weights_into(row, buffer)?);
-                    flat.extend(buffer.iter().flatten());
-                }
-                Ok::<_, bdmorph::MorphError>((flat, last))
+                threads.run(|| {
+                    let mut flat = Vec::with_capacity(rows.len() * n * 2);
+                    let mut last = None;
+                    for row in &rows {
+                        last = Some(inner.frame_weights_into(row, buffer)?);
+                        flat.extend(buffer.iter().flatten());
+                    }
+                    Ok::<_, bdmorph::MorphError>((flat, last))
+                })
             })
             .map_err(errors::morph)?;
         if last.is_some() {
@@ -257,6 +279,12 @@ impl Blend {
         stats_dict(py, self.stats.as_ref())
     }
 
+    /// Threads of the pool the frames are solved in.
+    #[getter]
+    fn threads(&self) -> usize {
+        self.threads.count()
+    }
+
     /// Keyframes.
     #[getter]
     fn n_keyframes(&self) -> usize {
@@ -268,6 +296,7 @@ impl Blend {
 #[pyclass(module = "bdmorph._bdmorph")]
 pub struct Path {
     inner: bdmorph::Path,
+    threads: Threads,
     n: usize,
     buffer: Vec<[f64; 2]>,
     stats: Option<FrameStats>,
@@ -276,7 +305,7 @@ pub struct Path {
 #[pymethods]
 impl Path {
     #[new]
-    #[pyo3(signature = (keyframes, f, durations=None, easings=None, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true))]
+    #[pyo3(signature = (keyframes, f, durations=None, easings=None, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -288,6 +317,7 @@ impl Path {
         max_iterations: Option<u32>,
         allow_inverted: bool,
         warm_start: bool,
+        threads: Option<usize>,
     ) -> PyResult<Path> {
         let morph = options(tolerance, max_iterations, allow_inverted, warm_start)?;
         let keys = self::keyframes(&keyframes, &f, allow_inverted)?;
@@ -301,11 +331,13 @@ impl Path {
             options = options
                 .with_easings(parsed.map_err(|e| errors::MorphError::new_err(e.to_string()))?);
         }
+        let threads = Threads::new(threads)?;
         let inner = py
-            .detach(|| bdmorph::Path::with_options(&keys, options))
+            .detach(|| threads.run(|| bdmorph::Path::with_options(&keys, options)))
             .map_err(errors::morph)?;
         Ok(Path {
             inner,
+            threads,
             n,
             buffer: vec![[0.0; 2]; n],
             stats: None,
@@ -314,9 +346,9 @@ impl Path {
 
     /// The frame at `t` in [0, 1] along the whole path as an n x 2 array.
     fn frame<'py>(&mut self, py: Python<'py>, t: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (inner, buffer) = (&mut self.inner, &mut self.buffer);
+        let (inner, buffer, threads) = (&mut self.inner, &mut self.buffer, &self.threads);
         let stats = py
-            .detach(|| inner.frame_into(t, buffer))
+            .detach(|| threads.run(|| inner.frame_into(t, buffer)))
             .map_err(errors::morph)?;
         self.stats = Some(stats);
         Ok(arrays::out2(py, &self.buffer))
@@ -330,15 +362,18 @@ impl Path {
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let ts = ts.as_array().to_vec();
         let (n, inner, buffer) = (self.n, &mut self.inner, &mut self.buffer);
+        let threads = &self.threads;
         let (flat, last) = py
             .detach(|| {
-                let mut flat = Vec::with_capacity(ts.len() * n * 2);
-                let mut last = None;
-                for &t in &ts {
-                    last = Some(inner.frame_into(t, buffer)?);
-                    flat.extend(buffer.iter().flatten());
-                }
-                Ok::<_, bdmorph::MorphError>((flat, last))
+                threads.run(|| {
+                    let mut flat = Vec::with_capacity(ts.len() * n * 2);
+                    let mut last = None;
+                    for &t in &ts {
+                        last = Some(inner.frame_into(t, buffer)?);
+                        flat.extend(buffer.iter().flatten());
+                    }
+                    Ok::<_, bdmorph::MorphError>((flat, last))
+                })
             })
             .map_err(errors::morph)?;
         if last.is_some() {
@@ -357,5 +392,11 @@ impl Path {
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         stats_dict(py, self.stats.as_ref())
+    }
+
+    /// Threads of the pool the frames are solved in.
+    #[getter]
+    fn threads(&self) -> usize {
+        self.threads.count()
     }
 }

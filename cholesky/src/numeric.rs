@@ -39,7 +39,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use crate::subtrees::{Subtrees, Work};
+use crate::subtrees::{self, Subtrees, Work};
 use crate::supernodes::{Supernode, Supernodes};
 
 /// Columns factored one by one before their trailing update is applied in tiles.
@@ -497,13 +497,7 @@ impl SupernodalLlt {
             self.open(t, matrix, values);
         }
         // Each subtree's values and columns: consecutive, disjoint, in column order.
-        let mut ranges: Vec<(usize, std::ops::Range<usize>)> = split
-            .bins
-            .iter()
-            .enumerate()
-            .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
-            .collect();
-        ranges.sort_by_key(|(_, r)| r.start);
+        let ranges = subtrees::in_column_order(&split.bins);
         let mut work: Vec<Vec<Share<'_, T>>> = (0..split.bins.len()).map(|_| Vec::new()).collect();
         let (mut vals, mut diag) = (&mut *values, &mut *pivots.inv_diag);
         let (mut v_at, mut c_at) = (0, 0);

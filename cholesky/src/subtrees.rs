@@ -185,6 +185,18 @@ impl Subtrees {
     }
 }
 
+/// Every subtree of `bins` (per bin, ranges of supernodes) with its bin, in column order: the
+/// order in which a factor's values, or a solve's rows, are cut into each subtree's own part.
+pub(crate) fn in_column_order(bins: &[Vec<Range<usize>>]) -> Vec<(usize, Range<usize>)> {
+    let mut ranges: Vec<(usize, Range<usize>)> = bins
+        .iter()
+        .enumerate()
+        .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
+        .collect();
+    ranges.sort_by_key(|(_, r)| r.start);
+    ranges
+}
+
 /// Deals `subtrees` (heaviest first) each into the lightest of `bins` bins: the bin of each
 /// and the heaviest bin's work.
 fn deal(subtrees: &[usize], work: &[f64], bins: usize) -> (Vec<usize>, f64) {

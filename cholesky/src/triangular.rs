@@ -35,7 +35,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use crate::subtrees::{Subtrees, Work};
+use crate::subtrees::{self, Subtrees, Work};
 use crate::supernodes::{Supernode, Supernodes};
 
 /// Right-hand sides solved together by [`SupernodalSolve::solve_many`]: each block of them
@@ -117,13 +117,7 @@ impl Split {
         st: &Supernodes,
         y: &'y mut [[f64; C]],
     ) -> Vec<Vec<(Range<usize>, usize, &'y mut [[f64; C]])>> {
-        let mut ranges: Vec<(usize, Range<usize>)> = self
-            .bins
-            .iter()
-            .enumerate()
-            .flat_map(|(b, rs)| rs.iter().map(move |r| (b, r.clone())))
-            .collect();
-        ranges.sort_by_key(|(_, r)| r.start);
+        let ranges = subtrees::in_column_order(&self.bins);
         let mut pieces: Vec<Vec<_>> = (0..self.bins.len()).map(|_| Vec::new()).collect();
         let (mut rest, mut at) = (y, 0);
         for (b, r) in ranges {

@@ -1,6 +1,7 @@
 //! The studio's interactive paths on the server side, from a request's JSON text to the
-//! answers' bytes (parse, engine, the binary frame with its distortions): a drag at about 5K
-//! vertices (KVF, four handles) and a scrub at about 10K (two keyframes, a new time per call).
+//! answers' bytes (parse, the engine, the edit kept in the document, the binary frame with its
+//! distortions for the page that asked): a drag at about 5K vertices (KVF, four handles) and a
+//! scrub at about 10K (two keyframes, a new time per call).
 //!
 //! Baselines in the same run: the engine call alone (`Deformer::drag`, `Path::frame_into`),
 //! so the ratio is what the session layer costs. The browser's share (transfer and drawing) is
@@ -12,7 +13,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 
 use bdmorph::deform::{Deformer, Method};
 use bdmorph::studio::project::Keyframe;
-use bdmorph::studio::session::{Answer, Request};
+use bdmorph::studio::protocol::Request;
+use bdmorph::studio::session::{Answer, Revs};
 use bdmorph::studio::{Project, Session};
 use bdmorph::{generate, Path, PlanarMesh};
 
@@ -67,18 +69,21 @@ fn drag(c: &mut Criterion) {
     let workspace = std::env::temp_dir();
     let mut session =
         Session::new(Project::new(&mesh, None), workspace, None, None).expect("session");
-    session.set_pins(&pins).expect("pins");
+    for v in pins {
+        session.handle(Request::PinAdd { vertex: v });
+    }
+    let mut seen = Revs::default();
+    session.updates(&mut seen, 0);
     let mut sweep = Sweep(0);
     let mut seq = 0;
     group.bench_function("request_to_answer", |b| {
         b.iter(|| {
             seq += 1;
-            let text =
-                serde_json::json!({"op": "drag", "seq": seq, "targets": targets(sweep.next())})
-                    .to_string();
+            let text = serde_json::json!({"op": "drag", "seq": seq, "pins": pins, "targets": targets(sweep.next())})
+                .to_string();
             let request: Request = serde_json::from_str(&text).expect("request");
-            let answers = session.handle(request);
-            bytes_of(&answers)
+            let reply = session.handle(request);
+            bytes_of(&reply.answers) + bytes_of(&session.updates(&mut seen, seq))
         })
     });
     let mut pose = Deformer::new(&mesh, Method::kvf()).expect("deformer");
@@ -102,15 +107,19 @@ fn scrub(c: &mut Criterion) {
     });
     let mut group = c.benchmark_group(format!("studio_scrub/disk-{}", mesh.positions.len()));
     let mut session = Session::new(project, std::env::temp_dir(), None, None).expect("session");
+    let mut seen = Revs::default();
+    session.updates(&mut seen, 0);
     let mut sweep = Sweep(0);
     let mut seq = 0;
     group.bench_function("request_to_answer", |b| {
         b.iter(|| {
             seq += 1;
-            let text = format!(r#"{{"op":"scrub","seq":{seq},"time":{}}}"#, sweep.next());
+            // Strictly between the keyframes (a keyframe's time shows the keyframe).
+            let t = 0.001 + 0.998 * sweep.next();
+            let text = format!(r#"{{"op":"scrub","seq":{seq},"time":{t}}}"#);
             let request: Request = serde_json::from_str(&text).expect("request");
-            let answers = session.handle(request);
-            bytes_of(&answers)
+            let reply = session.handle(request);
+            bytes_of(&reply.answers) + bytes_of(&session.updates(&mut seen, seq))
         })
     });
     let mut path = Path::new(&[mesh.clone(), bent]).expect("path");
@@ -118,7 +127,7 @@ fn scrub(c: &mut Criterion) {
     let mut sweep = Sweep(0);
     group.bench_function("engine_only", |b| {
         b.iter(|| {
-            path.frame_into(sweep.next(), &mut out)
+            path.frame_into(0.001 + 0.998 * sweep.next(), &mut out)
                 .expect("frame")
                 .newton_iterations
         })

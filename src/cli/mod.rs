@@ -245,13 +245,20 @@ enum Command {
     /// Serves the editor on 127.0.0.1 (never another interface) and prints exactly one line
     /// on stdout, the URL to open (it carries this run's token; nothing is served without
     /// it), then logs on stderr until Ctrl-C. FILE is a picture (meshed by its subject and
-    /// drawn on the mesh), a mesh (OBJ/OFF) or a project the studio saved; without one the
-    /// studio starts from the sample figure. Saves and exports go into FILE's folder (or the
-    /// current one), by plain file names.
+    /// drawn on the mesh; a picture without transparency is told from its background, by
+    /// default the colour of its border), a mesh (OBJ/OFF, drawn with the picture of the same
+    /// name beside it or --texture) or a project the studio saved; without one the studio
+    /// starts from the sample figure. Saves and exports go into FILE's folder (or the current
+    /// one), by plain file names. Unsaved changes are kept in that folder's .bdmorph-studio/
+    /// (every 2 seconds and at Ctrl-C) and offered by the next studio there if this one did
+    /// not stop cleanly; a restart on the same folder reuses the port and the page's token,
+    /// so an open page reconnects by itself.
     ///
     /// Examples:
     ///   bdmorph studio
     ///   bdmorph studio figure.png --open
+    ///   bdmorph studio scan.jpg --background white --threshold 0.3
+    ///   bdmorph studio character.obj --texture character-skin.png
     ///   bdmorph studio wave.json --port 8300
     #[command(verbatim_doc_comment)]
     Studio(StudioArgs),
@@ -592,12 +599,30 @@ fn parse_drag(text: &str) -> Result<([f64; 2], [f64; 2]), String> {
 struct StudioArgs {
     /// A picture (.png, .jpg), mesh (.obj, .off) or studio project (.json) to open.
     file: Option<PathBuf>,
-    /// The port to listen on (default: any free one).
-    #[arg(long, default_value_t = 0)]
-    port: u16,
+    /// The port to listen on (default: the one the last studio in this folder used, if it is
+    /// free, else any free one; 0: any free one).
+    #[arg(long)]
+    port: Option<u16>,
     /// Start the system's browser on the URL.
     #[arg(long)]
     open: bool,
+    /// For a picture: the background colour around the subject (#rrggbb, #rgb, white,
+    /// black, ..., or auto: the colour of the picture's border), as for `mesh`. Default: the
+    /// picture's transparency, or auto for a picture without any.
+    #[arg(long, value_name = "COLOR", value_parser = parse_background)]
+    background: Option<bdmorph::meshing::Background>,
+    /// For a picture: the threshold in [0, 1), as for `mesh`.
+    #[arg(long, value_name = "L")]
+    threshold: Option<f64>,
+    /// For a mesh: the picture drawn on it (by its texture coordinates; without them laid
+    /// over it by its pixels or its bounding box). Default: the picture of the same name
+    /// beside it.
+    #[arg(long, value_name = "PICTURE")]
+    texture: Option<PathBuf>,
+    /// For a picture: keep specks (pieces under 1% of the largest piece's area), which are
+    /// dropped by default.
+    #[arg(long)]
+    keep_specks: bool,
 }
 
 #[derive(Args, Debug)]
@@ -753,6 +778,19 @@ pub fn run(cli: Cli) -> Result<(), String> {
             file: args.file,
             port: args.port,
             open: args.open,
+            opening: bdmorph::studio::open::OpenOptions {
+                picture: bdmorph::studio::project::PictureSettings {
+                    background: args.background.map(|b| match b {
+                        bdmorph::meshing::Background::Auto => "auto".to_owned(),
+                        bdmorph::meshing::Background::Colour([r, g, b]) => {
+                            format!("#{r:02x}{g:02x}{b:02x}")
+                        }
+                    }),
+                    threshold: args.threshold,
+                },
+                texture: args.texture,
+                keep_specks: args.keep_specks,
+            },
         })
         .map_err(|e| e.to_string()),
     }

@@ -470,3 +470,42 @@ mod tests {
         assert!(without > 1e-3, "{without}");
     }
 }
+
+// TEMP-SHIM: replaced by the untangle branch.
+/// TEMP-SHIM.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct UntangleOptions;
+/// TEMP-SHIM.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct UntangleReport {
+    /// TEMP-SHIM.
+    pub flipped_after: usize,
+}
+/// TEMP-SHIM.
+#[derive(Clone, Debug)]
+pub struct Untangled {
+    /// TEMP-SHIM.
+    pub positions: Vec<[f64; 2]>,
+    /// TEMP-SHIM.
+    pub report: UntangleReport,
+}
+/// TEMP-SHIM.
+pub fn untangle(
+    rest: &PlanarMesh,
+    pose: &[[f64; 2]],
+    _pins: &[u32],
+    _options: &UntangleOptions,
+) -> Result<Untangled, DeformError> {
+    let flipped_after = rest
+        .faces
+        .iter()
+        .filter(|f| {
+            let [a, b, c] = f.map(|v| pose[v as usize]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) <= 0.0
+        })
+        .count();
+    Ok(Untangled {
+        positions: pose.to_vec(),
+        report: UntangleReport { flipped_after },
+    })
+}

@@ -197,6 +197,8 @@ pub struct PictureOutline {
     pub outline: Outline,
     /// Traced loops dropped as too small for the tolerance.
     pub dropped: usize,
+    /// TEMP-SHIM.
+    pub dropped_specks: usize,
 }
 
 /// Traces a picture's subject and simplifies its outlines to `tolerance` pixels (default 1).
@@ -232,6 +234,7 @@ pub fn picture_outline(
         traced,
         outline,
         dropped: simplified.dropped,
+        dropped_specks: 0,
     })
 }
 
@@ -398,4 +401,29 @@ pub fn mesh_file(
     .map_err(|e| e.in_file(path))?;
     meshed.stats.seconds = start.elapsed().as_secs_f64();
     Ok(meshed)
+}
+
+// TEMP-SHIM: replaced by the meshing branch (specks and vertex targets).
+/// Specks: pieces under this fraction of the largest piece's area.
+pub const SPECK_FRACTION: f64 = 0.01;
+/// Loops fitted to a vertex target.
+#[derive(Clone, Debug)]
+pub struct FittedLoops {
+    /// The loops.
+    pub loops: Vec<Vec<[f64; 2]>>,
+    /// The tolerance used, if simplified.
+    pub tolerance: Option<f64>,
+}
+/// TEMP-SHIM.
+pub fn fit_loops_to_vertices(loops: &[Vec<[f64; 2]>], _target: usize) -> FittedLoops {
+    FittedLoops {
+        loops: loops.to_vec(),
+        tolerance: None,
+    }
+}
+impl PictureOptions {
+    /// TEMP-SHIM.
+    pub fn with_keep_specks(self, _keep: bool) -> Self {
+        self
+    }
 }

@@ -1,8 +1,9 @@
 //! Who may talk to the studio: requests from this machine's loopback, for this server's own
 //! address, from its own page, carrying this run's token.
 //!
-//! - The token (128 random bits, hex) is made once per run and printed in the URL; every HTTP
-//!   request and the WebSocket carry it as `?token=`. Compared in constant time.
+//! - The token (128 random bits, hex) is printed in the URL; every HTTP request and the
+//!   WebSocket carry it as `?token=`. Compared in constant time. It is kept in the workspace,
+//!   owner-only ([`super::workspace`]), so that a page reconnects to a restarted studio.
 //! - `Host` must name the server's own address (`127.0.0.1:P` or `localhost:P`): a page on
 //!   another site whose name was rebound to 127.0.0.1 (DNS rebinding) sends its own name.
 //! - `Origin`, when present (browsers send it on WebSocket handshakes and non-GET requests),
@@ -18,6 +19,12 @@ impl Token {
         let mut bytes = [0u8; 16];
         getrandom::fill(&mut bytes)?;
         Ok(Token(bytes.iter().map(|b| format!("{b:02x}")).collect()))
+    }
+
+    /// A token from its text: 32 lowercase hexadecimal digits, or `None`.
+    pub fn from_hex(text: &str) -> Option<Token> {
+        (text.len() == 32 && text.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f')))
+            .then(|| Token(text.to_owned()))
     }
 
     /// The token's text.
@@ -77,6 +84,9 @@ mod tests {
         assert!(!a.matches(b.as_str()));
         assert!(!a.matches(&a.as_str()[..31]));
         assert!(!a.matches(""));
+        assert_eq!(Token::from_hex(a.as_str()), Some(a.clone()));
+        assert_eq!(Token::from_hex("abc"), None);
+        assert_eq!(Token::from_hex(&"G".repeat(32)), None);
     }
 
     #[test]

@@ -1,21 +1,32 @@
 //! `bdmorph studio`: an animation editor in the browser, on the live engine.
 //!
 //! A local web server ([`server`]) serves a page (embedded in the binary: no build step) and
-//! talks to it over one WebSocket: the page sends requests (pin, drag, add a keyframe, scrub,
-//! save, export, ...) as JSON; the engine ([`session::Session`]) answers with state as JSON
-//! and poses and frames as binary `f32` arrays. The project is one versioned JSON file
-//! ([`project`]).
+//! talks to it over one WebSocket. The page is a view of one document on the server (the
+//! project: mesh, picture, outline, keyframes, settings; [`project`]); every change to it is an
+//! undoable [`edit::Edit`] on one history ([`history`]), carried out by the session
+//! ([`session`]), which keeps the engine's caches in step ([`engine`]) and tells every open
+//! page what changed. Long work runs in the background ([`jobs`]). The document is autosaved
+//! into the workspace while it has unsaved changes, and work a studio could not save (killed,
+//! crashed) is offered back at the next start ([`workspace`]).
 //!
 //! Safety of a local server ([`guard`]): it binds 127.0.0.1 only, every request and the
-//! socket carry a per-run random token, `Host` and `Origin` must be the server's own (against
-//! DNS rebinding and other sites' pages), messages are bounded, and the studio writes only
-//! into its workspace (the opened file's folder, or the current one) by plain file names,
-//! atomically.
+//! socket carry a secret token (kept owner-only in the workspace so that pages reconnect after
+//! a restart), `Host` and `Origin` must be the server's own (against DNS rebinding and other
+//! sites' pages), messages are bounded, and the studio writes only into its workspace (the
+//! opened file's folder, or the current one) by plain file names, atomically.
 
+pub mod carry;
+pub mod edit;
+pub mod engine;
 pub mod guard;
+pub mod history;
+pub mod jobs;
+pub mod open;
 pub mod project;
+pub mod protocol;
 pub mod server;
 pub mod session;
+pub mod workspace;
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -28,10 +39,12 @@ pub use session::Session;
 pub struct StudioOptions {
     /// A picture, mesh or project to open; `None` starts from the sample figure.
     pub file: Option<PathBuf>,
-    /// The port (0: any free one).
-    pub port: u16,
+    /// The port (`None`: the one the last studio in this workspace used, if free, else any).
+    pub port: Option<u16>,
     /// Whether to start the system's browser on the URL.
     pub open: bool,
+    /// How a picture is opened and a mesh textured.
+    pub opening: open::OpenOptions,
 }
 
 /// Why the studio could not start.
@@ -49,57 +62,100 @@ pub enum StudioError {
     Server(String),
 }
 
-/// The session for `options.file` (or the sample), its workspace and texture.
-pub fn session_for(options: &StudioOptions) -> Result<(Session, Option<Vec<u8>>), StudioError> {
-    let (project, texture, workspace, project_file) = match &options.file {
+/// The session for `options.file` (or the sample), with its notes said.
+pub fn session_for(options: &StudioOptions) -> Result<Session, StudioError> {
+    let (opened, workspace, source) = match &options.file {
         Some(file) => {
-            let (project, texture) = session::open(file).map_err(StudioError::Open)?;
             let folder = file
                 .parent()
                 .filter(|p| !p.as_os_str().is_empty())
                 .map_or_else(|| PathBuf::from("."), PathBuf::from);
-            let is_project = file
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-            (project, texture, folder, is_project.then(|| file.clone()))
+            let workspace = std::fs::canonicalize(&folder).unwrap_or(folder);
+            let opened =
+                open::open(file, &workspace, &options.opening).map_err(StudioError::Open)?;
+            let source = file.file_name().map(|n| n.to_string_lossy().into_owned());
+            (opened, workspace, source)
         }
         None => {
             let sample = crate::generate::figure(0.01);
-            (Project::new(&sample, None), None, PathBuf::from("."), None)
+            let here = PathBuf::from(".");
+            let workspace = std::fs::canonicalize(&here).unwrap_or(here);
+            (
+                open::Opened {
+                    project: Project::new(&sample, None),
+                    texture: None,
+                    project_file: None,
+                    notes: Vec::new(),
+                },
+                workspace,
+                None,
+            )
         }
     };
-    let png = match &texture {
-        Some(image) => Some(
-            crate::render::raster::encode_png(image)
-                .map_err(|e| StudioError::Open(format!("texture: {e}")))?,
-        ),
-        None => None,
-    };
-    let workspace = std::fs::canonicalize(&workspace).unwrap_or(workspace);
-    Ok((
-        Session::new(project, workspace, project_file, texture)?,
-        png,
-    ))
+    let mut session = Session::new(
+        opened.project,
+        workspace,
+        opened.project_file,
+        opened.texture,
+    )?;
+    session.set_source(source);
+    for note in opened.notes {
+        eprintln!("studio: {note}");
+        session.note(note, false);
+    }
+    Ok(session)
 }
 
 /// Runs the studio until Ctrl-C: prints the URL (one line on stdout), logs on stderr.
 pub fn run(options: StudioOptions) -> Result<(), StudioError> {
-    let (session, texture_png) = session_for(&options)?;
-    let token = guard::Token::random().map_err(|e| StudioError::Server(e.to_string()))?;
+    let mut session = session_for(&options)?;
+    session.offer_recoveries();
+    for r in session.recovered() {
+        eprintln!(
+            "studio: unsaved work of a studio that did not stop cleanly ({} keyframes{}) is offered in the page",
+            r.keyframes,
+            r.source
+                .as_ref()
+                .map_or_else(String::new, |s| format!(", from {s}"))
+        );
+    }
+    let workspace = session.workspace().clone();
+    let (token, token_note) = workspace
+        .token()
+        .map_err(|e| StudioError::Server(e.to_string()))?;
+    if let Some(note) = token_note {
+        eprintln!("studio: {note}");
+    }
+    let threads = rayon::current_num_threads();
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
         .map_err(|e| StudioError::Server(e.to_string()))?;
     runtime.block_on(async move {
-        let listener = tokio::net::TcpListener::bind(("127.0.0.1", options.port))
-            .await
-            .map_err(|e| {
-                StudioError::Server(format!("cannot listen on 127.0.0.1:{}: {e}", options.port))
-            })?;
+        let listener = match options.port {
+            Some(port) => tokio::net::TcpListener::bind(("127.0.0.1", port))
+                .await
+                .map_err(|e| {
+                    StudioError::Server(format!("cannot listen on 127.0.0.1:{port}: {e}"))
+                })?,
+            None => {
+                let last = match workspace.last_port() {
+                    Some(port) => tokio::net::TcpListener::bind(("127.0.0.1", port)).await.ok(),
+                    None => None,
+                };
+                match last {
+                    Some(l) => l,
+                    None => tokio::net::TcpListener::bind(("127.0.0.1", 0))
+                        .await
+                        .map_err(|e| StudioError::Server(format!("cannot listen on 127.0.0.1: {e}")))?,
+                }
+            }
+        };
         let port = listener
             .local_addr()
             .map_err(|e| StudioError::Server(e.to_string()))?
             .port();
+        workspace.remember_port(port);
         let url = format!("http://127.0.0.1:{port}/?token={}", token.as_str());
         {
             use std::io::Write as _;
@@ -111,12 +167,15 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
         if options.open {
             open_browser(&url);
         }
+        let (changed, _) = tokio::sync::watch::channel(0u64);
         let app = Arc::new(server::App {
             token,
             port,
             session: Mutex::new(session),
-            texture_png,
+            changed,
+            job_threads: (threads / 2).max(1),
         });
+        tokio::spawn(autosave(app.clone()));
         // Small frames go out at once (no Nagle delay): latency is the point.
         use axum::serve::ListenerExt as _;
         let listener = listener.tap_io(|stream| {
@@ -124,14 +183,63 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
                 eprintln!("studio: TCP_NODELAY not set: {e}");
             }
         });
-        axum::serve(listener, server::router(app))
+        let served = axum::serve(listener, server::router(app.clone()))
             .with_graceful_shutdown(async {
                 let _ = tokio::signal::ctrl_c().await;
                 eprintln!("studio: stopping");
             })
             .await
-            .map_err(|e| StudioError::Server(e.to_string()))
+            .map_err(|e| StudioError::Server(e.to_string()));
+        // Unsaved work is kept for the next start.
+        let last = app.session().autosave_copy();
+        match last {
+            Some((project, source, _)) => match workspace.autosave(&project, source.as_deref()) {
+                Ok(()) => eprintln!(
+                    "studio: unsaved changes kept in {} (the next studio in this folder offers them)",
+                    workspace.autosave_path().display()
+                ),
+                Err(e) => eprintln!("studio: unsaved changes could not be kept: {e}"),
+            },
+            None => workspace.clear_autosave(),
+        }
+        served
     })
+}
+
+/// Writes the document to the workspace's autosave every
+/// [`workspace::AUTOSAVE_SECONDS`] while it has unsaved changes.
+async fn autosave(app: Arc<server::App>) {
+    let mut written = u64::MAX;
+    let mut interval =
+        tokio::time::interval(std::time::Duration::from_secs(workspace::AUTOSAVE_SECONDS));
+    loop {
+        interval.tick().await;
+        let copy = {
+            let session = app.session();
+            match session.autosave_copy() {
+                Some(c) if c.2 != written => Some((c, session.workspace().clone())),
+                Some(_) => None,
+                None => {
+                    if written != 0 {
+                        session.workspace().clear_autosave();
+                        written = 0;
+                    }
+                    None
+                }
+            }
+        };
+        if let Some(((project, source, version), workspace)) = copy {
+            let done = tokio::task::spawn_blocking(move || {
+                workspace.autosave(&project, source.as_deref())
+            })
+            .await;
+            match done {
+                Ok(Ok(())) => written = version,
+                Ok(Err(e)) => eprintln!("studio: autosave failed: {e}"),
+                Err(_) => {}
+            }
+        }
+    }
 }
 
 /// Starts the system's browser on `url` (a note on stderr when it cannot).

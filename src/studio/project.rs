@@ -1,25 +1,31 @@
-//! The studio's project file: one JSON document, versioned, with everything an animation
-//! needs: the rest mesh (positions, triangles, texture coordinates), the texture's file (by a
-//! path relative to the project file), the posing method, and the keyframes (each a pose, its
-//! time in seconds, the easing of the segment that starts there, and its handles).
+//! The studio's document and its file: one JSON document, versioned, with everything an
+//! animation needs: the rest mesh (positions, triangles, texture coordinates), the texture's
+//! file (by a path relative to the project file), the outline the mesh was made from, how the
+//! picture's subject was told from its background, the posing method, and the keyframes (each
+//! a pose, its time in seconds, the easing of the segment that starts there, and its handles).
 //!
 //! ```json
 //! {
 //!   "format": "bdmorph-studio",
-//!   "version": 1,
+//!   "version": 2,
 //!   "mesh": { "positions": [[0, 0], [1, 0], [0, 1]], "faces": [[0, 1, 2]], "texcoords": null },
 //!   "texture": null,
 //!   "method": { "name": "kvf", "weight": 100, "max_distortion": 3 },
 //!   "fps": 25,
+//!   "outline": [[[0, 0], [1, 0], [0, 1]]],
+//!   "picture": { "background": null, "threshold": null },
 //!   "keyframes": [
 //!     { "time": 0, "easing": "linear", "positions": [[0, 0], [1, 0], [0, 1]], "pins": [] }
 //!   ]
 //! }
 //! ```
 //!
-//! A file is refused whole, with the reason, when it is not JSON, is another program's or
-//! another version's, or is damaged (a pose with the wrong number of points, a triangle naming
-//! a missing vertex, times out of order, an unknown easing, a pin out of range, ...).
+//! Version 1 files (without `outline` and `picture`) are read as well. A file is refused whole,
+//! with the reason, when it is not JSON, is another program's or a newer version's, is damaged
+//! (a pose with the wrong number of points or a point that is not finite, a triangle naming a
+//! missing vertex, times out of order, an unknown easing, a pin out of range or twice, ...), or
+//! is beyond the studio's limits ([`MAX_KEYFRAMES`], [`MAX_KEYFRAME_POINTS`],
+//! [`MAX_OUTLINE_POINTS`]). Nothing that fails these checks is ever written.
 
 use std::path::Path;
 
@@ -29,8 +35,21 @@ use crate::mesh::PlanarMesh;
 
 /// The `format` field of every project file.
 pub const FORMAT: &str = "bdmorph-studio";
-/// The version this studio writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this studio writes (it reads this one and version 1).
+pub const VERSION: u32 = 2;
+
+/// The most keyframes a project holds.
+pub const MAX_KEYFRAMES: usize = 1000;
+/// The most keyframe points (keyframes times vertices) a project holds: 20 million points,
+/// 320 MB of poses (100 keyframes of a 200,000-vertex mesh, 1,000 of a 20,000-vertex one).
+pub const MAX_KEYFRAME_POINTS: usize = 20_000_000;
+/// The most points of all outline loops together.
+pub const MAX_OUTLINE_POINTS: usize = 200_000;
+/// The smallest and largest KVF handle weight the studio takes (beyond them the posing system
+/// cannot be factored reliably).
+pub const KVF_WEIGHTS: (f64, f64) = (1e-3, 1e6);
+/// The largest distortion bound the studio takes.
+pub const MAX_BOUND: f64 = 1e4;
 
 /// A project.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -47,8 +66,42 @@ pub struct Project {
     pub method: MethodData,
     /// Playback and export frame rate.
     pub fps: f64,
+    /// The loops the mesh was made from (or is being drawn), in the mesh's frame: the region
+    /// of odd winding is meshed. Empty when the mesh came from elsewhere.
+    #[serde(default)]
+    pub outline: Vec<Vec<[f64; 2]>>,
+    /// How the picture's subject is told from its background when it is traced.
+    #[serde(default)]
+    pub picture: PictureSettings,
     /// The keyframes, in time order; the first is at time 0.
     pub keyframes: Vec<Keyframe>,
+}
+
+/// How the picture's subject is told from its background (as `bdmorph mesh --background
+/// --threshold` takes them).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PictureSettings {
+    /// `auto`, a colour (`#rrggbb`, `white`, ...), or `None` for the picture's transparency.
+    pub background: Option<String>,
+    /// The threshold in [0, 1) (see `bdmorph mesh --threshold`), or the default.
+    pub threshold: Option<f64>,
+}
+
+impl PictureSettings {
+    /// The meshing options these settings stand for.
+    pub fn options(&self) -> Result<crate::meshing::PictureOptions, String> {
+        let mut options = crate::meshing::PictureOptions::default();
+        if let Some(b) = &self.background {
+            options = options.with_background(b.parse()?);
+        }
+        if let Some(t) = self.threshold {
+            if !(0.0..1.0).contains(&t) {
+                return Err(format!("threshold {t}: give one in [0, 1)"));
+            }
+            options = options.with_threshold(t);
+        }
+        Ok(options)
+    }
 }
 
 /// The rest mesh.
@@ -71,6 +124,76 @@ pub struct MethodData {
     pub weight: f64,
     /// The bounded method's bound `K`.
     pub max_distortion: f64,
+}
+
+impl MethodData {
+    /// Whether the method is one the studio knows, with parameters it can use.
+    pub fn check(&self) -> Result<(), String> {
+        if !["kvf", "arap", "bounded"].contains(&self.name.as_str()) {
+            return Err(format!(
+                "unknown method \"{}\" (kvf, arap or bounded)",
+                self.name
+            ));
+        }
+        let (lo, hi) = KVF_WEIGHTS;
+        if !(self.weight >= lo && self.weight <= hi) {
+            return Err(format!(
+                "KVF weight {}: give one from {lo} to {hi}",
+                self.weight
+            ));
+        }
+        if !(self.max_distortion >= 1.0 && self.max_distortion <= MAX_BOUND) {
+            return Err(format!(
+                "distortion bound {}: give one from 1 to {MAX_BOUND}",
+                self.max_distortion
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Whether `keyframes` keyframes of `vertices` points each are within the studio's limits.
+pub fn check_limits(keyframes: usize, vertices: usize) -> Result<(), String> {
+    if keyframes > MAX_KEYFRAMES {
+        return Err(format!(
+            "{keyframes} keyframes: a project holds at most {MAX_KEYFRAMES}"
+        ));
+    }
+    if keyframes.saturating_mul(vertices) > MAX_KEYFRAME_POINTS {
+        return Err(format!(
+            "{keyframes} keyframes of {vertices} vertices: a project holds at most {MAX_KEYFRAME_POINTS} keyframe points ({} keyframes of this mesh)",
+            MAX_KEYFRAME_POINTS / vertices.max(1)
+        ));
+    }
+    Ok(())
+}
+
+/// Whether an outline's points are finite and within [`MAX_OUTLINE_POINTS`].
+pub fn check_outline(loops: &[Vec<[f64; 2]>]) -> Result<(), String> {
+    let points: usize = loops.iter().map(Vec::len).sum();
+    if points > MAX_OUTLINE_POINTS {
+        return Err(format!(
+            "the outline has {points} points; the studio takes at most {MAX_OUTLINE_POINTS}"
+        ));
+    }
+    if loops.iter().flatten().flatten().any(|c| !c.is_finite()) {
+        return Err("an outline point is not finite".into());
+    }
+    Ok(())
+}
+
+/// Whether `pins` name distinct vertices of `n`.
+pub fn check_pins(pins: &[u32], n: usize) -> Result<(), String> {
+    let mut seen = std::collections::HashSet::with_capacity(pins.len());
+    for &v in pins {
+        if v as usize >= n {
+            return Err(format!("a pin names vertex {} of {n}", u64::from(v) + 1));
+        }
+        if !seen.insert(v) {
+            return Err(format!("vertex {} is pinned twice", u64::from(v) + 1));
+        }
+    }
+    Ok(())
 }
 
 impl Default for MethodData {
@@ -138,6 +261,8 @@ impl Project {
             texture: None,
             method: MethodData::default(),
             fps: 25.0,
+            outline: Vec::new(),
+            picture: PictureSettings::default(),
             keyframes: vec![Keyframe {
                 time: 0.0,
                 easing: "linear".into(),
@@ -170,14 +295,15 @@ impl Project {
             other => return Err(ProjectError::Format(other.unwrap_or("none").into())),
         }
         match envelope.version {
-            Some(VERSION) => {}
+            Some(1 | VERSION) => {}
             found => {
                 return Err(ProjectError::Version {
                     found: found.unwrap_or(0),
                 })
             }
         }
-        let project: Project = serde_json::from_slice(bytes)?;
+        let mut project: Project = serde_json::from_slice(bytes)?;
+        project.version = VERSION;
         project.check()?;
         Ok(project)
     }
@@ -193,8 +319,10 @@ impl Project {
         serde_json::to_vec_pretty(self).unwrap_or_default()
     }
 
-    /// Writes the project atomically (a temporary file renamed over the target).
+    /// Checks the project, then writes it atomically (a temporary file renamed over the
+    /// target): a project that fails [`Project::check`] is never written.
     pub fn write(&self, path: &Path) -> Result<(), ProjectError> {
+        self.check()?;
         crate::io::write_bytes_atomic(path, &self.to_json())?;
         Ok(())
     }
@@ -215,14 +343,8 @@ impl Project {
                 ));
             }
         }
-        if !["kvf", "arap", "bounded"].contains(&self.method.name.as_str()) {
-            return damaged(format!("unknown method \"{}\"", self.method.name));
-        }
-        if !(self.method.weight > 0.0 && self.method.weight.is_finite()) {
-            return damaged(format!("KVF weight {}", self.method.weight));
-        }
-        if !(self.method.max_distortion >= 1.0 && self.method.max_distortion.is_finite()) {
-            return damaged(format!("distortion bound {}", self.method.max_distortion));
+        if let Err(e) = self.method.check() {
+            return damaged(e);
         }
         if !(self.fps > 0.0 && self.fps <= 240.0) {
             return damaged(format!("frame rate {}", self.fps));
@@ -230,29 +352,40 @@ impl Project {
         if self.keyframes.is_empty() {
             return damaged("no keyframes".into());
         }
+        if let Err(e) = check_limits(self.keyframes.len(), n) {
+            return damaged(e);
+        }
+        if let Err(e) = check_outline(&self.outline) {
+            return damaged(e);
+        }
+        if let Err(e) = self.picture.options() {
+            return damaged(format!("picture settings: {e}"));
+        }
         let mut last = f64::NEG_INFINITY;
         for (k, key) in self.keyframes.iter().enumerate() {
+            // Keyframes are numbered from 1, as the page shows them.
+            let shown = k + 1;
             if key.positions.len() != n {
                 return damaged(format!(
-                    "keyframe {k} has {} points for {n} vertices",
+                    "keyframe {shown} has {} points for {n} vertices",
                     key.positions.len()
                 ));
             }
             if key.positions.iter().flatten().any(|c| !c.is_finite()) {
-                return damaged(format!("keyframe {k} has a point that is not finite"));
+                return damaged(format!("keyframe {shown} has a point that is not finite"));
             }
             if !(key.time.is_finite() && key.time > last) || (k == 0 && key.time != 0.0) {
                 return damaged(format!(
-                    "keyframe {k} at time {}: times start at 0 and increase",
+                    "keyframe {shown} at time {}: times start at 0 and increase",
                     key.time
                 ));
             }
             last = key.time;
             if let Err(e) = key.easing.parse::<crate::Easing>() {
-                return damaged(format!("keyframe {k}: {e}"));
+                return damaged(format!("keyframe {shown}: {e}"));
             }
-            if let Some(&v) = key.pins.iter().find(|&&v| v as usize >= n) {
-                return damaged(format!("keyframe {k} pins vertex {v} of {n}"));
+            if let Err(e) = check_pins(&key.pins, n) {
+                return damaged(format!("keyframe {shown}: {e}"));
             }
         }
         Ok(())
@@ -283,19 +416,46 @@ mod tests {
                 .expect_err("refused")
                 .to_string()
         };
-        assert!(broken("\"version\": 1", "\"version\": 2").contains("another version"));
+        assert!(broken("\"version\": 2", "\"version\": 3").contains("another version"));
         assert!(broken("bdmorph-studio", "something-else").contains("not a bdmorph studio"));
         assert!(broken("\"time\": 1.5", "\"time\": 0.0").contains("times start at 0"));
-        assert!(broken("ease-in-out", "bouncy").contains("keyframe 1"));
+        assert!(broken("ease-in-out", "bouncy").contains("keyframe 2"));
         assert!(broken("\"name\": \"kvf\"", "\"name\": \"magic\"").contains("unknown method"));
         assert!(Project::from_json(b"{ not json").is_err());
         assert!(Project::from_json(&project.to_json()[..100]).is_err());
         let mut short = project.clone();
         short.keyframes[1].positions.pop();
         let e = Project::from_json(&short.to_json()).expect_err("refused");
-        assert!(e.to_string().contains("keyframe 1 has"), "{e}");
+        assert!(e.to_string().contains("keyframe 2 has"), "{e}");
         let mut pinned = project.clone();
         pinned.keyframes[1].pins.push(10_000);
         assert!(Project::from_json(&pinned.to_json()).is_err());
+        let mut twice = project.clone();
+        twice.keyframes[1].pins.push(0);
+        let e = Project::from_json(&twice.to_json()).expect_err("refused");
+        assert!(e.to_string().contains("pinned twice"), "{e}");
+        // Nothing that fails the checks is written.
+        let mut nan = project.clone();
+        nan.keyframes[1].positions[2][0] = f64::NAN;
+        let path = std::env::temp_dir().join(format!("bdmorph-nan-{}.json", std::process::id()));
+        assert!(nan.write(&path).is_err());
+        assert!(!path.exists());
+        let mut weak = project.clone();
+        weak.method.weight = 1e-300;
+        assert!(weak.check().is_err());
+    }
+
+    #[test]
+    fn version_1_files_are_read() {
+        let mesh = generate::disk(3, 0.1);
+        let project = Project::new(&mesh, None);
+        let mut value: serde_json::Value =
+            serde_json::from_slice(&project.to_json()).expect("json");
+        let object = value.as_object_mut().expect("object");
+        object.remove("outline");
+        object.remove("picture");
+        object.insert("version".into(), 1.into());
+        let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
+        assert_eq!(back, project);
     }
 }

@@ -1,1117 +1,45 @@
-//! The studio's engine state: one project, the keyframe being posed with its [`Deformer`], the
-//! compiled [`Path`] through the keyframes for playback, and undo. Every operation the page asks
-//! for is a method here, answering with the new state (JSON) or a frame (binary), so the server
-//! only moves bytes.
+//! The studio's session: one document ([`Project`]), its history ([`History`]), the view every
+//! page shares (the keyframe shown or the time scrubbed to, the mode, the loop being drawn),
+//! and the engine's caches ([`Engine`]).
 //!
-//! Frames travel as little-endian binary ([`frame_bytes`]): a 32-byte header (kind, sequence
-//! number, vertices, faces, largest distortion, flipped triangles, time) and then the
-//! positions and each triangle's distortion as `f32`.
+//! Every change to the document is an [`Edit`] carried out by [`Session::commit`]: applied,
+//! its result checked by the engine, and either kept with its inverse on the history or undone
+//! whole. A refused request changes nothing, history included. Drags are the one change made
+//! in place, many times a second: a stroke is one history step (the pose before it), each
+//! move checked before it is kept.
+//!
+//! Pages are told what changed ([`Session::updates`]): each page's task remembers which
+//! revision of each part it has ([`Revs`]) and gets only the parts that moved on, so a second
+//! tab, or a page reloaded, shows exactly what the first does.
 
-use std::path::{Path as FsPath, PathBuf};
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
 
-use rayon::prelude::*;
-use serde::Deserialize;
-
-use super::project::{Keyframe, Project, ProjectError};
-use crate::deform::{Deformer, KvfOptions, Method};
-use crate::distortion::RestShape;
+use super::edit::{keyframe_at, Edit, Touched};
+use super::engine::{people, Engine};
+use super::history::History;
+use super::jobs::{ExportWork, MeshWork, OpenWork, Outcome, Progress, Work};
+use super::open::{fitted_uv, per_vertex_uv, read_texture, OpenOptions, Texture};
+use super::project::{Keyframe, PictureSettings, Project};
+use super::protocol::{frame_bytes, kind, mesh_bytes, upload, Request};
+use super::workspace::{kind_of, Recovered, Workspace};
 use crate::mesh::PlanarMesh;
-use crate::render::{colour, raster, Drawing, Image, ImageSize, Viewport};
-use crate::{Easing, Path, PathOptions};
+use crate::render::{colour, raster, Drawing, ImageSize, Viewport};
 
-/// Binary message kinds (the first `u32` of each binary message).
-pub mod kind {
-    /// A pose after a drag (or a keyframe shown).
-    pub const POSE: u32 = 1;
-    /// The rest mesh: positions, triangles, texture coordinates.
-    pub const MESH: u32 = 2;
-    /// A frame of the animation at a time.
-    pub const FRAME: u32 = 3;
-}
-
-/// What the page asks for (`{"op": "...", ...}`).
-#[derive(Debug, Deserialize)]
-#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Request {
-    /// The state and the mesh.
-    Hello,
-    /// Pose keyframe `keyframe`.
-    Select {
-        /// Its index.
-        keyframe: usize,
-    },
-    /// The handles of the keyframe being posed (factors the system).
-    Pins {
-        /// Vertex numbers.
-        pins: Vec<u32>,
-    },
-    /// The handles moved: one target per pin.
-    Drag {
-        /// Echoed in the answer.
-        seq: u32,
-        /// Targets.
-        targets: Vec<[f64; 2]>,
-    },
-    /// The mouse was released: the next drag starts a new undo step.
-    DragEnd,
-    /// The posing method and its parameter.
-    Method {
-        /// `kvf`, `arap` or `bounded`.
-        name: String,
-        /// KVF's handle weight.
-        weight: Option<f64>,
-        /// The bounded method's `K`.
-        max_distortion: Option<f64>,
-    },
-    /// Undo the last drag or reset of the keyframe being posed.
-    Undo,
-    /// Redo it.
-    Redo,
-    /// The keyframe being posed back to the rest shape.
-    Reset,
-    /// A new keyframe at `time`: a copy of keyframe `copy` (default: the one being posed,
-    /// a clone; the page's "add" copies the first).
-    AddKeyframe {
-        /// Seconds.
-        time: f64,
-        /// The keyframe to copy.
-        copy: Option<usize>,
-    },
-    /// Delete a keyframe (not the first).
-    DeleteKeyframe {
-        /// Its index.
-        keyframe: usize,
-    },
-    /// Reorder: keyframe `keyframe`'s pose moves to place `to` (times and easings stay).
-    MoveKeyframe {
-        /// Its index.
-        keyframe: usize,
-        /// Its new index.
-        to: usize,
-    },
-    /// Move a keyframe in time (not the first).
-    SetTime {
-        /// Its index.
-        keyframe: usize,
-        /// Seconds.
-        time: f64,
-    },
-    /// The easing of the segment starting at a keyframe.
-    SetEasing {
-        /// Its index.
-        keyframe: usize,
-        /// `linear`, `ease-in-out`, `cubic-bezier(x1,y1,x2,y2)`.
-        easing: String,
-    },
-    /// The animation's frame at `time` becomes a keyframe.
-    FrameToKeyframe {
-        /// Seconds.
-        time: f64,
-    },
-    /// A keyframe read from a mesh file's text (OBJ or OFF, by the name's extension) with
-    /// the project's triangles (in any order), at `time`.
-    LoadKeyframe {
-        /// The file's name (for its format and in messages).
-        name: String,
-        /// Its text.
-        text: String,
-        /// Seconds.
-        time: f64,
-    },
-    /// The picture's outline, traced and simplified to `tolerance` pixels (default 1), as
-    /// loops to edit (answered with `{"type": "outline", "loops": [...]}`).
-    TraceOutline {
-        /// Pixels.
-        tolerance: Option<f64>,
-    },
-    /// A new mesh from closed loops (the region of odd winding: outlines, holes, pieces),
-    /// about `vertices` vertices; the project starts over from it (the picture kept).
-    MeshOutline {
-        /// Each loop's points, in the mesh's frame (the picture's pixels, y up).
-        loops: Vec<Vec<[f64; 2]>>,
-        /// About how many vertices.
-        vertices: usize,
-    },
-    /// A new mesh from an outline file's text (`.svg` or `.poly`, by the name's extension).
-    ImportOutline {
-        /// The file's name.
-        name: String,
-        /// Its text.
-        text: String,
-        /// About how many vertices.
-        vertices: usize,
-    },
-    /// The frame rate of playback and exports.
-    Fps {
-        /// Frames per second, in (0, 240].
-        fps: f64,
-    },
-    /// The animation's frame at `time`.
-    Scrub {
-        /// Echoed in the answer.
-        seq: u32,
-        /// Seconds.
-        time: f64,
-    },
-    /// Save the project into the workspace as `name` (a plain file name ending `.json`), or
-    /// to the file it was opened from.
-    Save {
-        /// The file name.
-        name: Option<String>,
-    },
-    /// Export the animation into the workspace: `gif`, `mp4`, `png` (a strip), `html` (the
-    /// self-contained viewer) or `obj` (a folder of frames).
-    Export {
-        /// The format.
-        format: String,
-        /// A plain file (or folder, for `obj`) name.
-        name: String,
-        /// Frames (default: the duration times the frame rate, at least 2).
-        frames: Option<u32>,
-        /// For `still`: the animation's frame at this time (default: the keyframe being
-        /// posed).
-        time: Option<f64>,
-    },
-}
-
-/// Why an operation failed: said to the page, the session unchanged.
+/// Why a session could not be made.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SessionError {
-    /// A request the session cannot carry out, and why.
+    /// The document cannot be used, and why.
     #[error("{0}")]
     Refused(String),
-    /// Posing failed.
+    /// The document's file is damaged.
     #[error(transparent)]
-    Deform(#[from] crate::deform::DeformError),
-    /// Morphing failed.
-    #[error(transparent)]
-    Morph(#[from] crate::MorphError),
-    /// Reading or writing the project failed.
-    #[error(transparent)]
-    Project(#[from] ProjectError),
+    Project(#[from] super::project::ProjectError),
 }
 
-fn refused<T>(why: impl Into<String>) -> Result<T, SessionError> {
-    Err(SessionError::Refused(why.into()))
-}
-
-/// A pose's undo record.
-#[derive(Clone, Debug)]
-struct Snapshot {
-    keyframe: usize,
-    positions: Vec<[f64; 2]>,
-}
-
-/// The engine state of one studio.
-pub struct Session {
-    project: Project,
-    rest: PlanarMesh,
-    shape: RestShape,
-    current: usize,
-    deformer: Deformer,
-    pins: Vec<u32>,
-    path: Option<Path>,
-    dragging: bool,
-    undo: Vec<Snapshot>,
-    redo: Vec<Snapshot>,
-    distortion: Vec<f64>,
-    frame: Vec<[f64; 2]>,
-    workspace: PathBuf,
-    project_file: Option<PathBuf>,
-    texture: Option<Image>,
-    /// Each piece's anchor edge: where the morph places and turns the piece.
-    anchors: Vec<[u32; 2]>,
-}
-
-impl std::fmt::Debug for Session {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Session")
-            .field("vertices", &self.rest.positions.len())
-            .field("keyframes", &self.project.keyframes.len())
-            .field("workspace", &self.workspace)
-            .finish_non_exhaustive()
-    }
-}
-
-/// The most undo steps kept.
-const UNDO_STEPS: usize = 100;
-
-impl Session {
-    /// A session on `project`; saves and exports go into `workspace`, `project_file` is where
-    /// a plain "save" writes (if it was opened from one), `texture` the picture drawn on it.
-    pub fn new(
-        project: Project,
-        workspace: PathBuf,
-        project_file: Option<PathBuf>,
-        texture: Option<Image>,
-    ) -> Result<Session, SessionError> {
-        project.check()?;
-        let rest = project.rest();
-        let deformer = Deformer::new(&rest, method_of(&project)?)?;
-        let shape = RestShape::new(&rest.positions, &rest.faces);
-        let m = rest.faces.len();
-        // The anchors depend on the triangles only: the rest shape twice compiles them.
-        let anchors = Path::new(&[rest.clone(), rest.clone()])?
-            .structure()
-            .pieces
-            .iter()
-            .map(|p| p.anchor_edge)
-            .collect();
-        let mut session = Session {
-            distortion: vec![1.0; m],
-            frame: rest.positions.clone(),
-            shape,
-            rest,
-            deformer,
-            pins: Vec::new(),
-            path: None,
-            dragging: false,
-            undo: Vec::new(),
-            redo: Vec::new(),
-            current: 0,
-            project,
-            workspace,
-            project_file,
-            texture,
-            anchors,
-        };
-        session.select(0)?;
-        Ok(session)
-    }
-
-    /// The project as it stands.
-    pub fn project(&self) -> &Project {
-        &self.project
-    }
-
-    /// The texture, if any.
-    pub fn texture(&self) -> Option<&Image> {
-        self.texture.as_ref()
-    }
-
-    /// The state as JSON for the page.
-    pub fn state_json(&self, message: Option<&str>) -> String {
-        let keys: Vec<serde_json::Value> = self
-            .project
-            .keyframes
-            .iter()
-            .map(|k| serde_json::json!({"time": k.time, "easing": k.easing, "pins": k.pins}))
-            .collect();
-        serde_json::json!({
-            "type": "state",
-            "vertices": self.rest.positions.len(),
-            "faces": self.rest.faces.len(),
-            "keyframes": keys,
-            "current": self.current,
-            "method": self.project.method,
-            "fps": self.project.fps,
-            "duration": self.duration(),
-            "textured": self.texture.is_some() && self.project.mesh.texcoords.is_some(),
-            "anchors": self.anchors,
-            "picture": self.texture.as_ref().map(|t| [t.width, t.height]),
-            "can_undo": !self.undo.is_empty(),
-            "can_redo": !self.redo.is_empty(),
-            "project": self.project_file.as_ref().map(|p| p.display().to_string()),
-            "workspace": self.workspace.display().to_string(),
-            "message": message,
-        })
-        .to_string()
-    }
-
-    /// The animation's length in seconds (the last keyframe's time).
-    pub fn duration(&self) -> f64 {
-        self.project.keyframes.last().map_or(0.0, |k| k.time)
-    }
-
-    /// The rest mesh as a binary message ([`kind::MESH`]): header `[kind, n, m, textured]`,
-    /// then `2n` f32 positions, `3m` u32 triangles, and `2n` f32 texture coordinates when
-    /// textured.
-    pub fn mesh_bytes(&self) -> Vec<u8> {
-        let (n, m) = (self.rest.positions.len(), self.rest.faces.len());
-        let uv = self.project.mesh.texcoords.as_ref();
-        let mut out = Vec::with_capacity(16 + 8 * n + 12 * m + 8 * n);
-        for x in [kind::MESH, n as u32, m as u32, u32::from(uv.is_some())] {
-            out.extend_from_slice(&x.to_le_bytes());
-        }
-        for p in &self.rest.positions {
-            out.extend_from_slice(&(p[0] as f32).to_le_bytes());
-            out.extend_from_slice(&(p[1] as f32).to_le_bytes());
-        }
-        for f in &self.rest.faces {
-            for v in f {
-                out.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-        if let Some(uv) = uv {
-            for p in uv {
-                out.extend_from_slice(&(p[0] as f32).to_le_bytes());
-                out.extend_from_slice(&(p[1] as f32).to_le_bytes());
-            }
-        }
-        out
-    }
-
-    /// The keyframe being posed, as a [`kind::POSE`] frame.
-    pub fn pose_bytes(&mut self, seq: u32) -> Vec<u8> {
-        let positions = self.deformer.positions().to_vec();
-        self.frame_of(kind::POSE, seq, f64::NAN, &positions)
-    }
-
-    fn frame_of(&mut self, kind: u32, seq: u32, time: f64, positions: &[[f64; 2]]) -> Vec<u8> {
-        let worst = self.shape.distortion_into(positions, &mut self.distortion);
-        let flipped = self.distortion.iter().filter(|d| d.is_infinite()).count();
-        frame_bytes(kind, seq, time, positions, &self.distortion, worst, flipped)
-    }
-
-    /// Poses keyframe `k`.
-    pub fn select(&mut self, k: usize) -> Result<(), SessionError> {
-        let Some(key) = self.project.keyframes.get(k) else {
-            return refused(format!("there is no keyframe {k}"));
-        };
-        let (positions, pins) = (key.positions.clone(), key.pins.clone());
-        self.deformer.set_positions(&positions)?;
-        self.current = k;
-        self.pins.clear();
-        if !pins.is_empty() {
-            self.set_pins(&pins)?;
-        }
-        self.dragging = false;
-        Ok(())
-    }
-
-    /// The handles of the keyframe being posed.
-    pub fn set_pins(&mut self, pins: &[u32]) -> Result<(), SessionError> {
-        if pins.is_empty() {
-            self.pins.clear();
-            self.project.keyframes[self.current].pins.clear();
-            return Ok(());
-        }
-        self.deformer.set_pins(pins)?;
-        self.pins = pins.to_vec();
-        self.project.keyframes[self.current].pins = pins.to_vec();
-        self.dragging = false;
-        Ok(())
-    }
-
-    /// Moves the handles; the pose becomes the keyframe's.
-    pub fn drag(
-        &mut self,
-        targets: &[[f64; 2]],
-    ) -> Result<crate::deform::DragReport, SessionError> {
-        if self.pins.is_empty() {
-            return refused("pin some vertices first");
-        }
-        if !self.dragging {
-            self.remember();
-            self.dragging = true;
-        }
-        let report = self.deformer.drag(targets)?;
-        let k = self.current;
-        self.project.keyframes[k]
-            .positions
-            .copy_from_slice(self.deformer.positions());
-        self.path = None;
-        Ok(report)
-    }
-
-    /// Ends a drag (the next one is a new undo step).
-    pub fn drag_end(&mut self) {
-        self.dragging = false;
-    }
-
-    fn remember(&mut self) {
-        self.undo.push(Snapshot {
-            keyframe: self.current,
-            positions: self.project.keyframes[self.current].positions.clone(),
-        });
-        if self.undo.len() > UNDO_STEPS {
-            self.undo.remove(0);
-        }
-        self.redo.clear();
-    }
-
-    fn restore(&mut self, from_undo: bool) -> Result<(), SessionError> {
-        let (take, keep) = if from_undo {
-            (&mut self.undo, &mut self.redo)
-        } else {
-            (&mut self.redo, &mut self.undo)
-        };
-        let Some(snap) = take.pop() else {
-            return refused(if from_undo {
-                "nothing to undo"
-            } else {
-                "nothing to redo"
-            });
-        };
-        let Some(key) = self.project.keyframes.get_mut(snap.keyframe) else {
-            return refused("that keyframe was deleted");
-        };
-        keep.push(Snapshot {
-            keyframe: snap.keyframe,
-            positions: key.positions.clone(),
-        });
-        key.positions = snap.positions;
-        self.path = None;
-        self.select(snap.keyframe)
-    }
-
-    /// Sets the posing method.
-    pub fn set_method(
-        &mut self,
-        name: &str,
-        weight: Option<f64>,
-        max_distortion: Option<f64>,
-    ) -> Result<(), SessionError> {
-        let mut method = self.project.method.clone();
-        method.name = name.to_owned();
-        if let Some(w) = weight {
-            method.weight = w;
-        }
-        if let Some(k) = max_distortion {
-            method.max_distortion = k;
-        }
-        let mut trial = self.project.clone();
-        trial.method = method;
-        trial.check()?;
-        let mut deformer = Deformer::new(&self.rest, method_of(&trial)?)?;
-        deformer.set_positions(self.deformer.positions())?;
-        if !self.pins.is_empty() {
-            deformer.set_pins(&self.pins)?;
-        }
-        self.deformer = deformer;
-        self.project.method = trial.method;
-        Ok(())
-    }
-
-    /// Adds a copy of the keyframe being posed at `time` and poses it.
-    pub fn add_keyframe(&mut self, time: f64, copy: Option<usize>) -> Result<(), SessionError> {
-        let from = copy.unwrap_or(self.current);
-        let Some(source) = self.project.keyframes.get(from) else {
-            return refused(format!("there is no keyframe {from} to copy"));
-        };
-        let key = Keyframe {
-            time,
-            easing: "linear".into(),
-            positions: source.positions.clone(),
-            pins: if from == self.current {
-                self.pins.clone()
-            } else {
-                source.pins.clone()
-            },
-        };
-        self.insert(key)
-    }
-
-    fn insert(&mut self, key: Keyframe) -> Result<(), SessionError> {
-        if !(key.time.is_finite() && key.time > 0.0) {
-            return refused(format!(
-                "a new keyframe's time must be after 0, not {}",
-                key.time
-            ));
-        }
-        if self.project.keyframes.iter().any(|k| k.time == key.time) {
-            return refused(format!("there is already a keyframe at {} s", key.time));
-        }
-        let at = self
-            .project
-            .keyframes
-            .iter()
-            .position(|k| k.time > key.time)
-            .unwrap_or(self.project.keyframes.len());
-        self.project.keyframes.insert(at, key);
-        self.undo.clear();
-        self.redo.clear();
-        self.path = None;
-        self.select(at)
-    }
-
-    /// Deletes keyframe `k` (not the first: it is the animation's start).
-    pub fn delete_keyframe(&mut self, k: usize) -> Result<(), SessionError> {
-        if k == 0 || k >= self.project.keyframes.len() {
-            return refused(format!("keyframe {k} cannot be deleted"));
-        }
-        self.project.keyframes.remove(k);
-        self.undo.clear();
-        self.redo.clear();
-        self.path = None;
-        self.select(self.current.min(self.project.keyframes.len() - 1))
-    }
-
-    /// Moves keyframe `k`'s pose (positions and pins) to place `to` in the order, the poses
-    /// between shifting by one; the times and easings stay where they are on the timeline.
-    pub fn move_keyframe(&mut self, k: usize, to: usize) -> Result<(), SessionError> {
-        let n = self.project.keyframes.len();
-        if k >= n || to >= n {
-            return refused(format!(
-                "keyframe {k} cannot move to place {to}: there are {n} keyframes"
-            ));
-        }
-        let mut poses: Vec<_> = self
-            .project
-            .keyframes
-            .iter_mut()
-            .map(|key| {
-                (
-                    std::mem::take(&mut key.positions),
-                    std::mem::take(&mut key.pins),
-                )
-            })
-            .collect();
-        let moved = poses.remove(k);
-        poses.insert(to, moved);
-        for (key, (positions, pins)) in self.project.keyframes.iter_mut().zip(poses) {
-            key.positions = positions;
-            key.pins = pins;
-        }
-        self.undo.clear();
-        self.redo.clear();
-        self.path = None;
-        self.select(to)
-    }
-
-    /// Moves keyframe `k` to `time`, keeping the order (between its neighbours).
-    pub fn set_time(&mut self, k: usize, time: f64) -> Result<(), SessionError> {
-        let keys = &self.project.keyframes;
-        if k == 0 || k >= keys.len() {
-            return refused(format!("keyframe {k}'s time cannot change"));
-        }
-        let after = keys[k - 1].time;
-        let before = keys.get(k + 1).map_or(f64::INFINITY, |n| n.time);
-        if !(time > after && time < before) {
-            return refused(format!(
-                "keyframe {k} must stay between {after} s and {before} s"
-            ));
-        }
-        self.project.keyframes[k].time = time;
-        self.path = None;
-        Ok(())
-    }
-
-    /// Sets the easing of the segment starting at keyframe `k`.
-    pub fn set_easing(&mut self, k: usize, easing: &str) -> Result<(), SessionError> {
-        if let Err(e) = easing.parse::<Easing>() {
-            return refused(e.to_string());
-        }
-        let Some(key) = self.project.keyframes.get_mut(k) else {
-            return refused(format!("there is no keyframe {k}"));
-        };
-        key.easing = easing.to_owned();
-        self.path = None;
-        Ok(())
-    }
-
-    /// The compiled path through the keyframes (compiled again after any change).
-    fn path(&mut self) -> Result<&mut Path, SessionError> {
-        if self.project.keyframes.len() < 2 {
-            return refused("add a second keyframe to play");
-        }
-        if self.path.is_none() {
-            let keys = &self.project.keyframes;
-            let meshes: Vec<PlanarMesh> = keys
-                .iter()
-                .map(|k| PlanarMesh {
-                    positions: k.positions.clone(),
-                    faces: self.rest.faces.clone(),
-                })
-                .collect();
-            let durations: Vec<f64> = keys.windows(2).map(|w| w[1].time - w[0].time).collect();
-            let easings: Vec<Easing> = keys[..keys.len() - 1]
-                .iter()
-                .map(|k| k.easing.parse().unwrap_or(Easing::Linear))
-                .collect();
-            let options = PathOptions::default()
-                .with_durations(durations)
-                .with_easings(easings);
-            self.path = Some(Path::with_options(&meshes, options)?);
-        }
-        self.path
-            .as_mut()
-            .ok_or_else(|| SessionError::Refused("no path".into()))
-    }
-
-    /// The animation at `time` seconds (clamped to the animation) into the frame buffer.
-    fn compute(&mut self, time: f64) -> Result<f64, SessionError> {
-        let duration = self.duration();
-        let time = if time.is_finite() {
-            time.clamp(0.0, duration)
-        } else {
-            0.0
-        };
-        let t = if duration > 0.0 { time / duration } else { 0.0 };
-        let mut frame = std::mem::take(&mut self.frame);
-        let result = self.path().and_then(|p| Ok(p.frame_into(t, &mut frame)?));
-        self.frame = frame;
-        result?;
-        Ok(time)
-    }
-
-    /// The animation's frame at `time`, as a [`kind::FRAME`] message.
-    pub fn scrub(&mut self, seq: u32, time: f64) -> Result<Vec<u8>, SessionError> {
-        let time = self.compute(time)?;
-        let positions = std::mem::take(&mut self.frame);
-        let bytes = self.frame_of(kind::FRAME, seq, time, &positions);
-        self.frame = positions;
-        Ok(bytes)
-    }
-
-    /// The picture's traced outline as loops.
-    pub fn trace_outline(
-        &self,
-        tolerance: Option<f64>,
-    ) -> Result<Vec<Vec<[f64; 2]>>, SessionError> {
-        let Some(image) = &self.texture else {
-            return refused("there is no picture to trace: open one (bdmorph studio picture.png)");
-        };
-        let traced = crate::meshing::picture_outline(
-            image,
-            &crate::meshing::PictureOptions::default(),
-            tolerance,
-        )
-        .map_err(|e| SessionError::Refused(e.to_string()))?;
-        Ok(loops_of(&traced.outline))
-    }
-
-    /// Starts the project over from `outline`, meshed with about `vertices` vertices; the
-    /// picture (if any) stays, spanning its own pixels.
-    pub fn remesh(
-        &mut self,
-        mut outline: crate::meshing::Outline,
-        vertices: usize,
-    ) -> Result<(), SessionError> {
-        if !(MIN_MESH_VERTICES..=MAX_MESH_VERTICES).contains(&vertices) {
-            return refused(format!(
-                "{vertices} vertices: the studio meshes between {MIN_MESH_VERTICES} and {MAX_MESH_VERTICES} (use bdmorph mesh for more)"
-            ));
-        }
-        if let Some(t) = &self.texture {
-            outline.texture_frame = Some([0.0, 0.0, f64::from(t.width), f64::from(t.height)]);
-        }
-        let options = crate::meshing::MeshOptions::default().with_vertices(vertices);
-        let meshed = crate::meshing::mesh_outline(&outline, &options)
-            .map_err(|e| SessionError::Refused(e.to_string()))?;
-        let uv = per_vertex_uv(
-            &meshed.texcoords,
-            &meshed.mesh.faces,
-            meshed.mesh.positions.len(),
-        );
-        let mut project = Project::new(&meshed.mesh, uv);
-        project.texture = self.project.texture.clone();
-        project.method = self.project.method.clone();
-        project.fps = self.project.fps;
-        *self = Session::new(project, self.workspace.clone(), None, self.texture.clone())?;
-        Ok(())
-    }
-
-    /// A keyframe from a mesh file's text, at `time`.
-    pub fn load_keyframe(&mut self, name: &str, text: &str, time: f64) -> Result<(), SessionError> {
-        let path = FsPath::new(name);
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .unwrap_or_default();
-        let surface = match ext.as_str() {
-            "obj" => crate::io::parse_obj(text, path),
-            "off" => crate::io::parse_off(text, path),
-            _ => {
-                return refused(format!(
-                    "{name}: a keyframe is read from an .obj or .off file"
-                ))
-            }
-        }
-        .map_err(|e| SessionError::Refused(e.to_string()))?;
-        let planar = PlanarMesh::from_surface(surface, path)
-            .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
-        if planar.positions.len() != self.rest.positions.len() {
-            return refused(format!(
-                "{name} has {} vertices; the project has {}",
-                planar.positions.len(),
-                self.rest.positions.len()
-            ));
-        }
-        self.rest
-            .match_faces(&planar.faces)
-            .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
-        planar
-            .validate()
-            .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
-        let key = Keyframe {
-            time,
-            easing: "linear".into(),
-            positions: planar.positions,
-            pins: Vec::new(),
-        };
-        self.insert(key)
-    }
-
-    /// The frame at `time` becomes a keyframe there (and is posed).
-    pub fn frame_to_keyframe(&mut self, time: f64) -> Result<(), SessionError> {
-        let time = self.compute(time)?;
-        let key = Keyframe {
-            time,
-            easing: "linear".into(),
-            positions: self.frame.clone(),
-            pins: Vec::new(),
-        };
-        self.insert(key)
-    }
-
-    /// A file name in the workspace: plain (no folders, not hidden), with one of `endings`.
-    fn workspace_file(&self, name: &str, endings: &[&str]) -> Result<PathBuf, SessionError> {
-        let plain = !name.is_empty()
-            && name.len() <= 200
-            && !name.starts_with('.')
-            && name
-                .chars()
-                .all(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | '.' | ' '));
-        if !plain {
-            return refused(format!(
-                "'{name}' is not a plain file name: the studio writes only into {}, by names of letters, digits, spaces, '-', '_' and '.'",
-                self.workspace.display()
-            ));
-        }
-        let lower = name.to_ascii_lowercase();
-        if !endings.is_empty() && !endings.iter().any(|e| lower.ends_with(e)) {
-            return refused(format!("'{name}' must end with {}", endings.join(" or ")));
-        }
-        Ok(self.workspace.join(name))
-    }
-
-    /// Saves the project (atomically): into the workspace as `name`, or where it was opened.
-    pub fn save(&mut self, name: Option<&str>) -> Result<PathBuf, SessionError> {
-        let path = match (name, &self.project_file) {
-            (Some(name), _) => self.workspace_file(name, &[".json"])?,
-            (None, Some(path)) => path.clone(),
-            (None, None) => return refused("give the project a file name (.json)"),
-        };
-        self.project.write(&path)?;
-        self.project_file = Some(path.clone());
-        Ok(path)
-    }
-
-    /// Renders the animation into the workspace as `name`.
-    pub fn export(
-        &mut self,
-        format: &str,
-        name: &str,
-        frames: Option<u32>,
-    ) -> Result<PathBuf, SessionError> {
-        let endings: &[&str] = match format {
-            "gif" => &[".gif"],
-            "mp4" => &[".mp4"],
-            "png" => &[".png"],
-            "html" => &[".html"],
-            "obj" => &[],
-            "still" => return self.export_still(name, None),
-            other => return refused(format!("unknown export format '{other}'")),
-        };
-        let path = self.workspace_file(name, endings)?;
-        let duration = self.duration();
-        let count = frames
-            .unwrap_or((duration * self.project.fps).round() as u32 + 1)
-            .clamp(2, 2000) as usize;
-        let mut poses: Vec<(f64, Vec<[f64; 2]>, Vec<f64>)> = Vec::with_capacity(count);
-        for i in 0..count {
-            let time = duration * i as f64 / (count - 1) as f64;
-            self.compute(time)?;
-            self.shape
-                .distortion_into(&self.frame, &mut self.distortion);
-            poses.push((time, self.frame.clone(), self.distortion.clone()));
-        }
-        let faces = self.rest.faces.clone();
-        let corner_uv: Option<Vec<[[f64; 2]; 3]>> = self
-            .project
-            .mesh
-            .texcoords
-            .as_ref()
-            .map(|uv| faces.iter().map(|f| f.map(|v| uv[v as usize])).collect());
-        let texture = self.texture.as_ref().filter(|_| corner_uv.is_some());
-        let view = Viewport::fit(poses.iter().map(|p| p.1.as_slice()));
-        let size = ImageSize {
-            width: 640,
-            height: 640,
-        };
-        let render = |positions: &[[f64; 2]], shades: Option<&[[u8; 3]]>| {
-            let drawing = Drawing {
-                faces: &faces,
-                corner_uv: corner_uv.as_deref(),
-                texture,
-                face_colours: shades,
-            };
-            raster::render(positions, &drawing, &view, size)
-        };
-        let failed = |e: &dyn std::fmt::Display| SessionError::Refused(format!("export: {e}"));
-        match format {
-            "gif" | "mp4" | "png" => {
-                let images: Vec<Image> = if format == "png" {
-                    let max = colour::distortion_scale(poses.iter().map(|p| p.2.as_slice()));
-                    let picks = [0, count / 4, count / 2, 3 * count / 4, count - 1];
-                    picks
-                        .par_iter()
-                        .map(|&i| {
-                            let shades =
-                                colour::shade_colours(&colour::distortion_shades(&poses[i].2, max));
-                            render(&poses[i].1, Some(&shades))
-                        })
-                        .collect()
-                } else {
-                    poses.par_iter().map(|p| render(&p.1, None)).collect()
-                };
-                let bytes = match format {
-                    "gif" => {
-                        let delay = (100.0 / self.project.fps).round().max(2.0) as u16;
-                        raster::encode_gif(&images, delay).map_err(|e| failed(&e))?
-                    }
-                    "mp4" => {
-                        crate::render::video::encode_mp4(&images, self.project.fps.round() as u32)
-                            .map_err(|e| failed(&e))?
-                    }
-                    _ => raster::encode_png(&raster::strip(&images, images.len()))
-                        .map_err(|e| failed(&e))?,
-                };
-                crate::io::write_bytes_atomic(&path, &bytes).map_err(|e| failed(&e))?;
-            }
-            "html" => {
-                let png = match texture {
-                    Some(t) => Some(raster::encode_png(t).map_err(|e| failed(&e))?),
-                    None => None,
-                };
-                let frames: Vec<(f64, &[[f64; 2]])> =
-                    poses.iter().map(|p| (p.0, p.1.as_slice())).collect();
-                let page = crate::render::html::html(
-                    "bdmorph studio export",
-                    &frames,
-                    &faces,
-                    corner_uv.as_deref(),
-                    png.as_deref(),
-                    &view,
-                );
-                crate::io::write_bytes_atomic(&path, page.as_bytes()).map_err(|e| failed(&e))?;
-            }
-            _ => {
-                std::fs::create_dir_all(&path).map_err(|e| failed(&e))?;
-                for (i, p) in poses.iter().enumerate() {
-                    let file = path.join(format!("frame_{i:04}.obj"));
-                    crate::io::write_obj_2d(&file, &p.1, &faces, &[]).map_err(|e| failed(&e))?;
-                }
-            }
-        }
-        Ok(path)
-    }
-
-    /// One frame as a PNG picture (a screenshot of the shape, 800 pixels square): the
-    /// animation at `time`, or the keyframe being posed; drawn with the picture when the
-    /// project has one, else coloured by distortion.
-    pub fn export_still(&mut self, name: &str, time: Option<f64>) -> Result<PathBuf, SessionError> {
-        let path = self.workspace_file(name, &[".png"])?;
-        let positions = match time {
-            Some(t) => {
-                if !(t.is_finite() && t >= 0.0) {
-                    return refused(format!("time {t}: give one of 0 or more seconds"));
-                }
-                self.compute(t.min(self.duration()))?;
-                self.frame.clone()
-            }
-            None => self.deformer.positions().to_vec(),
-        };
-        self.shape.distortion_into(&positions, &mut self.distortion);
-        let faces = &self.rest.faces;
-        let corner_uv: Option<Vec<[[f64; 2]; 3]>> = self
-            .project
-            .mesh
-            .texcoords
-            .as_ref()
-            .map(|uv| faces.iter().map(|f| f.map(|v| uv[v as usize])).collect());
-        let texture = self.texture.as_ref().filter(|_| corner_uv.is_some());
-        let shades = match texture {
-            Some(_) => None,
-            None => {
-                let max = colour::distortion_scale(std::iter::once(self.distortion.as_slice()));
-                Some(colour::shade_colours(&colour::distortion_shades(
-                    &self.distortion,
-                    max,
-                )))
-            }
-        };
-        let drawing = Drawing {
-            faces,
-            corner_uv: corner_uv.as_deref(),
-            texture,
-            face_colours: shades.as_deref(),
-        };
-        let view = Viewport::fit(std::iter::once(positions.as_slice()));
-        let size = ImageSize {
-            width: 800,
-            height: 800,
-        };
-        let image = raster::render(&positions, &drawing, &view, size);
-        let failed = |e: &dyn std::fmt::Display| SessionError::Refused(format!("export: {e}"));
-        let bytes = raster::encode_png(&image).map_err(|e| failed(&e))?;
-        crate::io::write_bytes_atomic(&path, &bytes).map_err(|e| failed(&e))?;
-        Ok(path)
-    }
-
-    /// Carries out a request: the answers to send, in order (text is JSON state, bytes are
-    /// binary frames). A failed request changes nothing and answers with the state and the
-    /// reason.
-    pub fn handle(&mut self, request: Request) -> Vec<Answer> {
-        match self.try_handle(request) {
-            Ok(answers) => answers,
-            Err(e) => vec![Answer::Text(self.state_json(Some(&format!("error: {e}"))))],
-        }
-    }
-
-    fn try_handle(&mut self, request: Request) -> Result<Vec<Answer>, SessionError> {
-        use Answer::{Binary, Text};
-        Ok(match request {
-            Request::Hello => vec![
-                Text(self.state_json(None)),
-                Binary(self.mesh_bytes()),
-                Binary(self.pose_bytes(0)),
-            ],
-            Request::Select { keyframe } => {
-                self.select(keyframe)?;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::Pins { pins } => {
-                self.set_pins(&pins)?;
-                vec![Text(self.state_json(None))]
-            }
-            Request::Drag { seq, targets } => {
-                self.drag(&targets)?;
-                vec![Binary(self.pose_bytes(seq))]
-            }
-            Request::DragEnd => {
-                self.drag_end();
-                vec![Text(self.state_json(None))]
-            }
-            Request::Method {
-                name,
-                weight,
-                max_distortion,
-            } => {
-                self.set_method(&name, weight, max_distortion)?;
-                vec![Text(self.state_json(None))]
-            }
-            Request::Undo | Request::Redo => {
-                self.restore(matches!(request, Request::Undo))?;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::Reset => {
-                self.remember();
-                let rest = self.rest.positions.clone();
-                self.deformer.set_positions(&rest)?;
-                self.project.keyframes[self.current].positions = rest;
-                self.path = None;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::AddKeyframe { time, copy } => {
-                self.add_keyframe(time, copy)?;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::DeleteKeyframe { keyframe } => {
-                self.delete_keyframe(keyframe)?;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::MoveKeyframe { keyframe, to } => {
-                self.move_keyframe(keyframe, to)?;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::SetTime { keyframe, time } => {
-                self.set_time(keyframe, time)?;
-                vec![Text(self.state_json(None))]
-            }
-            Request::SetEasing { keyframe, easing } => {
-                self.set_easing(keyframe, &easing)?;
-                vec![Text(self.state_json(None))]
-            }
-            Request::FrameToKeyframe { time } => {
-                self.frame_to_keyframe(time)?;
-                vec![Text(self.state_json(None)), Binary(self.pose_bytes(0))]
-            }
-            Request::Scrub { seq, time } => vec![Binary(self.scrub(seq, time)?)],
-            Request::LoadKeyframe { name, text, time } => {
-                self.load_keyframe(&name, &text, time)?;
-                let said = format!("loaded {name} as a keyframe at {time} s");
-                vec![
-                    Text(self.state_json(Some(&said))),
-                    Binary(self.pose_bytes(0)),
-                ]
-            }
-            Request::TraceOutline { tolerance } => {
-                let loops = self.trace_outline(tolerance)?;
-                vec![Text(
-                    serde_json::json!({"type": "outline", "loops": loops}).to_string(),
-                )]
-            }
-            Request::MeshOutline { loops, vertices } => {
-                if loops.iter().any(|l| l.len() < 3) || loops.is_empty() {
-                    return refused("each loop needs at least three points");
-                }
-                self.remesh(crate::meshing::Outline::from_loops(&loops), vertices)?;
-                let said = format!("meshed: {} vertices", self.rest.positions.len());
-                vec![
-                    Text(self.state_json(Some(&said))),
-                    Binary(self.mesh_bytes()),
-                    Binary(self.pose_bytes(0)),
-                ]
-            }
-            Request::ImportOutline {
-                name,
-                text,
-                vertices,
-            } => {
-                let lower = name.to_ascii_lowercase();
-                let outline = if lower.ends_with(".svg") {
-                    crate::meshing::parse_svg(&text, None)
-                } else if lower.ends_with(".poly") {
-                    crate::meshing::parse_poly(&text)
-                } else {
-                    return refused(format!(
-                        "{name}: outlines are read from .svg or .poly files"
-                    ));
-                }
-                .map_err(|e| SessionError::Refused(format!("{name}: {e}")))?;
-                self.remesh(outline, vertices)?;
-                let said = format!("meshed {name}: {} vertices", self.rest.positions.len());
-                vec![
-                    Text(self.state_json(Some(&said))),
-                    Binary(self.mesh_bytes()),
-                    Binary(self.pose_bytes(0)),
-                ]
-            }
-            Request::Fps { fps } => {
-                if !(fps > 0.0 && fps <= 240.0) {
-                    return refused(format!("frame rate {fps}: give one in (0, 240]"));
-                }
-                self.project.fps = fps;
-                vec![Text(self.state_json(None))]
-            }
-            Request::Save { name } => {
-                let path = self.save(name.as_deref())?;
-                let said = format!("saved {}", path.display());
-                vec![Text(self.state_json(Some(&said)))]
-            }
-            Request::Export {
-                format,
-                name,
-                frames,
-                time,
-            } => {
-                let path = if format == "still" {
-                    self.export_still(&name, time)?
-                } else {
-                    self.export(&format, &name, frames)?
-                };
-                let said = format!("exported {}", path.display());
-                vec![Text(self.state_json(Some(&said)))]
-            }
-        })
-    }
-}
-
-/// One message to the page.
+/// One message to a page.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Answer {
     /// JSON text.
@@ -1120,115 +48,121 @@ pub enum Answer {
     Binary(Vec<u8>),
 }
 
-/// The posing method a project names.
-fn method_of(project: &Project) -> Result<Method, SessionError> {
-    let m = &project.method;
-    Ok(match m.name.as_str() {
-        "kvf" => Method::Kvf(KvfOptions::default().with_weight(m.weight)),
-        "arap" => Method::arap(),
-        "bounded" => Method::bounded(m.max_distortion),
-        other => return refused(format!("unknown method '{other}'")),
-    })
+/// What the pages show: a keyframe, or the animation at a time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shown {
+    /// The keyframe being posed.
+    Keyframe,
+    /// The animation's frame at this time.
+    Time(f64),
 }
 
-/// A frame as a binary message: `[kind, seq, n, m]` as u32, `[largest distortion]` f32,
-/// `[flipped]` u32, `[time]` f32, a reserved u32, then `2n` f32 positions and `m` f32
-/// distortions (flipped triangles as f32 infinity).
-pub fn frame_bytes(
-    kind: u32,
-    seq: u32,
-    time: f64,
-    positions: &[[f64; 2]],
-    distortion: &[f64],
-    worst: f64,
-    flipped: usize,
-) -> Vec<u8> {
-    let mut out = Vec::with_capacity(32 + 8 * positions.len() + 4 * distortion.len());
-    for x in [kind, seq, positions.len() as u32, distortion.len() as u32] {
-        out.extend_from_slice(&x.to_le_bytes());
-    }
-    out.extend_from_slice(&(worst as f32).to_le_bytes());
-    out.extend_from_slice(&(flipped as u32).to_le_bytes());
-    out.extend_from_slice(&(time as f32).to_le_bytes());
-    out.extend_from_slice(&0u32.to_le_bytes());
-    for p in positions {
-        out.extend_from_slice(&(p[0] as f32).to_le_bytes());
-        out.extend_from_slice(&(p[1] as f32).to_le_bytes());
-    }
-    for d in distortion {
-        out.extend_from_slice(&(*d as f32).to_le_bytes());
-    }
-    out
+/// The view every page shares (not part of the document, not undone).
+#[derive(Clone, Debug)]
+pub struct View {
+    /// The keyframe being posed (and shown, when [`Shown::Keyframe`]).
+    pub current: usize,
+    /// What is shown.
+    pub shown: Shown,
+    /// `pose` or `outline`.
+    pub mode: &'static str,
+    /// The outline loop being drawn, if one.
+    pub drawing: Option<usize>,
 }
 
-/// Opens what `bdmorph studio FILE` names: a project file (`.json`), a mesh (`.obj`, `.off`),
-/// or a picture (`.png`, `.jpg`, `.jpeg`: meshed by its opaque subject, about 2000 vertices,
-/// and drawn on the mesh). The texture of a project or mesh is the PNG beside it with the same
-/// stem, or the project's own.
-pub fn open(file: &FsPath) -> Result<(Project, Option<Image>), String> {
-    let shown = file.display();
-    let ext = file
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    match ext.as_str() {
-        "json" => {
-            let project = Project::read(file).map_err(|e| format!("{shown}: {e}"))?;
-            let texture = match &project.texture {
-                Some(t) => {
-                    let path = file.parent().unwrap_or(FsPath::new(".")).join(t);
-                    Some(raster::read_image(&path).map_err(|e| format!("{}: {e}", path.display()))?)
-                }
-                None => None,
-            };
-            Ok((project, texture))
-        }
-        "obj" | "off" => {
-            let read = crate::MeshFile::read(file).map_err(|e| e.to_string())?;
-            let planar = read.planar().map_err(|e| e.to_string())?;
-            let uv = read
-                .mesh
-                .texcoords
-                .as_ref()
-                .and_then(|t| per_vertex_uv(t, &planar.faces, planar.positions.len()));
-            let mut project = Project::new(&planar, uv);
-            let beside = file.with_extension("png");
-            let texture = if project.mesh.texcoords.is_some() && beside.is_file() {
-                project.texture = beside.file_name().map(|n| n.to_string_lossy().into_owned());
-                raster::read_image(&beside).ok()
-            } else {
-                None
-            };
-            Ok((project, texture))
-        }
-        "png" | "jpg" | "jpeg" => {
-            let image = raster::read_image(file).map_err(|e| format!("{shown}: {e}"))?;
-            let meshed = crate::meshing::mesh_picture(
-                &image,
-                &crate::meshing::PictureOptions::default(),
-                &crate::meshing::MeshOptions::default(),
-            )
-            .map_err(|e| format!("{shown}: {e}"))?;
-            let uv = per_vertex_uv(&meshed.texcoords, &meshed.mesh.faces, meshed.mesh.positions.len());
-            let mut project = Project::new(&meshed.mesh, uv);
-            project.texture = file.file_name().map(|n| n.to_string_lossy().into_owned());
-            Ok((project, Some(image)))
-        }
-        _ => Err(format!(
-            "{shown}: the studio opens a project (.json), a mesh (.obj, .off) or a picture (.png, .jpg)"
-        )),
-    }
+/// Revisions of the parts of what a page shows; a page's task keeps the ones it has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Revs {
+    /// The state (small JSON: keyframes' times and marks, view, history, job, notes).
+    pub state: u64,
+    /// The rest mesh.
+    pub mesh: u64,
+    /// The shown keyframe's pins.
+    pub pins: u64,
+    /// The outline.
+    pub outline: u64,
+    /// The shape shown.
+    pub shown: u64,
+    /// The picture.
+    pub texture: u64,
+}
+
+/// A message for every page until dismissed.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Note {
+    /// Its number.
+    pub id: u64,
+    /// Its text.
+    pub text: String,
+    /// Whether it reports a failure.
+    pub error: bool,
+}
+
+/// Work running in the background.
+#[derive(Debug)]
+pub struct Job {
+    /// What it is.
+    pub label: String,
+    /// How far it is.
+    pub progress: Arc<Progress>,
+}
+
+/// What a request asks of the server besides the updates every page gets.
+#[derive(Debug, Default)]
+pub struct Reply {
+    /// Messages for the page that asked only (errors, lists).
+    pub answers: Vec<Answer>,
+    /// Work to start in the background.
+    pub work: Option<(Work, Arc<Progress>)>,
 }
 
 /// The fewest vertices the studio meshes an outline with.
 pub const MIN_MESH_VERTICES: usize = 50;
-/// The most vertices the studio meshes an outline with (one request stays interactive;
-/// `bdmorph mesh` makes larger meshes, which the studio opens).
+/// The most vertices the studio meshes an outline with (`bdmorph mesh` makes larger meshes,
+/// which the studio opens).
 pub const MAX_MESH_VERTICES: usize = 200_000;
+/// How far (in mesh diameters, from the rest mesh's centre) a drag target may go.
+pub const MAX_DRAG_REACH: f64 = 20.0;
+/// The most notes kept (the oldest go first).
+const MAX_NOTES: usize = 20;
+
+/// The engine state of one studio.
+pub struct Session {
+    doc: Project,
+    history: History,
+    view: View,
+    engine: Engine,
+    workspace: Workspace,
+    project_file: Option<PathBuf>,
+    source: Option<String>,
+    texture: Option<Arc<Texture>>,
+    /// Pictures read before, by name (undo and redo of a new picture do not read it again).
+    textures: Vec<Arc<Texture>>,
+    revs: Revs,
+    tick: u64,
+    notes: Vec<Note>,
+    job: Option<Job>,
+    recovered: Vec<Recovered>,
+    dragging: bool,
+    /// Bumped on every change to the document (for autosaves).
+    version: u64,
+    shown_cache: Option<(u64, Vec<u8>)>,
+    /// The size and centre of the rest mesh (for the reach of drags).
+    reach: ([f64; 2], f64),
+}
+
+impl std::fmt::Debug for Session {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session")
+            .field("vertices", &self.doc.mesh.positions.len())
+            .field("keyframes", &self.doc.keyframes.len())
+            .field("workspace", &self.workspace.root())
+            .finish_non_exhaustive()
+    }
+}
 
 /// An outline's segments as closed loops (following each vertex's outgoing segment).
-fn loops_of(outline: &crate::meshing::Outline) -> Vec<Vec<[f64; 2]>> {
+pub fn loops_of(outline: &crate::meshing::Outline) -> Vec<Vec<[f64; 2]>> {
     let n = outline.vertices.len();
     let mut next = vec![u32::MAX; n];
     for &[a, b] in &outline.segments {
@@ -1259,21 +193,1456 @@ fn loops_of(outline: &crate::meshing::Outline) -> Vec<Vec<[f64; 2]>> {
     loops
 }
 
-/// Texture coordinates per vertex from per-corner ones (`corners` parallel to `faces`), when
-/// every corner of each vertex has the same one (no seams); `None` otherwise.
-fn per_vertex_uv(t: &crate::io::TexCoords, faces: &[[u32; 3]], n: usize) -> Option<Vec<[f64; 2]>> {
-    if t.corners.len() != faces.len() {
-        return None;
+fn reach_of(mesh: &PlanarMesh) -> ([f64; 2], f64) {
+    let (lo, hi) = mesh.positions.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    let size = (hi[0] - lo[0]).hypot(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
+    ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], size)
+}
+
+/// Keyframe `k` as people count it.
+fn nth(k: usize) -> usize {
+    k + 1
+}
+
+/// A request carried out, or why not.
+type Done = Result<(), String>;
+
+impl Session {
+    /// A session on `project` in `workspace`; `project_file` is where a plain save writes,
+    /// `source` the name of the file it was opened from, `texture` its picture.
+    pub fn new(
+        project: Project,
+        workspace: PathBuf,
+        project_file: Option<PathBuf>,
+        texture: Option<Arc<Texture>>,
+    ) -> Result<Session, SessionError> {
+        project.check()?;
+        let engine = Engine::new(&project, 0).map_err(SessionError::Refused)?;
+        let reach = reach_of(&engine.rest);
+        let mut session = Session {
+            doc: project,
+            history: History::default(),
+            view: View {
+                current: 0,
+                shown: Shown::Keyframe,
+                mode: "pose",
+                drawing: None,
+            },
+            engine,
+            workspace: Workspace::new(workspace),
+            project_file,
+            source: None,
+            textures: texture.iter().cloned().collect(),
+            texture,
+            revs: Revs::default(),
+            tick: 0,
+            notes: Vec::new(),
+            job: None,
+            recovered: Vec::new(),
+            dragging: false,
+            version: 0,
+            shown_cache: None,
+            reach,
+        };
+        session.bump_all();
+        Ok(session)
     }
-    let mut uv: Vec<Option<[f64; 2]>> = vec![None; n];
-    for (face, corners) in faces.iter().zip(&t.corners) {
-        for (&v, &c) in face.iter().zip(corners) {
-            let value = *t.uv.get(c as usize)?;
-            match uv.get_mut(v as usize)? {
-                Some(seen) if *seen != value => return None,
-                slot => *slot = Some(value),
-            }
+
+    /// The name of the file the document was opened from (for autosaves).
+    pub fn set_source(&mut self, source: Option<String>) {
+        self.source = source;
+    }
+
+    /// Adds a note for every page.
+    pub fn note(&mut self, text: impl Into<String>, error: bool) {
+        self.tick += 1;
+        self.notes.push(Note {
+            id: self.tick,
+            text: text.into(),
+            error,
+        });
+        if self.notes.len() > MAX_NOTES {
+            self.notes.remove(0);
+        }
+        self.bump_state();
+    }
+
+    /// Looks for recovered work in the workspace (at start) and offers it.
+    pub fn offer_recoveries(&mut self) {
+        self.workspace.collect_recoveries();
+        self.recovered = self.workspace.recovered();
+        self.bump_state();
+    }
+
+    /// Recovered work on offer.
+    pub fn recovered(&self) -> &[Recovered] {
+        &self.recovered
+    }
+
+    /// The document.
+    pub fn project(&self) -> &Project {
+        &self.doc
+    }
+
+    /// The history.
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// The shared view.
+    pub fn view(&self) -> &View {
+        &self.view
+    }
+
+    /// The workspace.
+    pub fn workspace(&self) -> &Workspace {
+        &self.workspace
+    }
+
+    /// The picture drawn on the mesh.
+    pub fn texture(&self) -> Option<&Arc<Texture>> {
+        self.texture.as_ref()
+    }
+
+    /// Bumped on every change to the document.
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+
+    /// Whether the document has changes not saved.
+    pub fn dirty(&self) -> bool {
+        self.history.dirty()
+    }
+
+    /// The name of the file the document came from.
+    pub fn source(&self) -> Option<&str> {
+        self.source.as_deref()
+    }
+
+    /// The revisions now.
+    pub fn revs(&self) -> Revs {
+        self.revs
+    }
+
+    fn next(&mut self) -> u64 {
+        self.tick += 1;
+        self.tick
+    }
+
+    fn bump_state(&mut self) {
+        self.revs.state = self.next();
+    }
+
+    fn bump_shown(&mut self) {
+        self.revs.shown = self.next();
+        self.shown_cache = None;
+    }
+
+    fn bump_all(&mut self) {
+        let t = self.next();
+        self.revs = Revs {
+            state: t,
+            mesh: t,
+            pins: t,
+            outline: t,
+            shown: t,
+            texture: t,
+        };
+        self.shown_cache = None;
+    }
+
+    /// The revisions and messages after a change that touched `touched`.
+    fn changed(&mut self, touched: Touched) {
+        self.version += 1;
+        self.bump_state();
+        if touched.mesh {
+            self.bump_all();
+            self.reach = reach_of(&self.engine.rest);
+        }
+        if touched.outline {
+            self.revs.outline = self.next();
+        }
+        if touched.texture {
+            self.revs.texture = self.next();
+            self.revs.mesh = self.next();
+        }
+        if touched.pins.is_some() || touched.keyframes || touched.mesh {
+            self.revs.pins = self.next();
+        }
+        if touched.keyframes || touched.pose.is_some() || touched.mesh {
+            self.refresh_shown();
         }
     }
-    uv.into_iter().map(|u| u.or(Some([0.0, 0.0]))).collect()
+
+    /// The shape shown after the keyframes changed: the same keyframe, or the frame at the
+    /// same time computed again (the keyframe, if it cannot be).
+    fn refresh_shown(&mut self) {
+        if let Shown::Time(t) = self.view.shown {
+            if let Err(e) = self.engine.compute(&self.doc, t) {
+                self.view.shown = Shown::Keyframe;
+                self.note(format!("the animation cannot be played: {e}"), true);
+            }
+        }
+        self.bump_shown();
+    }
+
+    /// Applies `edit` as one history step called `label`; refused whole (the document, its
+    /// history and the engine as they were) when the edit or its result is not valid.
+    pub fn commit(&mut self, label: impl Into<String>, edit: Edit) -> Done {
+        self.dragging = false;
+        let select = edit.keyframe();
+        let inverse = self.apply(edit)?;
+        self.history.push(label, inverse);
+        if let Some(k) = select {
+            self.show_keyframe(k.min(self.doc.keyframes.len() - 1));
+        }
+        Ok(())
+    }
+
+    /// Applies an edit and brings the engine in step; the inverse, or nothing changed.
+    fn apply(&mut self, edit: Edit) -> Result<Edit, String> {
+        let (inverse, touched) = edit.apply(&mut self.doc)?;
+        self.view.current = self.view.current.min(self.doc.keyframes.len() - 1);
+        if touched.texture || touched.mesh {
+            self.load_texture();
+        }
+        if let Err(e) = self.engine.sync(&self.doc, touched, self.view.current) {
+            // Undo the edit, and bring the engine back with it.
+            if let Ok((_, back)) = inverse.apply(&mut self.doc) {
+                self.view.current = self.view.current.min(self.doc.keyframes.len() - 1);
+                if back.texture || back.mesh {
+                    self.load_texture();
+                }
+                let _ = self.engine.sync(&self.doc, back, self.view.current);
+            }
+            return Err(e);
+        }
+        if touched.outline {
+            if let Some(d) = self.view.drawing {
+                if d >= self.doc.outline.len() {
+                    self.view.drawing = None;
+                }
+            }
+        }
+        self.changed(touched);
+        Ok(inverse)
+    }
+
+    /// The document's picture, read (or found among those read before) by its name.
+    fn load_texture(&mut self) {
+        let wanted = self.doc.texture.clone();
+        if self.texture.as_ref().map(|t| &t.name) == wanted.as_ref() {
+            return;
+        }
+        self.texture = match wanted {
+            None => None,
+            Some(name) => match self.textures.iter().find(|t| t.name == name) {
+                Some(t) => Some(t.clone()),
+                None => match read_texture(&self.workspace.root().join(&name), &name) {
+                    Ok(t) => {
+                        let t = Arc::new(t);
+                        self.textures.push(t.clone());
+                        if self.textures.len() > 4 {
+                            self.textures.remove(0);
+                        }
+                        Some(t)
+                    }
+                    Err(e) => {
+                        self.note(format!("the picture could not be read: {e}"), true);
+                        None
+                    }
+                },
+            },
+        };
+        self.revs.texture = self.next();
+    }
+
+    /// Shows and poses keyframe `k`.
+    fn show_keyframe(&mut self, k: usize) {
+        self.dragging = false;
+        self.view.current = k;
+        self.view.shown = Shown::Keyframe;
+        if let Err(e) = self.engine.load(&self.doc, k, false) {
+            self.note(e, true);
+        }
+        self.bump_state();
+        self.revs.pins = self.next();
+        self.bump_shown();
+    }
+
+    /// Undoes (or redoes) the newest step.
+    fn undo_redo(&mut self, undo: bool) -> Done {
+        self.dragging = false;
+        let step = if undo {
+            self.history.take_undo()
+        } else {
+            self.history.take_redo()
+        };
+        let Some(step) = step else {
+            return Err(if undo {
+                "nothing to undo"
+            } else {
+                "nothing to redo"
+            }
+            .into());
+        };
+        let select = step.edit.keyframe();
+        match self.apply(step.edit.clone()) {
+            Ok(inverse) => {
+                if undo {
+                    self.history.undone(step, inverse);
+                } else {
+                    self.history.redone(step, inverse);
+                }
+            }
+            Err(e) => {
+                if undo {
+                    self.history.restore_undo(step);
+                } else {
+                    self.history.restore_redo(step);
+                }
+                return Err(e);
+            }
+        }
+        if let Some(k) = select {
+            self.show_keyframe(k.min(self.doc.keyframes.len() - 1));
+        }
+        self.bump_state();
+        Ok(())
+    }
+
+    fn current_key(&self) -> &Keyframe {
+        &self.doc.keyframes[self.view.current]
+    }
+
+    fn duration(&self) -> f64 {
+        self.doc.keyframes.last().map_or(0.0, |k| k.time)
+    }
+
+    /// The keyframe at time `t` (within a microsecond), if one.
+    fn keyframe_at_time(&self, t: f64) -> Option<usize> {
+        self.doc
+            .keyframes
+            .iter()
+            .position(|k| (k.time - t).abs() < 1e-6)
+    }
+
+    /// Where a keyframe at `time` goes in the order.
+    fn place_for(&self, time: f64) -> usize {
+        self.doc
+            .keyframes
+            .iter()
+            .position(|k| k.time > time)
+            .unwrap_or(self.doc.keyframes.len())
+    }
+
+    /// A pin on `vertex` of what is shown (a frame between keyframes becomes one first).
+    fn pin_add(&mut self, vertex: u32) -> Done {
+        let n = self.doc.mesh.positions.len();
+        if vertex as usize >= n {
+            return Err(format!("there is no vertex there (the mesh has {n})"));
+        }
+        if let Shown::Time(t) = self.view.shown {
+            if let Some(k) = self.keyframe_at_time(t) {
+                self.show_keyframe(k);
+            } else {
+                let at = self.place_for(t);
+                let key = Keyframe {
+                    pins: vec![vertex],
+                    ..keyframe_at(t, self.engine.frame.clone())
+                };
+                return self.commit(
+                    format!("pin on a new keyframe {} at {t:.2} s", nth(at)),
+                    Edit::Insert { at, keyframe: key },
+                );
+            }
+        }
+        let k = self.view.current;
+        let mut pins = self.current_key().pins.clone();
+        if pins.contains(&vertex) {
+            return Err("that vertex is already pinned".into());
+        }
+        pins.push(vertex);
+        self.commit(
+            format!("pin on keyframe {}", nth(k)),
+            Edit::Pins { keyframe: k, pins },
+        )
+    }
+
+    fn drag(&mut self, pins: &[u32], targets: &[[f64; 2]]) -> Done {
+        if self.view.shown != Shown::Keyframe {
+            return Err("a frame between keyframes is shown: pin it to make it a keyframe".into());
+        }
+        let k = self.view.current;
+        if self.current_key().pins != pins {
+            return Err("the pins changed (in another tab?): drag again".into());
+        }
+        if pins.is_empty() {
+            return Err("pin a vertex first".into());
+        }
+        if targets.len() != pins.len() {
+            return Err(format!("{} targets for {} pins", targets.len(), pins.len()));
+        }
+        let (centre, size) = self.reach;
+        if let Some(far) = targets.iter().position(|t| {
+            !(t[0].is_finite() && t[1].is_finite())
+                || (t[0] - centre[0]).hypot(t[1] - centre[1]) > MAX_DRAG_REACH * size
+        }) {
+            return Err(format!(
+                "pin {} was dragged too far from the mesh (more than {MAX_DRAG_REACH} times its size)",
+                far + 1
+            ));
+        }
+        let before = (!self.dragging).then(|| self.current_key().positions.clone());
+        let flips = self.engine.flips[k];
+        self.engine.drag(&mut self.doc, k, targets)?;
+        // A stroke is one step: the pose before its first move.
+        let first = before.is_some();
+        if let Some(positions) = before {
+            self.history.push(
+                format!("drag on keyframe {}", nth(k)),
+                Edit::Pose {
+                    keyframe: k,
+                    positions,
+                },
+            );
+            self.dragging = true;
+        }
+        self.version += 1;
+        // The state (undo label, the keyframe's flips) changes with a stroke's first move,
+        // or when the flips do; the shape with every move.
+        if first || flips != self.engine.flips[k] {
+            self.bump_state();
+        }
+        self.bump_shown();
+        Ok(())
+    }
+
+    /// Shows the animation at `time`; on a keyframe's time, that keyframe (posed).
+    fn scrub(&mut self, time: f64) -> Done {
+        self.dragging = false;
+        let duration = self.duration();
+        let at = if time.is_finite() {
+            time.clamp(0.0, duration)
+        } else {
+            0.0
+        };
+        if let Some(k) = self.keyframe_at_time(at) {
+            self.show_keyframe(k);
+            return Ok(());
+        }
+        let time = self.engine.compute(&self.doc, time)?;
+        self.view.shown = Shown::Time(time);
+        self.bump_shown();
+        self.bump_state();
+        Ok(())
+    }
+
+    fn add_keyframe(&mut self, time: f64, copy: Option<usize>) -> Done {
+        let from = copy.unwrap_or(self.view.current);
+        let Some(source) = self.doc.keyframes.get(from) else {
+            return Err(format!("there is no keyframe {} to copy", nth(from)));
+        };
+        if self.keyframe_at_time(time).is_some() {
+            return Err(format!("there is already a keyframe at {time} s"));
+        }
+        let key = Keyframe {
+            pins: source.pins.clone(),
+            ..keyframe_at(time, source.positions.clone())
+        };
+        let at = self.place_for(time);
+        self.commit(
+            format!("add keyframe {}", nth(at)),
+            Edit::Insert { at, keyframe: key },
+        )
+    }
+
+    fn frame_to_keyframe(&mut self, time: f64) -> Done {
+        let time = self.engine.compute(&self.doc, time)?;
+        if let Some(k) = self.keyframe_at_time(time) {
+            return Err(format!("keyframe {} is at {time} s already", nth(k)));
+        }
+        let at = self.place_for(time);
+        let key = keyframe_at(time, self.engine.frame.clone());
+        self.commit(
+            format!("keyframe {} from the frame at {time:.2} s", nth(at)),
+            Edit::Insert { at, keyframe: key },
+        )
+    }
+
+    fn load_keyframe(&mut self, name: &str, text: &str, time: f64) -> Done {
+        let path = std::path::Path::new(name);
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        let surface = match ext.as_str() {
+            "obj" => crate::io::parse_obj(text, path),
+            "off" => crate::io::parse_off(text, path),
+            _ => {
+                return Err(format!(
+                    "{name}: a keyframe is read from an .obj or .off file"
+                ))
+            }
+        }
+        .map_err(|e| e.to_string())?;
+        let planar = PlanarMesh::from_surface(surface, path).map_err(|e| format!("{name}: {e}"))?;
+        let n = self.doc.mesh.positions.len();
+        if planar.positions.len() != n {
+            return Err(format!(
+                "{name} has {} vertices; the project has {n}",
+                planar.positions.len()
+            ));
+        }
+        self.engine
+            .rest
+            .match_faces(&planar.faces)
+            .map_err(|e| format!("{name}: {}", people(&e.to_string())))?;
+        planar
+            .validate_allowing_inverted()
+            .map_err(|e| format!("{name}: {}", people(&e.to_string())))?;
+        if self.keyframe_at_time(time).is_some() {
+            return Err(format!("there is already a keyframe at {time} s"));
+        }
+        let at = self.place_for(time);
+        self.commit(
+            format!("keyframe {} from {name}", nth(at)),
+            Edit::Insert {
+                at,
+                keyframe: keyframe_at(time, planar.positions),
+            },
+        )
+    }
+
+    fn set_method(&mut self, name: &str, weight: Option<f64>, bound: Option<f64>) -> Done {
+        let mut method = self.doc.method.clone();
+        method.name = name.to_owned();
+        if let Some(w) = weight {
+            method.weight = w;
+        }
+        if let Some(k) = bound {
+            method.max_distortion = k;
+        }
+        if method == self.doc.method {
+            return Ok(());
+        }
+        self.commit(format!("method {name}"), Edit::Method(method))
+    }
+
+    fn repair(&mut self, keyframe: Option<usize>) -> Done {
+        let k = keyframe.unwrap_or(self.view.current);
+        let Some(key) = self.doc.keyframes.get(k) else {
+            return Err(format!("there is no keyframe {}", nth(k)));
+        };
+        let before = self.engine.flips[k];
+        if before == 0 {
+            return Err(format!("keyframe {} has no flipped triangle", nth(k)));
+        }
+        let repaired = crate::deform::untangle(
+            &self.engine.rest,
+            &key.positions,
+            &key.pins,
+            &crate::deform::UntangleOptions::default(),
+        )
+        .map_err(|e| people(&e.to_string()))?;
+        let after = repaired.report.flipped_after;
+        if after >= before {
+            return Err(format!(
+                "keyframe {}: the {before} flipped triangles could not be repaired (pins may hold a fold: move or remove them)",
+                nth(k)
+            ));
+        }
+        self.commit(
+            format!("repair keyframe {}", nth(k)),
+            Edit::Pose {
+                keyframe: k,
+                positions: repaired.positions,
+            },
+        )?;
+        if after > 0 {
+            self.note(
+                format!(
+                    "keyframe {}: {} of {before} flipped triangles repaired; {after} remain (pins may hold a fold)",
+                    nth(k),
+                    before - after
+                ),
+                true,
+            );
+        }
+        Ok(())
+    }
+
+    fn trace(
+        &mut self,
+        tolerance: Option<f64>,
+        settings: PictureSettings,
+        vertices: Option<usize>,
+    ) -> Done {
+        let Some(texture) = self.texture.clone() else {
+            return Err(
+                "there is no picture to trace: open one, or attach one to this mesh".into(),
+            );
+        };
+        let options = settings.options()?;
+        let traced = crate::meshing::picture_outline(&texture.image, &options, tolerance)
+            .map_err(|e| e.to_string())?;
+        let mut loops = loops_of(&traced.outline);
+        if let Some(v) = vertices {
+            loops = crate::meshing::fit_loops_to_vertices(&loops, v).loops;
+        }
+        let mut edits = Vec::new();
+        if settings != self.doc.picture {
+            edits.push(Edit::Picture(settings));
+        }
+        edits.push(Edit::Outline(loops));
+        self.view.drawing = None;
+        self.commit("trace the picture", Edit::Batch(edits))?;
+        if traced.dropped_specks > 0 {
+            self.note(
+                format!(
+                    "{} speck{} left out of the outline (pieces under {}% of the largest piece's area)",
+                    traced.dropped_specks,
+                    if traced.dropped_specks == 1 { "" } else { "s" },
+                    crate::meshing::SPECK_FRACTION * 100.0
+                ),
+                false,
+            );
+        }
+        Ok(())
+    }
+
+    fn outline_remove(&mut self, ring: usize, index: usize) -> Done {
+        let Some(points) = self.doc.outline.get(ring) else {
+            return Err(format!("there is no loop {}", ring + 1));
+        };
+        if points.len() <= 3 && self.view.drawing != Some(ring) {
+            return self.commit("remove a loop", Edit::RemoveLoop { at: ring });
+        }
+        self.commit("remove an outline point", Edit::RemovePoint { ring, index })
+    }
+
+    /// Starts meshing the document's outline in the background.
+    fn mesh_outline(&mut self, loops: Vec<Vec<[f64; 2]>>, vertices: usize) -> Result<Work, String> {
+        if !(MIN_MESH_VERTICES..=MAX_MESH_VERTICES).contains(&vertices) {
+            return Err(format!(
+                "{vertices} vertices: the studio meshes between {MIN_MESH_VERTICES} and {MAX_MESH_VERTICES} (bdmorph mesh makes more)"
+            ));
+        }
+        let loops: Vec<Vec<[f64; 2]>> = loops.into_iter().filter(|l| l.len() >= 3).collect();
+        if loops.is_empty() {
+            return Err("draw or trace a loop of three points or more first".into());
+        }
+        let points: usize = loops.iter().map(Vec::len).sum();
+        if points > MAX_MESH_VERTICES {
+            return Err(format!(
+                "the outline has {points} points: more than the {MAX_MESH_VERTICES} vertices the studio meshes"
+            ));
+        }
+        Ok(Work::Mesh(MeshWork {
+            loops,
+            vertices,
+            picture: self
+                .texture
+                .as_ref()
+                .map(|t| [t.image.width, t.image.height]),
+            replaces: self.engine.rest.clone(),
+        }))
+    }
+
+    /// A new mesh made in the background becomes the document's, the animation carried over.
+    fn meshed(
+        &mut self,
+        outline: Vec<Vec<[f64; 2]>>,
+        meshed: crate::meshing::Meshed,
+        asked: usize,
+        replaces: &PlanarMesh,
+        notes: Vec<String>,
+    ) -> Done {
+        if *replaces != self.engine.rest {
+            return Err("the mesh changed while the new one was made: it was not used".into());
+        }
+        let n = meshed.mesh.positions.len();
+        if n > MAX_MESH_VERTICES {
+            return Err(format!(
+                "the new mesh has {n} vertices: more than the {MAX_MESH_VERTICES} the studio takes (bdmorph mesh makes larger meshes, which the studio opens)"
+            ));
+        }
+        let carried = super::carry::carry(&self.engine.rest, &self.doc.keyframes, &meshed.mesh);
+        let uv = per_vertex_uv(&meshed.texcoords, &meshed.mesh.faces, n)
+            .filter(|_| self.texture.is_some());
+        let mut project = self.doc.clone();
+        project.mesh = super::edit::mesh_data(&meshed.mesh, uv);
+        project.outline = outline;
+        project.keyframes = carried.keyframes;
+        // The first keyframe is the rest shape of the new mesh.
+        project.keyframes[0].positions = meshed.mesh.positions.clone();
+        super::project::check_limits(project.keyframes.len(), n)?;
+        let flipped: Vec<usize> = project
+            .keyframes
+            .iter()
+            .map(|k| super::engine::flipped(&meshed.mesh.faces, &k.positions))
+            .collect();
+        let keys = project.keyframes.len();
+        self.commit(
+            format!("new mesh ({n} vertices)"),
+            Edit::Document(Box::new(project)),
+        )?;
+        self.view.mode = "pose";
+        self.view.drawing = None;
+        for note in notes {
+            self.note(note, false);
+        }
+        let mut said = format!("new mesh: {n} vertices");
+        let off = (n as f64 - asked as f64).abs() / asked as f64;
+        if off > 0.1 {
+            said.push_str(&format!(
+                " for {asked} asked ({})",
+                if n > asked {
+                    "the outline and the smallest angle need that many"
+                } else {
+                    "the outline encloses too little area for more"
+                }
+            ));
+        }
+        if keys > 1 {
+            said.push_str(&format!("; {keys} keyframes carried over"));
+            if carried.outside > 0 {
+                said.push_str(&format!(
+                    ", {} new vertices outside the old mesh placed by its nearest triangles",
+                    carried.outside
+                ));
+            }
+            let with_flips: Vec<String> = flipped
+                .iter()
+                .enumerate()
+                .filter(|(_, &f)| f > 0)
+                .map(|(k, f)| format!("keyframe {} ({f})", nth(k)))
+                .collect();
+            if !with_flips.is_empty() {
+                said.push_str(&format!(
+                    "; flipped triangles in {} (Repair fixes them)",
+                    with_flips.join(", ")
+                ));
+            }
+        }
+        self.note(said, false);
+        Ok(())
+    }
+
+    fn save(&mut self, name: Option<&str>, overwrite: bool) -> Result<PathBuf, String> {
+        let path = match (name, &self.project_file) {
+            (Some(name), _) => {
+                let path = self.workspace.file(name, &[".json"])?;
+                if path.exists() && !overwrite && self.project_file.as_ref() != Some(&path) {
+                    return Err(format!("{name} exists: save over it?"));
+                }
+                path
+            }
+            (None, Some(path)) => path.clone(),
+            (None, None) => return Err("give the project a file name (.json)".into()),
+        };
+        let mut doc = self.doc.clone();
+        // The picture, relative to the project's folder (the workspace).
+        if let (Some(t), Some(dir)) = (&doc.texture, path.parent()) {
+            let absolute = self.workspace.root().join(t);
+            if let Ok(inside) = absolute.strip_prefix(dir) {
+                doc.texture = Some(inside.display().to_string());
+            }
+        }
+        doc.write(&path).map_err(|e| e.to_string())?;
+        self.project_file = Some(path.clone());
+        self.history.mark_saved();
+        self.workspace.clear_autosave();
+        self.bump_state();
+        Ok(path)
+    }
+
+    /// Writes the autosave if the document changed since `since` (a [`Session::version`]);
+    /// the version written. Called off the lock with a copy when the document is large.
+    pub fn autosave_copy(&self) -> Option<(Project, Option<String>, u64)> {
+        self.dirty()
+            .then(|| (self.doc.clone(), self.source.clone(), self.version))
+    }
+
+    fn export(
+        &mut self,
+        format: &str,
+        name: &str,
+        frames: Option<u32>,
+        time: Option<f64>,
+    ) -> Result<Option<Work>, String> {
+        let endings: &[&str] = match format {
+            "gif" => &[".gif"],
+            "mp4" => &[".mp4"],
+            "png" | "still" => &[".png"],
+            "html" => &[".html"],
+            "obj" => &[],
+            other => return Err(format!("unknown export format '{other}'")),
+        };
+        let path = self.workspace.file(name, endings)?;
+        if format == "still" {
+            self.export_still(&path, time)?;
+            self.note(format!("exported {}", path.display()), false);
+            return Ok(None);
+        }
+        if self.doc.keyframes.len() < 2 {
+            return Err("add a second keyframe to export an animation".into());
+        }
+        let count = match frames {
+            Some(f) => f as usize,
+            None => (self.duration() * self.doc.fps).round() as usize + 1,
+        };
+        if count > super::jobs::MAX_EXPORT_FRAMES {
+            return Err(format!(
+                "{count} frames: an export makes at most {}",
+                super::jobs::MAX_EXPORT_FRAMES
+            ));
+        }
+        Ok(Some(Work::Export(ExportWork {
+            format: format.to_owned(),
+            path,
+            frames: count.max(2),
+            project: self.doc.clone(),
+            texture: self.texture.as_ref().map(|t| Arc::new(t.image.clone())),
+        })))
+    }
+
+    /// One frame as a PNG picture (800 pixels square): the animation at `time`, or the
+    /// keyframe shown; drawn with the picture when the project has one, else coloured by
+    /// distortion.
+    fn export_still(&mut self, path: &std::path::Path, time: Option<f64>) -> Done {
+        let positions = match time {
+            Some(t) => {
+                if !(t.is_finite() && t >= 0.0) {
+                    return Err(format!("time {t}: give one of 0 or more seconds"));
+                }
+                self.engine.compute(&self.doc, t.min(self.duration()))?;
+                self.engine.frame.clone()
+            }
+            None => self.current_key().positions.clone(),
+        };
+        self.engine.measure(&positions);
+        let faces = &self.engine.rest.faces;
+        let corner_uv: Option<Vec<[[f64; 2]; 3]>> = self
+            .doc
+            .mesh
+            .texcoords
+            .as_ref()
+            .map(|uv| faces.iter().map(|f| f.map(|v| uv[v as usize])).collect());
+        let texture = self
+            .texture
+            .as_ref()
+            .map(|t| &t.image)
+            .filter(|_| corner_uv.is_some());
+        let shades = match texture {
+            Some(_) => None,
+            None => {
+                let d = &self.engine.distortion;
+                let max = colour::distortion_scale(std::iter::once(d.as_slice()));
+                Some(colour::shade_colours(&colour::distortion_shades(d, max)))
+            }
+        };
+        let drawing = Drawing {
+            faces,
+            corner_uv: corner_uv.as_deref(),
+            texture,
+            face_colours: shades.as_deref(),
+        };
+        let view = Viewport::fit(std::iter::once(positions.as_slice()));
+        let size = ImageSize {
+            width: 800,
+            height: 800,
+        };
+        let image = raster::render(&positions, &drawing, &view, size);
+        let bytes = raster::encode_png(&image).map_err(|e| format!("export: {e}"))?;
+        crate::io::write_bytes_atomic(path, &bytes).map_err(|e| format!("export: {e}"))
+    }
+
+    fn open_work(&self, name: &str) -> Result<Work, String> {
+        if kind_of(name).is_none() {
+            return Err(format!(
+                "{name}: the studio opens pictures (.png, .jpg), meshes (.obj, .off), outlines (.svg, .poly) and projects (.json)"
+            ));
+        }
+        let path = self.workspace.file(name, &[])?;
+        if !path.is_file() {
+            return Err(format!(
+                "{name} is not in {}",
+                self.workspace.root().display()
+            ));
+        }
+        Ok(Work::Open(OpenWork {
+            name: name.to_owned(),
+            path,
+            workspace: self.workspace.root().to_path_buf(),
+            options: OpenOptions {
+                picture: self.doc.picture.clone(),
+                ..OpenOptions::default()
+            },
+        }))
+    }
+
+    fn opened(&mut self, opened: super::open::Opened, name: String) -> Done {
+        if let Some(t) = &opened.texture {
+            self.textures.retain(|old| old.name != t.name);
+            self.textures.push(t.clone());
+        }
+        self.commit(
+            format!("open {name}"),
+            Edit::Document(Box::new(opened.project)),
+        )?;
+        self.project_file = opened.project_file;
+        self.source = Some(name.clone());
+        self.show_keyframe(0);
+        self.view.mode = "pose";
+        self.view.drawing = None;
+        for n in opened.notes {
+            self.note(n, false);
+        }
+        self.note(
+            format!("opened {name} (Undo goes back to what was open before)"),
+            false,
+        );
+        Ok(())
+    }
+
+    fn attach_picture(&mut self, name: &str) -> Done {
+        let path = self.workspace.file(name, &[".png", ".jpg", ".jpeg"])?;
+        let texture = read_texture(&path, name)?;
+        let uv = match &self.doc.mesh.texcoords {
+            Some(uv) => uv.clone(),
+            None => fitted_uv(&self.doc.mesh.positions, &texture.image).0,
+        };
+        let texture = Arc::new(texture);
+        self.textures.retain(|old| old.name != name);
+        self.textures.push(texture);
+        self.commit(
+            format!("picture {name}"),
+            Edit::Texture {
+                texture: Some(name.to_owned()),
+                texcoords: Some(uv),
+            },
+        )
+    }
+
+    fn recover(&mut self, name: &str) -> Done {
+        let (project, source) = self.workspace.recovered_project(name)?;
+        self.commit("restore recovered work", Edit::Document(Box::new(project)))?;
+        self.source = source;
+        self.project_file = None;
+        self.show_keyframe(0);
+        // Restored: it is now this studio's work, autosaved as such.
+        let _ = self.workspace.discard(name);
+        self.recovered = self.workspace.recovered();
+        self.note(
+            "recovered work restored (Undo goes back to what was open before); save it to keep it",
+            false,
+        );
+        Ok(())
+    }
+
+    /// The state as JSON for the pages.
+    pub fn state_json(&self) -> String {
+        let keys: Vec<serde_json::Value> = self
+            .doc
+            .keyframes
+            .iter()
+            .zip(&self.engine.flips)
+            .map(|(k, &flipped)| {
+                serde_json::json!({"time": k.time, "easing": k.easing, "pins": k.pins.len(), "flipped": flipped})
+            })
+            .collect();
+        let job = self.job.as_ref().map(|j| {
+            serde_json::json!({
+                "label": j.label,
+                "done": j.progress.done.load(Ordering::Relaxed),
+                "total": j.progress.total.load(Ordering::Relaxed),
+            })
+        });
+        let shown = match self.view.shown {
+            Shown::Keyframe => serde_json::json!({"keyframe": self.view.current}),
+            Shown::Time(t) => serde_json::json!({"time": t}),
+        };
+        serde_json::json!({
+            "type": "state",
+            "vertices": self.doc.mesh.positions.len(),
+            "faces": self.doc.mesh.faces.len(),
+            "pieces": self.engine.pieces.vertices.len(),
+            "keyframes": keys,
+            "current": self.view.current,
+            "shown": shown,
+            "mode": self.view.mode,
+            "drawing": self.view.drawing,
+            "method": self.doc.method,
+            "fps": self.doc.fps,
+            "duration": self.duration(),
+            "textured": self.texture.is_some() && self.doc.mesh.texcoords.is_some(),
+            "texture_rev": self.revs.texture,
+            "texture_name": self.texture.as_ref().map(|t| t.name.clone()),
+            "picture": self.texture.as_ref().map(|t| [t.image.width, t.image.height]),
+            "picture_settings": self.doc.picture,
+            "anchors": self.engine.anchors,
+            "pin_error": self.engine.pin_error,
+            "path_error": self.engine.path_error,
+            "undo": self.history.last_undo().map(|s| s.label.clone()),
+            "redo": self.history.last_redo().map(|s| s.label.clone()),
+            "history": {"steps": self.history.undo_len(), "dropped": self.history.dropped()},
+            "dirty": self.dirty(),
+            "project": self.project_file.as_ref().and_then(|p| p.file_name()).map(|p| p.to_string_lossy().into_owned()),
+            "source": self.source,
+            "workspace": self.workspace.root().display().to_string(),
+            "job": job,
+            "notes": self.notes,
+            "recovered": self.recovered,
+        })
+        .to_string()
+    }
+
+    /// The shown shape as a binary message tagged `seq`.
+    fn shown_bytes(&mut self, seq: u32) -> Vec<u8> {
+        let fresh = matches!(&self.shown_cache, Some((rev, _)) if *rev == self.revs.shown);
+        if !fresh {
+            let (bytes_kind, time, keyframe, positions) = match self.view.shown {
+                Shown::Keyframe => (
+                    kind::POSE,
+                    self.doc.keyframes[self.view.current].time,
+                    Some(self.view.current),
+                    std::mem::take(&mut self.doc.keyframes[self.view.current].positions),
+                ),
+                Shown::Time(t) => (kind::FRAME, t, None, std::mem::take(&mut self.engine.frame)),
+            };
+            let (worst, flipped) = self.engine.measure(&positions);
+            let bytes = frame_bytes(
+                bytes_kind,
+                0,
+                time,
+                keyframe,
+                &positions,
+                &self.engine.distortion,
+                worst,
+                flipped,
+            );
+            match self.view.shown {
+                Shown::Keyframe => self.doc.keyframes[self.view.current].positions = positions,
+                Shown::Time(_) => self.engine.frame = positions,
+            }
+            self.shown_cache = Some((self.revs.shown, bytes));
+        }
+        let mut bytes = self
+            .shown_cache
+            .as_ref()
+            .map(|(_, b)| b.clone())
+            .unwrap_or_default();
+        if bytes.len() >= 8 {
+            bytes[4..8].copy_from_slice(&seq.to_le_bytes());
+        }
+        bytes
+    }
+
+    /// What a page that has `seen` lacks, in order (mesh, state, pins, outline, the shape
+    /// shown, tagged `seq`); `seen` is brought up to date.
+    pub fn updates(&mut self, seen: &mut Revs, seq: u32) -> Vec<Answer> {
+        let mut out = Vec::new();
+        let now = self.revs;
+        if seen.mesh != now.mesh {
+            out.push(Answer::Binary(mesh_bytes(
+                &self.doc.mesh.positions,
+                &self.doc.mesh.faces,
+                self.doc.mesh.texcoords.as_deref(),
+            )));
+        }
+        if seen.state != now.state || seen.texture != now.texture {
+            out.push(Answer::Text(self.state_json()));
+        }
+        if seen.pins != now.pins || seen.mesh != now.mesh {
+            out.push(Answer::Text(
+                serde_json::json!({"type": "pins", "keyframe": self.view.current, "pins": self.current_key().pins})
+                    .to_string(),
+            ));
+        }
+        if seen.outline != now.outline {
+            out.push(Answer::Text(
+                serde_json::json!({"type": "outline", "loops": self.doc.outline}).to_string(),
+            ));
+        }
+        if seen.shown != now.shown || seen.mesh != now.mesh {
+            out.push(Answer::Binary(self.shown_bytes(seq)));
+        }
+        *seen = now;
+        out
+    }
+
+    /// The running job, if any.
+    pub fn job(&self) -> Option<&Job> {
+        self.job.as_ref()
+    }
+
+    /// Marks the progress of the running job as changed (for the pages).
+    pub fn job_progressed(&mut self) {
+        if self.job.is_some() {
+            self.bump_state();
+        }
+    }
+
+    fn start(&mut self, work: Work) -> Result<(Work, Arc<Progress>), String> {
+        if let Some(job) = &self.job {
+            return Err(format!(
+                "{} is running: wait for it or cancel it",
+                job.label
+            ));
+        }
+        let progress = Arc::new(Progress::default());
+        self.job = Some(Job {
+            label: work.label(),
+            progress: progress.clone(),
+        });
+        self.bump_state();
+        Ok((work, progress))
+    }
+
+    /// A background job ended with `result`: its outcome applied, or its failure noted.
+    pub fn finish(&mut self, result: Result<Outcome, String>) {
+        let label = self.job.take().map(|j| j.label).unwrap_or_default();
+        self.bump_state();
+        let applied = match result {
+            Err(e) if e == "cancelled" => {
+                self.note(format!("{label}: cancelled"), false);
+                return;
+            }
+            Err(e) => Err(e),
+            Ok(Outcome::Exported { path, frames }) => {
+                let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+                self.note(
+                    format!(
+                        "exported {} ({frames} frames{})",
+                        path.display(),
+                        if size > 0 {
+                            format!(", {:.1} MB", size as f64 / 1e6)
+                        } else {
+                            String::new()
+                        }
+                    ),
+                    false,
+                );
+                Ok(())
+            }
+            Ok(Outcome::Meshed {
+                outline,
+                meshed,
+                asked,
+                replaces,
+                notes,
+            }) => self.meshed(outline, *meshed, asked, &replaces, notes),
+            Ok(Outcome::Opened { opened, name }) => self.opened(*opened, name),
+        };
+        if let Err(e) = applied {
+            self.note(format!("{label}: {e}"), true);
+        }
+    }
+
+    /// Runs work now, on this thread (for tests and benchmarks: the server runs it in the
+    /// background).
+    pub fn run_now(&mut self, work: (Work, Arc<Progress>)) {
+        let (work, progress) = work;
+        let result = work.run(&progress, 1);
+        self.finish(result);
+    }
+
+    /// Carries out a request: what only the asking page gets, and work to start. A refused
+    /// request changes nothing and answers with the reason.
+    pub fn handle(&mut self, request: Request) -> Reply {
+        let seq = match &request {
+            Request::Drag { seq, .. } | Request::Scrub { seq, .. } => Some(*seq),
+            _ => None,
+        };
+        match self.try_handle(request) {
+            Ok(reply) => reply,
+            Err(e) => Reply {
+                answers: vec![Answer::Text(
+                    serde_json::json!({"type": "error", "message": e, "seq": seq}).to_string(),
+                )],
+                work: None,
+            },
+        }
+    }
+
+    /// Handles an upload (a binary message): the file stored in the workspace, then opened,
+    /// attached or kept.
+    pub fn handle_upload(&mut self, message: &[u8]) -> Reply {
+        let result = (|| -> Result<Reply, String> {
+            let (header, bytes) = upload(message)?;
+            let name = self.workspace.store(&header.name, bytes)?;
+            self.note(
+                format!("{} stored in the workspace as {name}", header.name),
+                false,
+            );
+            match header.then.as_str() {
+                "open" => self.try_handle(Request::Open { name }),
+                "attach" => self.try_handle(Request::AttachPicture { name }),
+                "store" => Ok(Reply::default()),
+                other => Err(format!("unknown upload action '{other}'")),
+            }
+        })();
+        result.unwrap_or_else(|e| Reply {
+            answers: vec![Answer::Text(
+                serde_json::json!({"type": "error", "message": e}).to_string(),
+            )],
+            work: None,
+        })
+    }
+
+    fn try_handle(&mut self, request: Request) -> Result<Reply, String> {
+        let mut reply = Reply::default();
+        if !matches!(request, Request::Drag { .. } | Request::DragEnd) {
+            self.dragging = false;
+        }
+        match request {
+            Request::Hello => {}
+            Request::Select { keyframe } => {
+                if keyframe >= self.doc.keyframes.len() {
+                    return Err(format!("there is no keyframe {}", nth(keyframe)));
+                }
+                self.show_keyframe(keyframe);
+            }
+            Request::Mode { mode } => {
+                self.view.mode = match mode.as_str() {
+                    "pose" => "pose",
+                    "outline" => "outline",
+                    other => return Err(format!("unknown mode '{other}'")),
+                };
+                if self.view.mode == "pose" {
+                    self.view.drawing = None;
+                }
+                self.bump_state();
+            }
+            Request::PinAdd { vertex } => self.pin_add(vertex)?,
+            Request::PinRemove { vertex } => {
+                let k = self.view.current;
+                let mut pins = self.current_key().pins.clone();
+                let Some(at) = pins.iter().position(|&v| v == vertex) else {
+                    return Err("that vertex has no pin".into());
+                };
+                pins.remove(at);
+                self.commit(
+                    format!("unpin on keyframe {}", nth(k)),
+                    Edit::Pins { keyframe: k, pins },
+                )?;
+            }
+            Request::PinsClear => {
+                let k = self.view.current;
+                if self.current_key().pins.is_empty() {
+                    return Err("there are no pins to clear".into());
+                }
+                self.commit(
+                    format!("clear the pins of keyframe {}", nth(k)),
+                    Edit::Pins {
+                        keyframe: k,
+                        pins: Vec::new(),
+                    },
+                )?;
+            }
+            Request::Drag { pins, targets, .. } => self.drag(&pins, &targets)?,
+            Request::DragEnd => self.dragging = false,
+            Request::Method {
+                name,
+                weight,
+                max_distortion,
+            } => self.set_method(&name, weight, max_distortion)?,
+            Request::Undo => self.undo_redo(true)?,
+            Request::Redo => self.undo_redo(false)?,
+            Request::Reset => {
+                let k = self.view.current;
+                let rest = self.engine.rest.positions.clone();
+                if self.current_key().positions == rest {
+                    return Err(format!("keyframe {} is at rest already", nth(k)));
+                }
+                self.commit(
+                    format!("reset keyframe {}", nth(k)),
+                    Edit::Pose {
+                        keyframe: k,
+                        positions: rest,
+                    },
+                )?;
+            }
+            Request::Repair { keyframe } => self.repair(keyframe)?,
+            Request::AddKeyframe { time, copy } => self.add_keyframe(time, copy)?,
+            Request::DeleteKeyframe { keyframe } => {
+                self.commit(
+                    format!("delete keyframe {}", nth(keyframe)),
+                    Edit::Delete { at: keyframe },
+                )?;
+            }
+            Request::MoveKeyframe { keyframe, to } => {
+                self.commit(
+                    format!("move keyframe {} to place {}", nth(keyframe), nth(to)),
+                    Edit::Reorder { from: keyframe, to },
+                )?;
+            }
+            Request::SetTime { keyframe, time } => {
+                self.commit(
+                    format!("time of keyframe {}", nth(keyframe)),
+                    Edit::Time { keyframe, time },
+                )?;
+            }
+            Request::SetEasing { keyframe, easing } => {
+                self.commit(
+                    format!("easing after keyframe {}", nth(keyframe)),
+                    Edit::Easing { keyframe, easing },
+                )?;
+            }
+            Request::FrameToKeyframe { time } => self.frame_to_keyframe(time)?,
+            Request::LoadKeyframe { name, text, time } => self.load_keyframe(&name, &text, time)?,
+            Request::TraceOutline {
+                tolerance,
+                background,
+                threshold,
+                vertices,
+            } => self.trace(
+                tolerance,
+                PictureSettings {
+                    background,
+                    threshold,
+                },
+                vertices,
+            )?,
+            Request::OutlineSet { loops } => {
+                self.view.drawing = None;
+                let label = if loops.is_empty() {
+                    "clear the outline"
+                } else {
+                    "set the outline"
+                };
+                self.commit(label, Edit::Outline(loops))?;
+            }
+            Request::OutlineNewLoop => {
+                let at = self.doc.outline.len();
+                self.commit(
+                    "new loop",
+                    Edit::AddLoop {
+                        at,
+                        points: Vec::new(),
+                    },
+                )?;
+                self.view.drawing = Some(at);
+                self.bump_state();
+            }
+            Request::OutlinePoint { point } => {
+                let Some(ring) = self.view.drawing else {
+                    return Err("no loop is being drawn: start one with New loop".into());
+                };
+                let index = self.doc.outline[ring].len();
+                self.commit("outline point", Edit::InsertPoint { ring, index, point })?;
+                self.view.drawing = Some(ring);
+                self.bump_state();
+            }
+            Request::OutlineClose => {
+                self.view.drawing = None;
+                self.bump_state();
+            }
+            Request::OutlineMove { ring, index, to } => {
+                self.commit("move an outline point", Edit::MovePoint { ring, index, to })?;
+            }
+            Request::OutlineInsert { ring, index, point } => {
+                self.commit(
+                    "add an outline point",
+                    Edit::InsertPoint { ring, index, point },
+                )?;
+            }
+            Request::OutlineRemove { ring, index } => self.outline_remove(ring, index)?,
+            Request::MeshOutline { vertices } => {
+                let work = self.mesh_outline(self.doc.outline.clone(), vertices)?;
+                reply.work = Some(self.start(work)?);
+            }
+            Request::ImportOutline {
+                name,
+                text,
+                vertices,
+            } => {
+                let lower = name.to_ascii_lowercase();
+                let outline = if lower.ends_with(".svg") {
+                    crate::meshing::parse_svg(&text, None)
+                } else if lower.ends_with(".poly") {
+                    crate::meshing::parse_poly(&text)
+                } else {
+                    return Err(format!(
+                        "{name}: outlines are read from .svg or .poly files"
+                    ));
+                }
+                .map_err(|e| format!("{name}: {e}"))?;
+                let work = self.mesh_outline(loops_of(&outline), vertices)?;
+                reply.work = Some(self.start(work)?);
+            }
+            Request::Fps { fps } => {
+                if fps != self.doc.fps {
+                    self.commit("frame rate", Edit::Fps(fps))?;
+                }
+            }
+            Request::Scrub { time, .. } => self.scrub(time)?,
+            Request::Save { name, overwrite } => {
+                let path = self.save(name.as_deref(), overwrite.unwrap_or(false))?;
+                self.note(format!("saved {}", path.display()), false);
+            }
+            Request::Export {
+                format,
+                name,
+                frames,
+                time,
+            } => {
+                if let Some(work) = self.export(&format, &name, frames, time)? {
+                    reply.work = Some(self.start(work)?);
+                }
+            }
+            Request::Cancel => match &self.job {
+                Some(job) => job.progress.cancel.store(true, Ordering::Relaxed),
+                None => return Err("nothing is running".into()),
+            },
+            Request::ListFiles => {
+                reply.answers.push(Answer::Text(
+                    serde_json::json!({
+                        "type": "files",
+                        "files": self.workspace.list(),
+                        "recovered": self.workspace.recovered(),
+                        "workspace": self.workspace.root().display().to_string(),
+                    })
+                    .to_string(),
+                ));
+            }
+            Request::Open { name } => {
+                if kind_of(&name) == Some("outline") {
+                    let path = self.workspace.file(&name, &[])?;
+                    let text =
+                        std::fs::read_to_string(&path).map_err(|e| format!("{name}: {e}"))?;
+                    let vertices = self.doc.mesh.positions.len().clamp(MIN_MESH_VERTICES, 2000);
+                    return self.try_handle(Request::ImportOutline {
+                        name,
+                        text,
+                        vertices,
+                    });
+                }
+                let work = self.open_work(&name)?;
+                reply.work = Some(self.start(work)?);
+            }
+            Request::AttachPicture { name } => self.attach_picture(&name)?,
+            Request::Recover { name } => self.recover(&name)?,
+            Request::Discard { name } => {
+                self.workspace.discard(&name)?;
+                self.recovered = self.workspace.recovered();
+                self.bump_state();
+            }
+            Request::Dismiss { note } => {
+                self.notes.retain(|n| n.id != note);
+                self.bump_state();
+            }
+        }
+        Ok(reply)
+    }
 }

@@ -1,0 +1,479 @@
+//! What the studio derives from its document to answer quickly: the rest mesh and its pieces,
+//! the [`Deformer`] of the keyframe being posed (with its pins set, so a drag costs one solve),
+//! the compiled [`Path`] through the keyframes for scrubbing, and each keyframe's flipped
+//! triangles. All of it is a cache: rebuilt from the document when what it depends on changes
+//! ([`Engine::sync`]), never a second copy of the document's data to keep in step by hand.
+//!
+//! Pieces: a pin may go on any piece of the mesh; a piece without a pin keeps its place (every
+//! one of its vertices held where the keyframe has it), so a mesh of several pieces poses as
+//! soon as one piece has a pin.
+
+use super::edit::Touched;
+use super::project::{MethodData, Project};
+use crate::deform::{Deformer, DragReport, KvfOptions, Method};
+use crate::distortion::RestShape;
+use crate::mesh::PlanarMesh;
+use crate::{Easing, MorphOptions, Path, PathOptions};
+
+/// The posing method a project names.
+pub fn method_of(m: &MethodData) -> Result<Method, String> {
+    m.check()?;
+    Ok(match m.name.as_str() {
+        "kvf" => Method::Kvf(KvfOptions::default().with_weight(m.weight)),
+        "arap" => Method::arap(),
+        _ => Method::bounded(m.max_distortion),
+    })
+}
+
+/// The pieces of a mesh (triangles connected through shared vertices).
+#[derive(Clone, Debug)]
+pub struct Pieces {
+    /// Each vertex's piece (`u32::MAX` for a vertex no triangle uses).
+    pub of: Vec<u32>,
+    /// Each piece's vertices.
+    pub vertices: Vec<Vec<u32>>,
+}
+
+impl Pieces {
+    /// The pieces of `mesh`, numbered in the order of their first triangle.
+    pub fn of(mesh: &PlanarMesh) -> Pieces {
+        let n = mesh.positions.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                parent[v as usize] = parent[parent[v as usize] as usize];
+                v = parent[v as usize];
+            }
+            v
+        }
+        for f in &mesh.faces {
+            for k in 1..3 {
+                let (a, b) = (find(&mut parent, f[0]), find(&mut parent, f[k]));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+        let mut number = vec![u32::MAX; n];
+        let mut of = vec![u32::MAX; n];
+        let mut vertices: Vec<Vec<u32>> = Vec::new();
+        for f in &mesh.faces {
+            for &v in f {
+                if of[v as usize] != u32::MAX {
+                    continue;
+                }
+                let root = find(&mut parent, v) as usize;
+                if number[root] == u32::MAX {
+                    number[root] = vertices.len() as u32;
+                    vertices.push(Vec::new());
+                }
+                of[v as usize] = number[root];
+                vertices[number[root] as usize].push(v);
+            }
+        }
+        Pieces { of, vertices }
+    }
+
+    /// The vertices of pieces without any of `pins`: held in place.
+    pub fn held(&self, pins: &[u32]) -> Vec<u32> {
+        let mut pinned = vec![false; self.vertices.len()];
+        for &v in pins {
+            if let Some(&p) = self.of.get(v as usize) {
+                if let Some(slot) = pinned.get_mut(p as usize) {
+                    *slot = true;
+                }
+            }
+        }
+        self.vertices
+            .iter()
+            .zip(&pinned)
+            .filter(|(_, &p)| !p)
+            .flat_map(|(v, _)| v.iter().copied())
+            .collect()
+    }
+}
+
+/// Triangles with non-positive signed area in `positions`.
+pub fn flipped(faces: &[[u32; 3]], positions: &[[f64; 2]]) -> usize {
+    faces
+        .iter()
+        .filter(|f| {
+            let [a, b, c] = f.map(|v| positions[v as usize]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) <= 0.0
+        })
+        .count()
+}
+
+/// The engine's caches for one document.
+pub struct Engine {
+    /// The rest mesh.
+    pub rest: PlanarMesh,
+    shape: RestShape,
+    deformer: Deformer,
+    /// The keyframe and pins the deformer holds (`None`: no pins set).
+    loaded: Option<(usize, Vec<u32>)>,
+    /// Why the keyframe's pins could not be set, if they could not.
+    pub pin_error: Option<String>,
+    /// The held vertices (pieces without a pin), after the pins in the deformer's order.
+    held: Vec<u32>,
+    /// Whether each vertex is held.
+    is_held: Vec<bool>,
+    /// The mesh's pieces.
+    pub pieces: Pieces,
+    /// Each piece's anchor edge: where the morph places and turns it.
+    pub anchors: Vec<[u32; 2]>,
+    path: Option<Path>,
+    /// Why the path could not be compiled, if it could not.
+    pub path_error: Option<String>,
+    /// Flipped triangles of each keyframe.
+    pub flips: Vec<usize>,
+    targets: Vec<[f64; 2]>,
+    /// A frame's positions (scratch).
+    pub frame: Vec<[f64; 2]>,
+    /// Each triangle's distortion of the last measured shape.
+    pub distortion: Vec<f64>,
+}
+
+impl std::fmt::Debug for Engine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Engine")
+            .field("vertices", &self.rest.positions.len())
+            .field("pieces", &self.pieces.vertices.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Engine {
+    /// The caches of `doc`, posing keyframe `current`.
+    pub fn new(doc: &Project, current: usize) -> Result<Engine, String> {
+        let rest = doc.rest();
+        let deformer = Deformer::new(&rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+        let anchors = Path::new(&[rest.clone(), rest.clone()])
+            .map_err(|e| e.to_string())?
+            .structure()
+            .pieces
+            .iter()
+            .map(|p| p.anchor_edge)
+            .collect();
+        let (n, m) = (rest.positions.len(), rest.faces.len());
+        let mut engine = Engine {
+            shape: RestShape::new(&rest.positions, &rest.faces),
+            pieces: Pieces::of(&rest),
+            frame: rest.positions.clone(),
+            distortion: vec![1.0; m],
+            rest,
+            deformer,
+            loaded: None,
+            pin_error: None,
+            held: Vec::new(),
+            is_held: vec![false; n],
+            anchors,
+            path: None,
+            path_error: None,
+            flips: Vec::new(),
+            targets: Vec::new(),
+        };
+        engine.count_flips(doc, None);
+        engine.load(doc, current, true)?;
+        Ok(engine)
+    }
+
+    fn count_flips(&mut self, doc: &Project, only: Option<usize>) {
+        match only {
+            Some(k) if self.flips.len() == doc.keyframes.len() => {
+                self.flips[k] = flipped(&self.rest.faces, &doc.keyframes[k].positions);
+            }
+            _ => {
+                self.flips = doc
+                    .keyframes
+                    .iter()
+                    .map(|k| flipped(&self.rest.faces, &k.positions))
+                    .collect();
+            }
+        }
+    }
+
+    /// Loads keyframe `k`'s pose and pins into the deformer (factoring only when the pins
+    /// differ from those it holds, or `refactor`). A failure to factor is kept in
+    /// [`Engine::pin_error`] and returned.
+    pub fn load(&mut self, doc: &Project, k: usize, refactor: bool) -> Result<(), String> {
+        let key = &doc.keyframes[k];
+        self.deformer
+            .set_positions(&key.positions)
+            .map_err(|e| e.to_string())?;
+        let same = matches!(&self.loaded, Some((at, pins)) if *at == k && *pins == key.pins);
+        if same && !refactor {
+            return Ok(());
+        }
+        self.loaded = None;
+        self.pin_error = None;
+        if key.pins.is_empty() {
+            self.held.clear();
+            self.is_held.iter_mut().for_each(|h| *h = false);
+            self.loaded = Some((k, Vec::new()));
+            return Ok(());
+        }
+        self.held = self.pieces.held(&key.pins);
+        self.is_held.iter_mut().for_each(|h| *h = false);
+        for &v in &self.held {
+            self.is_held[v as usize] = true;
+        }
+        let mut all = key.pins.clone();
+        all.extend_from_slice(&self.held);
+        match self.deformer.set_pins(&all) {
+            Ok(()) => {
+                self.loaded = Some((k, key.pins.clone()));
+                Ok(())
+            }
+            Err(e) => {
+                let why = format!(
+                    "these pins cannot be posed with: {}",
+                    people(&e.to_string())
+                );
+                self.pin_error = Some(why.clone());
+                Err(why)
+            }
+        }
+    }
+
+    /// Brings the caches in step with `doc` after an edit touched it; `current` is the
+    /// keyframe being posed. Fails when the edit's result cannot be posed (the caller
+    /// undoes the edit).
+    pub fn sync(&mut self, doc: &Project, touched: Touched, current: usize) -> Result<(), String> {
+        if touched.mesh {
+            *self = Engine::new(doc, current)?;
+            return Ok(());
+        }
+        if touched.method {
+            let mut deformer =
+                Deformer::new(&self.rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+            deformer
+                .set_positions(&doc.keyframes[current].positions)
+                .map_err(|e| e.to_string())?;
+            let previous = std::mem::replace(&mut self.deformer, deformer);
+            if let Err(e) = self.load(doc, current, true) {
+                self.deformer = previous;
+                self.loaded = None;
+                return Err(e);
+            }
+        }
+        if touched.keyframes || touched.pose.is_some() {
+            self.path = None;
+            self.path_error = None;
+        }
+        if touched.keyframes {
+            self.count_flips(doc, None);
+        } else if let Some(k) = touched.pose {
+            self.count_flips(doc, Some(k));
+        }
+        // The pins are factored again only when they differ from those loaded.
+        self.load(doc, current, false)
+    }
+
+    /// Whether the keyframe being posed has pins set in the deformer.
+    pub fn pinned(&self) -> bool {
+        matches!(&self.loaded, Some((_, pins)) if !pins.is_empty())
+    }
+
+    /// Moves the pins of keyframe `k` (the one loaded) to `targets` and writes the pose into
+    /// `doc`. The pose is checked before it is kept: every point finite, no triangle
+    /// collapsed, not mirrored; otherwise the keyframe keeps its pose and the drag is refused.
+    pub fn drag(
+        &mut self,
+        doc: &mut Project,
+        k: usize,
+        targets: &[[f64; 2]],
+    ) -> Result<DragReport, String> {
+        if let Some(why) = &self.pin_error {
+            return Err(why.clone());
+        }
+        self.targets.clear();
+        self.targets.extend_from_slice(targets);
+        let key = &doc.keyframes[k];
+        self.targets
+            .extend(self.held.iter().map(|&v| key.positions[v as usize]));
+        let result = self.deformer.drag(&self.targets);
+        let bad = match &result {
+            Err(e) => Some(people(&e.to_string())),
+            Ok(_) => {
+                let pose = PlanarMesh {
+                    positions: self.deformer.positions().to_vec(),
+                    faces: self.rest.faces.clone(),
+                };
+                match pose.validate_allowing_inverted() {
+                    Ok(_) => None,
+                    Err(crate::MeshError::NonFinite { .. }) => Some(
+                        "the handles are too far apart for the mesh to follow (the pose would not be finite)"
+                            .to_owned(),
+                    ),
+                    Err(crate::MeshError::Degenerate { .. }) => {
+                        Some("the pose would collapse a triangle".to_owned())
+                    }
+                    Err(crate::MeshError::Mirrored { .. }) => {
+                        Some("the pose would turn the mesh inside out".to_owned())
+                    }
+                    Err(e) => Some(people(&e.to_string())),
+                }
+            }
+        };
+        if let Some(why) = bad {
+            // The keyframe keeps its pose; the deformer goes back to it.
+            let _ = self.deformer.set_positions(&doc.keyframes[k].positions);
+            return Err(format!("the drag was not kept: {why}"));
+        }
+        let report = result.map_err(|e| e.to_string())?;
+        // Held pieces keep their places exactly (a soft hold moves them by round-off).
+        let key = &mut doc.keyframes[k].positions;
+        for (v, p) in self.deformer.positions().iter().enumerate() {
+            if self.pieces.of[v] != u32::MAX && !self.is_held[v] {
+                key[v] = *p;
+            }
+        }
+        if !self.held.is_empty() {
+            let _ = self.deformer.set_positions(key);
+        }
+        self.path = None;
+        self.path_error = None;
+        self.flips[k] = report.flipped_triangles;
+        Ok(report)
+    }
+
+    /// The compiled path through the keyframes (compiled again after any change). Keyframes
+    /// with flipped triangles morph as the command line's `--allow-inverted` does.
+    fn path(&mut self, doc: &Project) -> Result<&mut Path, String> {
+        if doc.keyframes.len() < 2 {
+            return Err("add a second keyframe to play".into());
+        }
+        if self.path.is_none() {
+            let meshes: Vec<PlanarMesh> = doc
+                .keyframes
+                .iter()
+                .map(|k| PlanarMesh {
+                    positions: k.positions.clone(),
+                    faces: self.rest.faces.clone(),
+                })
+                .collect();
+            let path = path_of(doc, &meshes);
+            match path {
+                Ok(p) => self.path = Some(p),
+                Err(e) => {
+                    self.path_error = Some(e.clone());
+                    return Err(e);
+                }
+            }
+        }
+        self.path.as_mut().ok_or_else(|| "no path".to_owned())
+    }
+
+    /// The animation at `time` seconds (clamped to it) into [`Engine::frame`]; the time used.
+    pub fn compute(&mut self, doc: &Project, time: f64) -> Result<f64, String> {
+        let duration = doc.keyframes.last().map_or(0.0, |k| k.time);
+        let time = if time.is_finite() {
+            time.clamp(0.0, duration)
+        } else {
+            0.0
+        };
+        let t = if duration > 0.0 { time / duration } else { 0.0 };
+        let mut frame = std::mem::take(&mut self.frame);
+        let result = self
+            .path(doc)
+            .and_then(|p| p.frame_into(t, &mut frame).map_err(|e| e.to_string()));
+        self.frame = frame;
+        result?;
+        Ok(time)
+    }
+
+    /// Measures `positions` (each triangle's distortion into [`Engine::distortion`]); the
+    /// largest distortion and the flipped triangles.
+    pub fn measure(&mut self, positions: &[[f64; 2]]) -> (f64, usize) {
+        let worst = self.shape.distortion_into(positions, &mut self.distortion);
+        let flipped = self.distortion.iter().filter(|d| d.is_infinite()).count();
+        (worst, flipped)
+    }
+
+    /// The user's pins' vertices and the held ones, as the deformer has them.
+    pub fn held(&self) -> &[u32] {
+        &self.held
+    }
+}
+
+/// The path through `meshes` (the keyframes' poses) with the document's times and easings.
+pub fn path_of(doc: &Project, meshes: &[PlanarMesh]) -> Result<Path, String> {
+    let keys = &doc.keyframes;
+    let durations: Vec<f64> = keys.windows(2).map(|w| w[1].time - w[0].time).collect();
+    let easings: Vec<Easing> = keys[..keys.len() - 1]
+        .iter()
+        .map(|k| k.easing.parse().unwrap_or(Easing::Linear))
+        .collect();
+    let options = PathOptions::default()
+        .with_durations(durations)
+        .with_easings(easings)
+        .with_morph(MorphOptions::default().with_allow_inverted(true));
+    Path::with_options(meshes, options).map_err(|e| people(&e.to_string()))
+}
+
+/// A library message in the page's words: keyframes and vertices counted from 1, no
+/// command-line flags.
+pub fn people(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    // "keyframe 1 (0-based)" -> "keyframe 2"; "vertex 2602 (0-based)" -> "a vertex".
+    while let Some(at) = rest.find(" (0-based)") {
+        let (before, after) = rest.split_at(at);
+        let digits = before.len() - before.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+        let (head, number) = before.split_at(before.len() - digits);
+        match (head.strip_suffix("keyframe "), number.parse::<u64>()) {
+            (Some(h), Ok(k)) => {
+                out.push_str(h);
+                out.push_str(&format!("keyframe {}", k + 1));
+            }
+            _ => match head.trim_end().rsplit_once(' ') {
+                Some((h, word)) if !number.is_empty() => {
+                    out.push_str(h);
+                    out.push_str(&format!(" a {word}"));
+                }
+                _ => out.push_str(before),
+            },
+        }
+        rest = &after[" (0-based)".len()..];
+    }
+    out.push_str(rest);
+    out.replace("; morphs with --allow-inverted", "")
+        .replace(" (--allow-inverted)", "")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate;
+
+    #[test]
+    fn messages_count_from_one_and_name_no_vertex_numbers() {
+        assert_eq!(
+            people("keyframe 1 (0-based): 2 of 3175 triangles are clockwise"),
+            "keyframe 2: 2 of 3175 triangles are clockwise"
+        );
+        assert_eq!(
+            people("the piece holding vertex 2602 (0-based) has no pin"),
+            "the piece holding a vertex has no pin"
+        );
+        assert_eq!(people("plain"), "plain");
+    }
+
+    #[test]
+    fn pieces_without_pins_are_held() {
+        // Two disks side by side.
+        let a = generate::disk(3, 0.1);
+        let n = a.positions.len() as u32;
+        let mut mesh = a.clone();
+        mesh.positions
+            .extend(a.positions.iter().map(|p| [p[0] + 5.0, p[1]]));
+        mesh.faces.extend(a.faces.iter().map(|f| f.map(|v| v + n)));
+        let pieces = Pieces::of(&mesh);
+        assert_eq!(pieces.vertices.len(), 2);
+        let held = pieces.held(&[0]);
+        assert_eq!(held.len(), n as usize);
+        assert!(held.iter().all(|&v| v >= n));
+        assert!(pieces.held(&[0, n]).is_empty());
+    }
+}

@@ -1,0 +1,289 @@
+//! Opening a file as a studio document: a project (`.json`), a mesh (`.obj`, `.off`) with the
+//! picture of the same name beside it (or one given), or a picture (`.png`, `.jpg`), meshed by
+//! its subject. Pictures without transparency are told from their background by its colour
+//! (`auto`: the colour of the picture's border) unless settings say otherwise.
+//!
+//! What cannot be used is said, not fatal where the rest can be: a project whose picture is
+//! missing opens untextured, with a note naming both files.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::project::{PictureSettings, Project};
+use crate::render::{raster, Image};
+
+/// A picture drawn on the mesh, as decoded and as the page gets it.
+#[derive(Debug)]
+pub struct Texture {
+    /// Its file (as the document names it).
+    pub name: String,
+    /// The pixels.
+    pub image: Image,
+    /// The file's bytes (served to the page as they are).
+    pub bytes: Vec<u8>,
+    /// Their media type.
+    pub content_type: &'static str,
+}
+
+/// Reads a picture file as a texture named `name`.
+pub fn read_texture(path: &Path, name: &str) -> Result<Texture, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let image = raster::decode_image(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    let content_type = if bytes.starts_with(b"\x89PNG") {
+        "image/png"
+    } else {
+        "image/jpeg"
+    };
+    Ok(Texture {
+        name: name.to_owned(),
+        image,
+        bytes,
+        content_type,
+    })
+}
+
+/// A document opened from a file.
+#[derive(Debug)]
+pub struct Opened {
+    /// The document.
+    pub project: Project,
+    /// Its picture, if it has one that could be read.
+    pub texture: Option<Arc<Texture>>,
+    /// Where a plain save writes (a project file), if anywhere.
+    pub project_file: Option<PathBuf>,
+    /// What was said about it (a missing picture, specks dropped, the background taken).
+    pub notes: Vec<String>,
+}
+
+/// Whether any pixel of `image` is less than opaque.
+fn has_transparency(image: &Image) -> bool {
+    image.rgba.chunks_exact(4).any(|p| p[3] < 255)
+}
+
+/// The settings a picture is meshed with: `given`, or for an opaque picture without settings
+/// the border's colour as background (with a note).
+pub fn picture_settings(
+    image: &Image,
+    given: &PictureSettings,
+    notes: &mut Vec<String>,
+    shown: &str,
+) -> PictureSettings {
+    if given.background.is_some() || given.threshold.is_some() || has_transparency(image) {
+        return given.clone();
+    }
+    notes.push(format!(
+        "{shown} has no transparency: its subject was told from the colour of its border (background auto); change it in Outline mode"
+    ));
+    PictureSettings {
+        background: Some("auto".into()),
+        threshold: None,
+    }
+}
+
+/// Texture coordinates per vertex from per-corner ones (`corners` parallel to `faces`), when
+/// every corner of each vertex has the same one (no seams); `None` otherwise.
+pub fn per_vertex_uv(
+    t: &crate::io::TexCoords,
+    faces: &[[u32; 3]],
+    n: usize,
+) -> Option<Vec<[f64; 2]>> {
+    if t.corners.len() != faces.len() {
+        return None;
+    }
+    let mut uv: Vec<Option<[f64; 2]>> = vec![None; n];
+    for (face, corners) in faces.iter().zip(&t.corners) {
+        for (&v, &c) in face.iter().zip(corners) {
+            let value = *t.uv.get(c as usize)?;
+            match uv.get_mut(v as usize)? {
+                Some(seen) if *seen != value => return None,
+                slot => *slot = Some(value),
+            }
+        }
+    }
+    uv.into_iter().map(|u| u.or(Some([0.0, 0.0]))).collect()
+}
+
+/// Texture coordinates that lay `image` over a mesh without its own: the picture's pixels when
+/// the mesh lies within them (a mesh made in the picture's pixel frame, y up), else the mesh's
+/// bounding box stretched over the picture. Also whether it was by pixels.
+pub fn fitted_uv(positions: &[[f64; 2]], image: &Image) -> (Vec<[f64; 2]>, bool) {
+    let (w, h) = (f64::from(image.width), f64::from(image.height));
+    let inside = positions
+        .iter()
+        .all(|p| (0.0..=w).contains(&p[0]) && (0.0..=h).contains(&p[1]));
+    let (lo, hi) = positions.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    let uv = positions
+        .iter()
+        .map(|p| {
+            if inside {
+                [p[0] / w, p[1] / h]
+            } else {
+                [
+                    (p[0] - lo[0]) / (hi[0] - lo[0]).max(f64::MIN_POSITIVE),
+                    (p[1] - lo[1]) / (hi[1] - lo[1]).max(f64::MIN_POSITIVE),
+                ]
+            }
+        })
+        .collect();
+    (uv, inside)
+}
+
+/// How to open a file.
+#[derive(Clone, Debug, Default)]
+pub struct OpenOptions {
+    /// For a picture: how its subject is told from its background.
+    pub picture: PictureSettings,
+    /// For a mesh: the picture to draw on it (else the one of the same name beside it).
+    pub texture: Option<PathBuf>,
+    /// For a picture: keep specks (pieces far smaller than the subject).
+    pub keep_specks: bool,
+}
+
+/// The name a file is kept under in a document: relative to `workspace` when inside it.
+pub fn name_in(workspace: &Path, file: &Path) -> String {
+    let absolute = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
+    match absolute.strip_prefix(workspace) {
+        Ok(inside) => inside.display().to_string(),
+        Err(_) => absolute.display().to_string(),
+    }
+}
+
+/// Opens `file` (see the [module docs](self)); textures are named relative to `workspace`.
+pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Opened, String> {
+    let shown = file.display().to_string();
+    let ext = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let mut notes = Vec::new();
+    match ext.as_str() {
+        "json" => {
+            let mut project = Project::read(file).map_err(|e| format!("{shown}: {e}"))?;
+            let texture = match project.texture.clone() {
+                Some(t) => {
+                    let path = file.parent().unwrap_or(Path::new(".")).join(&t);
+                    let name = name_in(workspace, &path);
+                    match read_texture(&path, &name) {
+                        Ok(texture) => {
+                            project.texture = Some(name);
+                            Some(Arc::new(texture))
+                        }
+                        Err(e) => {
+                            notes.push(format!(
+                                "{shown} opened without its picture: {} could not be read ({e})",
+                                path.display()
+                            ));
+                            None
+                        }
+                    }
+                }
+                None => None,
+            };
+            Ok(Opened {
+                project,
+                texture,
+                project_file: Some(file.to_path_buf()),
+                notes,
+            })
+        }
+        "obj" | "off" => {
+            let read = crate::MeshFile::read(file).map_err(|e| e.to_string())?;
+            let planar = read.planar().map_err(|e| e.to_string())?;
+            let uv = read
+                .mesh
+                .texcoords
+                .as_ref()
+                .and_then(|t| per_vertex_uv(t, &planar.faces, planar.positions.len()));
+            let mut project = Project::new(&planar, uv);
+            let picture = match &options.texture {
+                Some(given) => Some(given.clone()),
+                None => ["png", "jpg", "jpeg"]
+                    .iter()
+                    .map(|e| file.with_extension(e))
+                    .find(|p| p.is_file()),
+            };
+            let mut texture = None;
+            if let Some(path) = picture {
+                let name = name_in(workspace, &path);
+                match read_texture(&path, &name) {
+                    Ok(t) => {
+                        if project.mesh.texcoords.is_none() {
+                            let (uv, by_pixels) = fitted_uv(&planar.positions, &t.image);
+                            project.mesh.texcoords = Some(uv);
+                            notes.push(format!(
+                                "{shown} has no texture coordinates: {} is laid over it by {}",
+                                path.display(),
+                                if by_pixels {
+                                    "its pixels (the mesh lies within them)"
+                                } else {
+                                    "the mesh's bounding box"
+                                }
+                            ));
+                        }
+                        project.texture = Some(name);
+                        texture = Some(Arc::new(t));
+                    }
+                    Err(e) if options.texture.is_some() => return Err(e),
+                    Err(e) => notes.push(format!("the picture beside it was not used: {e}")),
+                }
+            }
+            Ok(Opened {
+                project,
+                texture,
+                project_file: None,
+                notes,
+            })
+        }
+        "png" | "jpg" | "jpeg" => {
+            let name = name_in(workspace, file);
+            let texture = read_texture(file, &name)?;
+            let settings = picture_settings(&texture.image, &options.picture, &mut notes, &shown);
+            let picture_options = settings
+                .options()
+                .map_err(|e| format!("{shown}: {e}"))?
+                .with_keep_specks(options.keep_specks);
+            let traced = crate::meshing::picture_outline(&texture.image, &picture_options, None)
+                .map_err(|e| format!("{shown}: {e}"))?;
+            let meshed = crate::meshing::mesh_outline(
+                &traced.outline,
+                &crate::meshing::MeshOptions::default(),
+            )
+            .map_err(|e| format!("{shown}: {e}"))?;
+            if traced.dropped_specks > 0 {
+                notes.push(format!(
+                    "{} speck{} dropped (pieces under {}% of the largest piece's area); mesh with --keep-specks to keep them",
+                    traced.dropped_specks,
+                    if traced.dropped_specks == 1 { "" } else { "s" },
+                    crate::meshing::SPECK_FRACTION * 100.0
+                ));
+            }
+            let uv = per_vertex_uv(
+                &meshed.texcoords,
+                &meshed.mesh.faces,
+                meshed.mesh.positions.len(),
+            );
+            let mut project = Project::new(&meshed.mesh, uv);
+            project.texture = Some(name);
+            project.picture = settings;
+            project.outline = super::session::loops_of(&traced.outline);
+            Ok(Opened {
+                project,
+                texture: Some(Arc::new(texture)),
+                project_file: None,
+                notes,
+            })
+        }
+        _ => Err(format!(
+            "{shown}: the studio opens a project (.json), a mesh (.obj, .off) or a picture (.png, .jpg)"
+        )),
+    }
+}

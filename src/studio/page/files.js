@@ -1,0 +1,119 @@
+// Files: Open (the workspace's pictures, meshes, outlines and projects, and recovered work),
+// Save (Ctrl+S) and Save as, a file dropped on the page (stored in the workspace, then opened
+// or drawn on the mesh), exports in the background, the unsaved-changes mark, and a warning
+// before closing the page while changes are unsaved.
+
+import { S, $ } from "./view.js";
+import { send, upload, on } from "./net.js";
+import { confirmDialog, promptDialog } from "./panels.js";
+import { sliderTime } from "./timeline.js";
+
+const when = (seconds) => new Date(seconds * 1000).toLocaleString();
+
+// The Open dialog: files by kind, and recovered work with Restore / Put aside.
+$("open").onclick = () => send({ op: "list_files" });
+on("files", (msg) => {
+  const list = $("open-list");
+  list.textContent = "";
+  const rows = [];
+  for (const r of msg.recovered) {
+    rows.push({ text: `recovered work from ${when(r.saved_at)}: ${r.keyframes} keyframes, ${r.vertices} vertices${r.source ? `, from ${r.source}` : ""}`, open: () => send({ op: "recover", name: r.name }) });
+  }
+  for (const f of msg.files) rows.push({ text: `${f.name} (${f.kind}, ${(f.bytes / 1024).toFixed(0)} KB)`, open: () => openFile(f.name) });
+  if (!rows.length) list.textContent = `No pictures, meshes, outlines or projects in ${msg.workspace}. Drop a file on the page to add one.`;
+  for (const row of rows) {
+    const b = document.createElement("button");
+    b.className = "file";
+    b.textContent = row.text;
+    b.onclick = () => { $("open-dialog").close(); row.open(); };
+    list.appendChild(b);
+  }
+  $("open-where").textContent = msg.workspace;
+  if (!$("open-dialog").open) $("open-dialog").showModal();
+});
+$("open-close").onclick = () => $("open-dialog").close();
+
+async function openFile(name) {
+  if (S.state && S.state.dirty && !(await confirmDialog(`Open ${name}? This project's unsaved changes stay one Undo away (and in the autosave).`, "Open"))) return;
+  send({ op: "open", name });
+}
+
+export async function save() {
+  if (S.state && S.state.project) send({ op: "save" });
+  else await saveAs();
+}
+export async function saveAs() {
+  const name = await promptDialog("Save the project in the workspace as", (S.state && S.state.project) || "project.json");
+  if (!name) return;
+  S.pendingSave = name.toLowerCase().endsWith(".json") ? name : `${name}.json`;
+  send({ op: "save", name: S.pendingSave });
+}
+$("save").onclick = save;
+$("save-as").onclick = saveAs;
+// "exists: save over it?" asks before replacing another file.
+on("error", async (msg) => {
+  if (S.pendingSave && msg.message && msg.message.startsWith(`${S.pendingSave} exists`)) {
+    const name = S.pendingSave;
+    S.pendingSave = null;
+    msg.handled = true;
+    if (await confirmDialog(`${name} exists. Replace it?`, "Replace")) send({ op: "save", name, overwrite: true });
+  }
+});
+on("state", (st) => {
+  if (st.dirty === false) S.pendingSave = null;
+  const name = st.project || st.source || "untitled";
+  document.title = `${st.dirty ? "● " : ""}${name} — bdmorph studio`;
+  $("dirty").hidden = !st.dirty;
+  $("doc-name").textContent = name;
+  const banner = $("banner-recovered");
+  const r = st.recovered[0];
+  banner.hidden = !r;
+  if (r) {
+    $("recovered-text").textContent = `Unsaved work of a studio that did not stop cleanly was found: ${when(r.saved_at)}, ${r.keyframes} keyframes, ${r.vertices} vertices${r.source ? `, from ${r.source}` : ""}${st.recovered.length > 1 ? ` (and ${st.recovered.length - 1} more in Open)` : ""}.`;
+    $("recovered-restore").onclick = () => send({ op: "recover", name: r.name });
+    $("recovered-aside").onclick = () => send({ op: "discard", name: r.name });
+  }
+});
+
+window.addEventListener("beforeunload", (e) => {
+  if (S.state && S.state.dirty) { e.preventDefault(); e.returnValue = ""; }
+});
+
+// A file dropped on the page goes to the workspace, then is opened; a picture dropped on a
+// mesh may instead be drawn on it.
+window.addEventListener("dragover", (e) => { e.preventDefault(); document.body.classList.add("dropping"); });
+window.addEventListener("dragleave", () => document.body.classList.remove("dropping"));
+window.addEventListener("drop", async (e) => {
+  e.preventDefault();
+  document.body.classList.remove("dropping");
+  const file = e.dataTransfer && e.dataTransfer.files[0];
+  if (!file) return;
+  let then = "open";
+  if (/\.(png|jpe?g)$/i.test(file.name) && S.state) {
+    const choice = await confirmDialog(`${file.name}: open it as a new project (meshed by its subject), or draw it on this mesh?`, "Open as new", "Draw on this mesh");
+    if (choice === false) return;
+    then = choice === "other" ? "attach" : "open";
+  }
+  if (then === "open" && S.state && S.state.dirty && !(await confirmDialog(`Open ${file.name}? This project's unsaved changes stay one Undo away.`, "Open"))) return;
+  upload(file.name, await file.arrayBuffer(), then);
+});
+$("attach").onclick = () => $("attach-file").click();
+$("attach-file").addEventListener("change", async () => {
+  const file = $("attach-file").files[0];
+  if (!file) return;
+  upload(file.name, await file.arrayBuffer(), "attach");
+  $("attach-file").value = "";
+});
+
+$("export-format").addEventListener("change", () => {
+  const f = $("export-format").value;
+  const ext = { gif: ".gif", mp4: ".mp4", png: ".png", html: ".html", obj: "", still: ".png" }[f];
+  $("export-name").value = f === "still" ? "frame.png" : "animation" + (f === "obj" ? "-frames" : ext);
+});
+$("export").onclick = () => {
+  const format = $("export-format").value;
+  const request = { op: "export", format, name: $("export-name").value };
+  // A screenshot is of what is shown: the scrubbed frame, or the keyframe shown.
+  if (format === "still" && S.showing === "frame") request.time = sliderTime();
+  send(request);
+};

@@ -148,6 +148,22 @@ fn nesting(loops: &[Vec<[f64; 2]>]) -> Nesting {
     }
 }
 
+/// The area of the region of odd winding of closed loops that do not cross: each loop's
+/// enclosed area, added at even depths (a piece), taken away at odd ones (a hole).
+pub(crate) fn region_area(loops: &[Vec<[f64; 2]>]) -> f64 {
+    let n = nesting(loops);
+    n.order
+        .iter()
+        .map(|&i| {
+            if n.depth[i] % 2 == 0 {
+                n.areas[i]
+            } else {
+                -n.areas[i]
+            }
+        })
+        .sum()
+}
+
 /// The pieces of closed loops that are specks: per loop, the index of the loop that is the
 /// outer loop of the speck it belongs to, or `None`.
 ///
@@ -180,7 +196,6 @@ pub(crate) fn specks(loops: &[Vec<[f64; 2]>], fraction: f64) -> Vec<Option<usize
 }
 
 /// Simplifies closed loops (as traced: simple, apart from each other) to `tolerance`.
-#[cfg(test)]
 pub(crate) fn simplify(loops: &[Vec<[f64; 2]>], tolerance: f64) -> Simplified {
     simplify_leaving_out(loops, tolerance, &[])
 }
@@ -395,6 +410,18 @@ mod tests {
         assert_eq!(super::specks(&ccw, 0.01), specks);
         // Everything is a speck of nothing but the largest piece when it is alone.
         assert_eq!(super::specks(&loops[..1], 0.01), vec![None]);
+    }
+
+    #[test]
+    fn the_region_is_pieces_less_holes() {
+        let square = |x: f64, y: f64, s: f64| vec![[x, y], [x + s, y], [x + s, y + s], [x, y + s]];
+        let loops = [
+            square(0.0, 0.0, 10.0),
+            square(3.0, 3.0, 4.0),
+            square(4.0, 4.0, 1.0),
+            square(20.0, 0.0, 2.0),
+        ];
+        assert_eq!(region_area(&loops), 100.0 - 16.0 + 1.0 + 4.0);
     }
 
     #[test]

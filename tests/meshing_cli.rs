@@ -306,3 +306,158 @@ fn bad_inputs_are_one_line_and_write_nothing() {
         &dir,
     );
 }
+
+/// Runs a command that must succeed, in `dir`; returns its stdout and stderr.
+fn succeeds_saying(cmd: &mut Command, dir: &Path) -> (String, String) {
+    let r = cmd.current_dir(dir).output().expect("runs");
+    let err = String::from_utf8(r.stderr).expect("utf8");
+    assert!(r.status.success(), "{err}");
+    (String::from_utf8(r.stdout).expect("utf8"), err)
+}
+
+/// The value of `key` in a one-line JSON object of numbers, booleans, strings and nulls.
+fn json_field<'a>(line: &'a str, key: &str) -> &'a str {
+    let start = line.find(&format!("\"{key}\":")).expect(key) + key.len() + 3;
+    let rest = &line[start..];
+    let end = if let Some(text) = rest.strip_prefix('"') {
+        text.find('"').expect("a closing quote") + 2
+    } else {
+        rest.find([',', '}']).expect("an end")
+    };
+    &rest[..end]
+}
+
+#[test]
+fn specks_are_noted_and_kept_on_request() {
+    let dir = scratch("specks");
+    // A body and two specks of dust of a few pixels.
+    let picture = generate::picture(300, 200, |x, y| {
+        capsule_distance([x, y], [100.0, 100.0], [180.0, 110.0], 60.0)
+            .min(capsule_distance([x, y], [280.0, 20.0], [280.0, 20.0], 2.0))
+            .min(capsule_distance([x, y], [15.0, 180.0], [18.0, 183.0], 1.5))
+    });
+    save(&dir, "dusty.png", &picture);
+    let (out, err) = succeeds_saying(
+        bin().args([
+            "mesh",
+            "dusty.png",
+            "--vertices",
+            "400",
+            "--stats",
+            "-o",
+            "m.obj",
+        ]),
+        &dir,
+    );
+    assert!(
+        err.lines().any(|l| l
+            == "bdmorph: note: dropped 2 specks (pieces under 1% of the largest piece's area); --keep-specks keeps them"),
+        "{err}"
+    );
+    assert_eq!(json_field(&out, "pieces"), "1");
+    assert_eq!(json_field(&out, "dropped_specks"), "2");
+    let mesh = PlanarMesh::read(&dir.join("m.obj")).expect("reads");
+    bdmorph::compile(&mesh.positions, &mesh.faces).expect("one piece, a disk");
+    let (out, err) = succeeds_saying(
+        bin().args([
+            "mesh",
+            "dusty.png",
+            "--vertices",
+            "400",
+            "--keep-specks",
+            "--stats",
+        ]),
+        &dir,
+    );
+    assert!(!err.contains("speck"), "{err}");
+    assert_eq!(json_field(&out, "pieces"), "3");
+    assert_eq!(json_field(&out, "dropped_specks"), "0");
+    // -q keeps the note to itself; outlines are kept whole, and say so.
+    let (_, err) = succeeds_saying(bin().args(["mesh", "dusty.png", "-q", "-o", "q.obj"]), &dir);
+    assert!(err.is_empty(), "{err}");
+    std::fs::write(
+        dir.join("two.svg"),
+        r#"<svg viewBox="0 0 100 100"><rect width="90" height="90"/><rect x="95" y="95" width="1" height="1"/></svg>"#,
+    )
+    .expect("writes");
+    let (out, err) = succeeds_saying(
+        bin().args([
+            "mesh",
+            "two.svg",
+            "--keep-specks",
+            "--vertices",
+            "300",
+            "--stats",
+        ]),
+        &dir,
+    );
+    assert_eq!(
+        err.trim(),
+        "bdmorph: warning: --keep-specks only applies to pictures"
+    );
+    assert_eq!(json_field(&out, "pieces"), "2");
+    assert_eq!(json_field(&out, "tolerance"), "null");
+}
+
+#[test]
+fn the_vertex_count_is_met_or_explained() {
+    let dir = scratch("vertex-count");
+    // A gear of 200 teeth: 1000 outline vertices at the default tolerance.
+    let gear = generate::picture(800, 800, |x, y| {
+        let (dx, dy) = (x - 400.0, y - 400.0);
+        dx.hypot(dy) - 320.0 - 4.0 * (4.0 * (200.0 * dy.atan2(dx)).sin()).tanh()
+    });
+    save(&dir, "gear.png", &gear);
+    let (out, err) = succeeds_saying(
+        bin().args([
+            "mesh",
+            "gear.png",
+            "--vertices",
+            "500",
+            "--stats",
+            "-o",
+            "m.obj",
+        ]),
+        &dir,
+    );
+    assert!(!err.contains("note"), "{err}");
+    let vertices: usize = json_field(&out, "vertices").parse().expect("a count");
+    assert!(vertices.abs_diff(500) <= 50, "{vertices}");
+    assert_eq!(json_field(&out, "requested_vertices"), "500");
+    assert_eq!(json_field(&out, "off_target"), "null");
+    let tolerance: f64 = json_field(&out, "tolerance").parse().expect("a tolerance");
+    assert!(tolerance > 1.0, "{tolerance}");
+    // A tolerance given explicitly is kept, and the miss explained on one line.
+    let (out, err) = succeeds_saying(
+        bin().args([
+            "mesh",
+            "gear.png",
+            "--vertices",
+            "100",
+            "--tolerance",
+            "0.5",
+            "--stats",
+            "-o",
+            "fine.obj",
+        ]),
+        &dir,
+    );
+    let vertices: usize = json_field(&out, "vertices").parse().expect("a count");
+    let outline: usize = json_field(&out, "outline_vertices")
+        .parse()
+        .expect("a count");
+    assert!(vertices > 110, "{vertices}");
+    let note = format!(
+        "bdmorph: note: {vertices} vertices, not about 100 as asked: the outline simplified to --tolerance 0.5 alone has {outline} vertices; raise --tolerance, or leave it out to have it raised to fit"
+    );
+    assert_eq!(
+        err.lines()
+            .filter(|l| l.contains("note"))
+            .collect::<Vec<_>>(),
+        [note.as_str()]
+    );
+    assert!(
+        json_field(&out, "off_target").starts_with("\"the outline simplified to --tolerance 0.5"),
+        "{out}"
+    );
+}

@@ -17,18 +17,40 @@ fn json(x: f64) -> String {
     }
 }
 
+/// A JSON string.
+fn json_string(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 2);
+    out.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if u32::from(c) < 0x20 => out.push_str(&format!("\\u{:04x}", u32::from(c))),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 /// The statistics line of `--stats`.
 fn stats_json(m: &Meshed) -> String {
     let s = &m.stats;
     format!(
-        "{{\"vertices\":{},\"faces\":{},\"pieces\":{},\"holes\":{},\"min_angle\":{},\"outline_vertices\":{},\"dropped_outlines\":{},\"refinement_complete\":{},\"passes\":{},\"seconds\":{}}}",
+        "{{\"vertices\":{},\"requested_vertices\":{},\"off_target\":{},\"faces\":{},\"pieces\":{},\"holes\":{},\"min_angle\":{},\"outline_vertices\":{},\"tolerance\":{},\"dropped_outlines\":{},\"dropped_specks\":{},\"refinement_complete\":{},\"passes\":{},\"seconds\":{}}}",
         s.vertices,
+        s.requested_vertices,
+        s.off_target
+            .as_ref()
+            .map_or_else(|| "null".to_string(), |o| json_string(&o.to_string())),
         s.faces,
         s.pieces,
         s.holes,
         json(s.min_angle),
         s.outline_vertices,
+        s.tolerance.map_or_else(|| "null".to_string(), json),
         s.dropped_outlines,
+        s.dropped_specks,
         s.refinement_complete,
         s.passes,
         json(s.seconds)
@@ -61,14 +83,26 @@ pub(super) fn run(args: MeshArgs) -> Result<(), String> {
     if let Some(t) = args.threshold {
         picture = picture.with_threshold(t);
     }
+    picture = picture.with_keep_specks(args.keep_specks);
     let kind = std::fs::read(&args.input)
         .ok()
         .and_then(|bytes| InputKind::of(&args.input, &bytes));
-    if kind.is_some_and(|k| k != InputKind::Picture)
-        && (args.background.is_some() || args.threshold.is_some())
-        && !args.quiet
-    {
-        eprintln!("bdmorph: warning: --background and --threshold only apply to pictures");
+    let picture_only: Vec<&str> = [
+        (args.background.is_some(), "--background"),
+        (args.threshold.is_some(), "--threshold"),
+        (args.keep_specks, "--keep-specks"),
+    ]
+    .iter()
+    .filter(|(given, _)| *given)
+    .map(|&(_, name)| name)
+    .collect();
+    if kind.is_some_and(|k| k != InputKind::Picture) && !picture_only.is_empty() && !args.quiet {
+        let (names, verb) = match picture_only.as_slice() {
+            [one] => (one.to_string(), "applies"),
+            [rest @ .., last] => (format!("{} and {last}", rest.join(", ")), "apply"),
+            [] => unreachable!("checked above"),
+        };
+        eprintln!("bdmorph: warning: {names} only {verb} to pictures");
     }
     let meshed = meshing::mesh_file(&args.input, &picture, &options).map_err(|e| e.to_string())?;
     if args.stats {
@@ -128,10 +162,20 @@ pub(super) fn run(args: MeshArgs) -> Result<(), String> {
                 if s.dropped_outlines == 1 { "it" } else { "them" }
             );
         }
-        if s.outline_vertices >= args.vertices {
+        if s.dropped_specks > 0 {
+            let percent = 100.0 * meshing::SPECK_AREA_FRACTION;
             eprintln!(
-                "bdmorph: note: the outline alone has {} vertices, --vertices asked for {}; raise --tolerance for fewer",
-                s.outline_vertices, args.vertices
+                "bdmorph: note: dropped {} ({} under {percent}% of the largest piece's area); --keep-specks keeps {}",
+                plural(s.dropped_specks, "speck", "specks"),
+                if s.dropped_specks == 1 { "a piece" } else { "pieces" },
+                if s.dropped_specks == 1 { "it" } else { "them" }
+            );
+        }
+        if let Some(why) = &s.off_target {
+            eprintln!(
+                "bdmorph: note: {}, not about {} as asked: {why}",
+                plural(s.vertices, "vertex", "vertices"),
+                s.requested_vertices
             );
         }
         if !s.refinement_complete {

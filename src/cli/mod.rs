@@ -184,10 +184,13 @@ enum Command {
     /// to --tolerance). A picture's subject is its opaque pixels; for a picture without
     /// transparency give --background COLOR (#rrggbb, a name, or auto for the colour of the
     /// picture's border) or --threshold L (the pixels darker than L). Its outlines are traced,
-    /// simplified to --tolerance pixels (outlines smaller than that are left out), and
-    /// triangulated with their holes, however many pieces: a constrained Delaunay
+    /// simplified to --tolerance pixels (outlines smaller than that are left out; without
+    /// --tolerance, raised from 1 until the outline takes at most a fifth of --vertices),
+    /// specks left out (pieces under 1% of the largest piece's area, unless --keep-specks),
+    /// and triangulated with their holes, however many pieces: a constrained Delaunay
     /// triangulation refined until no angle is below --min-angle (except at sharper corners
-    /// of the outline itself) and about --vertices vertices are placed.
+    /// of the outline itself) and about --vertices vertices are placed (a note says why
+    /// when the count is missed by more than 10%).
     ///
     /// -o OUT.obj writes `v x y 0` lines (y up, counter-clockwise triangles) and one `vt` per
     /// vertex. From a picture, positions are in pixels from its bottom-left corner and
@@ -678,10 +681,12 @@ struct MeshArgs {
     /// Optional with --stats.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
-    /// About how many vertices.
+    /// About how many vertices (within 10%, or a note says why not; a picture's outline is
+    /// simplified further to fit unless --tolerance is given).
     #[arg(long, value_name = "N", default_value_t = bdmorph::meshing::DEFAULT_VERTICES)]
     vertices: usize,
-    /// How far the mesh's boundary may stray from the traced outline, in pixels (default 1);
+    /// How far the mesh's boundary may stray from the traced outline, in pixels (default 1,
+    /// raised when the outline alone would take more than a fifth of --vertices);
     /// for SVG, how far curves may stray from their polylines, in the file's units after
     /// transforms (default 1/1000 of the outline's bounding-box diagonal). Unused for .poly.
     #[arg(long, value_name = "T")]
@@ -699,6 +704,10 @@ struct MeshArgs {
     /// --background, the brightness below which it is (no default).
     #[arg(long, value_name = "L")]
     threshold: Option<f64>,
+    /// Keep specks: pieces of a picture's subject under 1% of the largest piece's area
+    /// (dust), otherwise left out with a note. Outlines (.svg, .poly) are always kept whole.
+    #[arg(long)]
+    keep_specks: bool,
     /// Picture size for SVG and PNG output, as WxH.
     #[arg(long, value_name = "WxH", default_value = "800x800")]
     size: ImageSize,

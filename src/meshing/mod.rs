@@ -8,6 +8,13 @@
 //! Outlines can also come from Triangle's `.poly` files ([`parse_poly`]) and SVG files
 //! ([`parse_svg`]).
 //!
+//! A picture's specks (pieces under [`SPECK_AREA_FRACTION`], 1%, of the largest piece's
+//! area: dust) are left out unless [`PictureOptions::keep_specks`]; outlines are the user's
+//! own geometry and are kept whole. Without an explicit tolerance, a picture's outline is
+//! simplified until it takes at most [`OUTLINE_VERTEX_SHARE`] of the requested vertices, so
+//! that the mesh lands within 10% of the count; [`MeshStats::off_target`] says why when it
+//! does not. [`fit_loops_to_vertices`] does the same for loops drawn by hand.
+//!
 //! The mesh is in a y-up frame with counter-clockwise triangles. From a picture, positions
 //! are in pixels (`x` from the left edge, `y` from the bottom edge), so the aspect ratio is
 //! kept, and every vertex has texture coordinates `u = x / width`, `v = y / height` (OBJ's
@@ -40,6 +47,7 @@
 //! ```
 
 mod error;
+mod fit;
 mod outline;
 mod picture;
 mod poly;
@@ -52,6 +60,7 @@ use std::path::Path;
 use std::time::Instant;
 
 pub use error::{Contact, MeshingError, NoSubject, Place};
+pub use fit::{fit_loops_to_vertices, FittedLoops, OUTLINE_VERTEX_SHARE};
 pub use outline::{Element, Inside, Outline};
 pub use picture::{Background, PictureOptions};
 pub use poly::parse_poly;
@@ -76,18 +85,35 @@ pub const DEFAULT_OUTLINE_TOLERANCE: f64 = 1e-3;
 pub const MAX_MIN_ANGLE: f64 = 33.0;
 /// The most vertices accepted.
 pub const MAX_VERTICES: usize = 20_000_000;
+/// How far from the requested count a mesh's vertices may be before [`MeshStats::off_target`]
+/// says why: 10%.
+pub const VERTEX_COUNT_SLACK: f64 = 0.1;
+/// A picture's pieces whose area is below this fraction of the largest piece's are specks,
+/// left out unless [`PictureOptions::keep_specks`]: 1%.
+///
+/// A piece is an outer loop of the subject's outline with what it holds, and its area is what
+/// the outer loop encloses. Dust on a picture is a few pixels: on a 512-pixel picture whose
+/// subject covers a quarter of it (65,000 square pixels), 1% is 650 square pixels, a blob 25
+/// pixels across, and a speck of 3 by 3 pixels is 0.014%. A part meant to be apart (a hat
+/// above a head, a floating hand, a ball) is far larger: a hand is some 2-4% of a figure, a
+/// head 5-10%. Between the two there is a wide margin, and the command line says when it
+/// dropped something.
+pub const SPECK_AREA_FRACTION: f64 = 0.01;
 
 /// How to mesh: density, tolerance, quality.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct MeshOptions {
-    /// About how many vertices the mesh should have (default 2000). Fewer when the outline
-    /// alone needs more: then the mesh has no more than the minimum angle needs.
+    /// About how many vertices the mesh should have (default 2000; within 10% unless
+    /// [`MeshStats::off_target`] says why not). The outline's own vertices count: a picture's
+    /// outline without an explicit `tolerance` is simplified further until it uses at most
+    /// [`OUTLINE_VERTEX_SHARE`] of them. More when the outline alone (or the minimum angle)
+    /// needs more.
     pub vertices: usize,
     /// How far (at most) the mesh's boundary may be from the traced outline (pictures, in
-    /// pixels, default 1) or curves from their polylines (SVG, in the file's units after
-    /// transforms, default 1/1000 of the outline's bounding-box diagonal). `.poly` vertices
-    /// are used as they are.
+    /// pixels, default 1, raised to fit `vertices`: see [`mesh_picture`]) or curves from
+    /// their polylines (SVG, in the file's units after transforms, default 1/1000 of the
+    /// outline's bounding-box diagonal). `.poly` vertices are used as they are.
     pub tolerance: Option<f64>,
     /// The smallest angle of any triangle, in degrees (default 28), except where the
     /// outline's own corners are sharper.
@@ -151,11 +177,120 @@ impl MeshOptions {
     }
 }
 
+/// Why a mesh's vertex count is more than [`VERTEX_COUNT_SLACK`] (10%) from the count asked
+/// for ([`MeshStats::off_target`]). Displayed as one sentence naming the command line's
+/// options.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum OffTarget {
+    /// A picture's outline, simplified to the tolerance given (pixels), has
+    /// `outline_vertices` vertices alone: more than the refinement can take and land near the
+    /// count (at most [`OUTLINE_VERTEX_SHARE`] of it). Without a tolerance it would be raised.
+    Tolerance {
+        /// The tolerance given.
+        tolerance: f64,
+        /// The outline's vertices.
+        outline_vertices: usize,
+    },
+    /// A picture's outline has `loops` loops (pieces and holes) that need `outline_vertices`
+    /// vertices even at `tolerance`, the coarsest tolerance that keeps every one of them
+    /// (a coarser one would drop the smaller ones).
+    Loops {
+        /// Loops of the outline.
+        loops: usize,
+        /// The outline's vertices at `tolerance`.
+        outline_vertices: usize,
+        /// The coarsest tolerance that keeps every loop, in pixels.
+        tolerance: f64,
+    },
+    /// A picture's outline has `outline_vertices` vertices even at `tolerance` (pixels), half
+    /// the mean edge length of a mesh of the count asked for: the coarsest tolerance chosen
+    /// automatically, as a coarser one would cut off detail that such a mesh could show.
+    Detail {
+        /// The outline's vertices at `tolerance`.
+        outline_vertices: usize,
+        /// The coarsest automatic tolerance, in pixels.
+        tolerance: f64,
+    },
+    /// An outline given as it is (SVG, `.poly`, [`Outline`]) has `outline_vertices`
+    /// vertices, too many for the count.
+    Outline {
+        /// The outline's vertices.
+        outline_vertices: usize,
+    },
+    /// The outline fits, but the minimum angle (degrees) needs more vertices, around the
+    /// outline's narrow parts and sharp corners.
+    MinAngle {
+        /// The minimum angle asked for.
+        min_angle: f64,
+    },
+    /// The refinement came no closer in `passes` passes.
+    Refinement {
+        /// Passes run.
+        passes: usize,
+    },
+}
+
+/// `x` with at most two decimals, trailing zeros dropped.
+fn short(x: f64) -> String {
+    let s = format!("{x:.2}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    s.to_string()
+}
+
+impl std::fmt::Display for OffTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OffTarget::Tolerance {
+                tolerance,
+                outline_vertices,
+            } => write!(
+                f,
+                "the outline simplified to --tolerance {} alone has {outline_vertices} vertices; raise --tolerance, or leave it out to have it raised to fit",
+                short(*tolerance)
+            ),
+            OffTarget::Loops {
+                loops,
+                outline_vertices,
+                tolerance,
+            } => write!(
+                f,
+                "the outline's {loops} loops (pieces and holes) need {outline_vertices} vertices even at tolerance {}, the coarsest that keeps them all; ask for more vertices, or give a --tolerance that drops the smallest",
+                short(*tolerance)
+            ),
+            OffTarget::Detail {
+                outline_vertices,
+                tolerance,
+            } => write!(
+                f,
+                "the outline's detail needs {outline_vertices} vertices even simplified to {} pixels, half the mesh's edge length (coarser would cut it off); ask for more vertices, or give a larger --tolerance to smooth it",
+                short(*tolerance)
+            ),
+            OffTarget::Outline { outline_vertices } => {
+                write!(f, "the outline alone has {outline_vertices} vertices")
+            }
+            OffTarget::MinAngle { min_angle } => write!(
+                f,
+                "the minimum angle of {} degrees needs more vertices around the outline's narrow parts and sharp corners; lower --min-angle",
+                short(*min_angle)
+            ),
+            OffTarget::Refinement { passes } => {
+                write!(f, "the refinement came no closer in {passes} passes")
+            }
+        }
+    }
+}
+
 /// What a meshing did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshStats {
     /// Vertices of the mesh.
     pub vertices: usize,
+    /// The vertices asked for ([`MeshOptions::vertices`]).
+    pub requested_vertices: usize,
+    /// Why `vertices` is more than [`VERTEX_COUNT_SLACK`] (10%) from `requested_vertices`;
+    /// `None` when it is not.
+    pub off_target: Option<OffTarget>,
     /// Triangles.
     pub faces: usize,
     /// Connected pieces.
@@ -168,6 +303,11 @@ pub struct MeshStats {
     pub outline_vertices: usize,
     /// Outlines dropped as too small for the tolerance (pictures).
     pub dropped_outlines: usize,
+    /// Pieces dropped as specks (pictures; see [`SPECK_AREA_FRACTION`]).
+    pub dropped_specks: usize,
+    /// The tolerance a picture's outline was simplified to, in pixels (the one given, or the
+    /// default raised to fit the vertex count); `None` for outlines.
+    pub tolerance: Option<f64>,
     /// Whether the refinement finished rather than ran out of vertices.
     pub refinement_complete: bool,
     /// Refinement passes run to approach the requested vertex count.
@@ -191,17 +331,80 @@ pub struct Meshed {
 #[derive(Clone, Debug)]
 pub struct PictureOutline {
     /// The loops as traced, in the mesh's frame (pixels, y up): outer loops
-    /// counter-clockwise, holes clockwise.
+    /// counter-clockwise, holes clockwise. All of them, including those dropped.
     pub traced: Vec<Vec<[f64; 2]>>,
     /// The simplified loops that are kept, as an outline.
     pub outline: Outline,
     /// Traced loops dropped as too small for the tolerance.
     pub dropped: usize,
-    /// TEMP-SHIM.
+    /// Pieces dropped as specks (their outer loops; the loops inside go with them).
     pub dropped_specks: usize,
+    /// The tolerance the loops were simplified to, in pixels.
+    pub tolerance: f64,
+}
+
+/// A picture's traced loops, and which belong to specks.
+struct Traced {
+    loops: Vec<Vec<[f64; 2]>>,
+    /// Per loop, the outer loop of the speck it belongs to (all `None` when specks are kept).
+    speck: Vec<Option<usize>>,
+    /// `speck[i].is_some()`.
+    leave_out: Vec<bool>,
+}
+
+fn trace_picture(image: &Image, picture: &PictureOptions) -> Result<Traced, MeshingError> {
+    let coverage = picture::coverage(image, picture)?;
+    let loops = trace::trace(&coverage);
+    let speck = if picture.keep_specks {
+        vec![None; loops.len()]
+    } else {
+        simplify::specks(&loops, SPECK_AREA_FRACTION)
+    };
+    let leave_out = speck.iter().map(Option::is_some).collect();
+    Ok(Traced {
+        loops,
+        speck,
+        leave_out,
+    })
+}
+
+impl Traced {
+    fn simplify(&self, tolerance: f64) -> simplify::Simplified {
+        simplify::simplify_leaving_out(&self.loops, tolerance, &self.leave_out)
+    }
+
+    /// The picture's outline from these loops simplified to `tolerance`, and how many specks
+    /// were left out.
+    fn outline(
+        &self,
+        image: &Image,
+        simplified: &simplify::Simplified,
+        tolerance: f64,
+    ) -> Result<(Outline, usize), MeshingError> {
+        if simplified.loops.is_empty() {
+            return Err(MeshingError::TooSmall {
+                place: Place::default(),
+                loops: self.loops.len(),
+                largest_area: simplified.largest_area,
+                tolerance,
+            });
+        }
+        let mut outline = Outline::from_loops(&simplified.loops);
+        outline.texture_frame = Some([0.0, 0.0, f64::from(image.width), f64::from(image.height)]);
+        let dropped_specks = simplified
+            .left_out
+            .iter()
+            .filter(|&&i| self.speck[i] == Some(i))
+            .count();
+        Ok((outline, dropped_specks))
+    }
 }
 
 /// Traces a picture's subject and simplifies its outlines to `tolerance` pixels (default 1).
+///
+/// Specks are left out (unless [`PictureOptions::keep_specks`]): pieces whose area is below
+/// [`SPECK_AREA_FRACTION`] of the largest piece's (the largest is always kept). Loops too
+/// small for the tolerance are dropped first, and counted in `dropped`, not as specks.
 ///
 /// # Errors
 /// [`MeshingError::NoTransparency`], [`MeshingError::NoSubject`] when nothing is found,
@@ -217,28 +420,28 @@ pub fn picture_outline(
     MeshOptions::default()
         .with_tolerance(tolerance)
         .validate()?;
-    let coverage = picture::coverage(image, picture)?;
-    let traced = trace::trace(&coverage);
-    let simplified = simplify::simplify(&traced, tolerance);
-    if simplified.loops.is_empty() {
-        return Err(MeshingError::TooSmall {
-            place: Place::default(),
-            loops: traced.len(),
-            largest_area: simplified.largest_area,
-            tolerance,
-        });
-    }
-    let mut outline = Outline::from_loops(&simplified.loops);
-    outline.texture_frame = Some([0.0, 0.0, f64::from(image.width), f64::from(image.height)]);
+    let traced = trace_picture(image, picture)?;
+    let simplified = traced.simplify(tolerance);
+    let (outline, dropped_specks) = traced.outline(image, &simplified, tolerance)?;
     Ok(PictureOutline {
-        traced,
+        traced: traced.loops,
         outline,
         dropped: simplified.dropped,
-        dropped_specks: 0,
+        dropped_specks,
+        tolerance,
     })
 }
 
-/// Meshes a picture's subject (see the [module docs](self)).
+/// Meshes a picture's subject (see the [module docs](self)), specks left out as
+/// [`picture_outline`] does.
+///
+/// Without an explicit [`MeshOptions::tolerance`], the tolerance starts at the default (1
+/// pixel) and is raised (the traced loops simplified again, doubling it, then bisecting)
+/// until the outline uses at most [`OUTLINE_VERTEX_SHARE`] of the vertices asked for, so that
+/// the mesh lands within 10% of the count; but never so far that a loop (a piece or a hole)
+/// the default kept would be dropped. [`MeshStats::tolerance`] is the tolerance used, and
+/// [`MeshStats::off_target`] says why when the count is still missed (an explicit tolerance,
+/// loops that need more vertices than that, the minimum angle).
 ///
 /// # Errors
 /// Those of [`picture_outline`] and [`mesh_outline`].
@@ -247,11 +450,111 @@ pub fn mesh_picture(
     picture: &PictureOptions,
     options: &MeshOptions,
 ) -> Result<Meshed, MeshingError> {
+    mesh_picture_sharing(image, picture, options, OUTLINE_VERTEX_SHARE, MAX_REFITS)
+}
+
+/// How many times a picture's outline is fitted again when its mesh misses the count (the
+/// minimum angle needing more vertices along a detailed outline).
+const MAX_REFITS: usize = 3;
+
+/// [`mesh_picture`] with the outline at most `share` of the vertices asked for at first, and
+/// at most `refits` fits again.
+fn mesh_picture_sharing(
+    image: &Image,
+    picture: &PictureOptions,
+    options: &MeshOptions,
+    share: f64,
+    refits: usize,
+) -> Result<Meshed, MeshingError> {
     let start = Instant::now();
     options.validate()?;
-    let traced = picture_outline(image, picture, options.tolerance)?;
-    let mut meshed = mesh_outline(&traced.outline, options)?;
-    meshed.stats.dropped_outlines = traced.dropped;
+    let target = options.vertices;
+    let given = options.tolerance;
+    let first_tolerance = given.unwrap_or(DEFAULT_PICTURE_TOLERANCE);
+    let traced = trace_picture(image, picture)?;
+    let first = traced.simplify(first_tolerance);
+    let base = first.kept.clone();
+    let kept: Vec<Vec<[f64; 2]>> = base.iter().map(|&i| traced.loops[i].clone()).collect();
+    let cap = fit::max_tolerance(simplify::region_area(&kept), target);
+    let mut first = Some(first);
+    let mut budget = (share * target as f64).floor() as usize;
+    let mut best: Option<Meshed> = None;
+    // Outline vertices with which the mesh overshot, and undershot after an overshoot.
+    let (mut over_at, mut under_at): (Option<usize>, Option<usize>) = (None, None);
+    for _ in 0..=refits {
+        let s = first
+            .take()
+            .unwrap_or_else(|| traced.simplify(first_tolerance));
+        let (simplified, tolerance, limit) =
+            if given.is_none() && !s.loops.is_empty() && fit::vertices(&s) > budget {
+                let found = fit::search(
+                    |t| traced.simplify(t),
+                    &base,
+                    budget,
+                    first_tolerance,
+                    first_tolerance,
+                    cap,
+                );
+                (found.simplified, found.tolerance, found.limit)
+            } else {
+                (s, first_tolerance, None)
+            };
+        let (outline, dropped_specks) = traced.outline(image, &simplified, tolerance)?;
+        let mut meshed = mesh_outline(&outline, options)?;
+        let stats = &mut meshed.stats;
+        stats.dropped_outlines = simplified.dropped;
+        stats.dropped_specks = dropped_specks;
+        stats.tolerance = Some(tolerance);
+        if let Some(OffTarget::Outline { outline_vertices }) = stats.off_target {
+            stats.off_target = Some(match (given, limit) {
+                (Some(tolerance), _) => OffTarget::Tolerance {
+                    tolerance,
+                    outline_vertices,
+                },
+                (None, Some(fit::Limit::Detail)) => OffTarget::Detail {
+                    outline_vertices,
+                    tolerance,
+                },
+                (None, _) => OffTarget::Loops {
+                    loops: simplified.loops.len(),
+                    outline_vertices,
+                    tolerance,
+                },
+            });
+        }
+        let vertices = stats.vertices;
+        let off = stats.off_target.is_some();
+        if best
+            .as_ref()
+            .is_none_or(|b| vertices.abs_diff(target) < b.stats.vertices.abs_diff(target))
+        {
+            best = Some(meshed);
+        }
+        if !off || given.is_some() || limit.is_some() {
+            break;
+        }
+        // Off the count with an outline that fitted: fit it to fewer vertices (in proportion
+        // to the overshoot), or between an overshoot and an undershoot.
+        let used = fit::vertices(&simplified);
+        if vertices > target {
+            over_at = Some(used);
+        } else {
+            under_at = Some(used);
+        }
+        let next = match (over_at, under_at) {
+            (Some(o), Some(u)) if u < o => (o + u) / 2,
+            (Some(o), None) => o * target / vertices,
+            _ => break,
+        };
+        if next < 3 || Some(next) == over_at || Some(next) == under_at {
+            break;
+        }
+        budget = next;
+    }
+    let mut meshed = best.ok_or_else(|| MeshingError::Internal {
+        place: Place::default(),
+        message: "no meshing ran".into(),
+    })?;
     meshed.stats.seconds = start.elapsed().as_secs_f64();
     Ok(meshed)
 }
@@ -293,14 +596,31 @@ pub fn mesh_outline(outline: &Outline, options: &MeshOptions) -> Result<Meshed, 
         faces: mesh.faces.clone(),
         texcoords: None,
     });
+    let vertices = mesh.positions.len();
+    let target = options.vertices;
+    let off_target = if vertices.abs_diff(target) as f64 <= VERTEX_COUNT_SLACK * target as f64 {
+        None
+    } else if vertices > target && outline_vertices > fit::budget(target) {
+        Some(OffTarget::Outline { outline_vertices })
+    } else if vertices > target {
+        Some(OffTarget::MinAngle {
+            min_angle: options.min_angle,
+        })
+    } else {
+        Some(OffTarget::Refinement { passes: t.passes })
+    };
     let stats = MeshStats {
-        vertices: mesh.positions.len(),
+        vertices,
+        requested_vertices: target,
+        off_target,
         faces: mesh.faces.len(),
         pieces: info.components,
         holes: info.boundary_loops.saturating_sub(info.components),
         min_angle: min_angle(&mesh),
         outline_vertices,
         dropped_outlines: 0,
+        dropped_specks: 0,
+        tolerance: None,
         refinement_complete: t.refinement_complete,
         passes: t.passes,
         seconds: start.elapsed().as_secs_f64(),
@@ -401,29 +721,4 @@ pub fn mesh_file(
     .map_err(|e| e.in_file(path))?;
     meshed.stats.seconds = start.elapsed().as_secs_f64();
     Ok(meshed)
-}
-
-// TEMP-SHIM: replaced by the meshing branch (specks and vertex targets).
-/// Specks: pieces under this fraction of the largest piece's area.
-pub const SPECK_FRACTION: f64 = 0.01;
-/// Loops fitted to a vertex target.
-#[derive(Clone, Debug)]
-pub struct FittedLoops {
-    /// The loops.
-    pub loops: Vec<Vec<[f64; 2]>>,
-    /// The tolerance used, if simplified.
-    pub tolerance: Option<f64>,
-}
-/// TEMP-SHIM.
-pub fn fit_loops_to_vertices(loops: &[Vec<[f64; 2]>], _target: usize) -> FittedLoops {
-    FittedLoops {
-        loops: loops.to_vec(),
-        tolerance: None,
-    }
-}
-impl PictureOptions {
-    /// TEMP-SHIM.
-    pub fn with_keep_specks(self, _keep: bool) -> Self {
-        self
-    }
 }

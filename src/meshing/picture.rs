@@ -84,6 +84,9 @@ pub struct PictureOptions {
     /// background (default 0.2), or of brightness for opaque pictures without a background
     /// (no default).
     pub threshold: Option<f64>,
+    /// Keep specks: pieces whose area is below [`super::SPECK_AREA_FRACTION`] of the largest
+    /// piece's, which are otherwise left out as dust (default `false`).
+    pub keep_specks: bool,
 }
 
 impl PictureOptions {
@@ -96,6 +99,12 @@ impl PictureOptions {
     /// The threshold (see [`PictureOptions::threshold`]).
     pub fn with_threshold(mut self, threshold: f64) -> Self {
         self.threshold = Some(threshold);
+        self
+    }
+
+    /// Keeps specks, or not (see [`PictureOptions::keep_specks`]).
+    pub fn with_keep_specks(mut self, keep: bool) -> Self {
+        self.keep_specks = keep;
         self
     }
 }

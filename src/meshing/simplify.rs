@@ -17,6 +17,11 @@ use super::outline::{bounds, contains, crossings, twice_area};
 pub(crate) struct Simplified {
     /// The kept loops, simplified, in the order of the input.
     pub loops: Vec<Vec<[f64; 2]>>,
+    /// The input index of each kept loop.
+    pub kept: Vec<usize>,
+    /// Loops large enough for the tolerance but left out as asked (see [`simplify_leaving_out`]),
+    /// by input index.
+    pub left_out: Vec<usize>,
     /// How many input loops were dropped as too small.
     pub dropped: usize,
     /// The largest area an input loop encloses.
@@ -85,29 +90,133 @@ fn douglas_peucker(points: &[[f64; 2]], tolerance: f64) -> Vec<usize> {
     (0..n).filter(|&k| keep[k]).collect()
 }
 
-/// Simplifies closed loops (as traced: simple, apart from each other) to `tolerance`.
-pub(crate) fn simplify(loops: &[Vec<[f64; 2]>], tolerance: f64) -> Simplified {
-    let areas: Vec<f64> = loops.iter().map(|l| twice_area(l).abs() / 2.0).collect();
-    let largest_area = areas.iter().copied().fold(0.0, f64::max);
-    let min_area = (2.0 * tolerance).powi(2);
-    // Large enough loops, largest first (so a parent comes before what it holds).
-    let mut order: Vec<usize> = (0..loops.len())
-        .filter(|&i| areas[i] >= min_area && loops[i].len() >= 3)
-        .collect();
-    order.sort_by(|&i, &j| areas[j].total_cmp(&areas[i]).then(i.cmp(&j)));
-    let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounds(l)).collect();
+/// Each loop's parent: the smallest larger loop (by enclosed area) of `candidates` holding
+/// its first point, for the loops of `candidates` (given largest first); `None` elsewhere.
+fn parents(
+    loops: &[Vec<[f64; 2]>],
+    boxes: &[[f64; 4]],
+    candidates: &[usize],
+) -> Vec<Option<usize>> {
     let inside_box =
         |b: &[f64; 4], p: [f64; 2]| p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3];
-    // Each loop's parent: the smallest larger loop holding its first point.
     let mut parent: Vec<Option<usize>> = vec![None; loops.len()];
-    for (x, &i) in order.iter().enumerate() {
+    for (x, &i) in candidates.iter().enumerate() {
         let p = loops[i][0];
-        parent[i] = order[..x]
+        parent[i] = candidates[..x]
             .iter()
             .rev()
             .copied()
             .find(|&j| inside_box(&boxes[j], p) && contains(&loops[j], p));
     }
+    parent
+}
+
+/// The loops with at least three points and `area(i) >= min_area`, largest first (so that a
+/// parent comes before what it holds).
+fn largest_first(loops: &[Vec<[f64; 2]>], areas: &[f64], min_area: f64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..loops.len())
+        .filter(|&i| areas[i] >= min_area && loops[i].len() >= 3)
+        .collect();
+    order.sort_by(|&i, &j| areas[j].total_cmp(&areas[i]).then(i.cmp(&j)));
+    order
+}
+
+/// How closed loops nest: their enclosed areas, the loops (of three points or more) largest
+/// first, each loop's parent (the smallest loop around it) and depth (how many loops are
+/// around it).
+struct Nesting {
+    areas: Vec<f64>,
+    order: Vec<usize>,
+    parent: Vec<Option<usize>>,
+    depth: Vec<usize>,
+}
+
+fn nesting(loops: &[Vec<[f64; 2]>]) -> Nesting {
+    let areas: Vec<f64> = loops.iter().map(|l| twice_area(l).abs() / 2.0).collect();
+    let order = largest_first(loops, &areas, 0.0);
+    let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounds(l)).collect();
+    let parent = parents(loops, &boxes, &order);
+    let mut depth = vec![0usize; loops.len()];
+    for &i in &order {
+        depth[i] = parent[i].map_or(0, |j| depth[j] + 1);
+    }
+    Nesting {
+        areas,
+        order,
+        parent,
+        depth,
+    }
+}
+
+/// The area of the region of odd winding of closed loops that do not cross: each loop's
+/// enclosed area, added at even depths (a piece), taken away at odd ones (a hole).
+pub(crate) fn region_area(loops: &[Vec<[f64; 2]>]) -> f64 {
+    let n = nesting(loops);
+    n.order
+        .iter()
+        .map(|&i| {
+            if n.depth[i] % 2 == 0 {
+                n.areas[i]
+            } else {
+                -n.areas[i]
+            }
+        })
+        .sum()
+}
+
+/// The pieces of closed loops that are specks: per loop, the index of the loop that is the
+/// outer loop of the speck it belongs to, or `None`.
+///
+/// Loops nest by parity (as [`super::Outline::from_loops`] takes them): a loop inside an even
+/// number of others is a piece's outer loop, the loops directly inside it its holes, a loop
+/// inside a hole another piece. A piece's area is the area its outer loop encloses (holes
+/// included: a ring counts by its extent); a piece whose area is below `fraction` of the
+/// largest piece's is a speck, with everything inside it.
+pub(crate) fn specks(loops: &[Vec<[f64; 2]>], fraction: f64) -> Vec<Option<usize>> {
+    let Nesting {
+        areas,
+        order,
+        parent,
+        depth,
+    } = nesting(loops);
+    let largest = order
+        .iter()
+        .filter(|&&i| depth[i] % 2 == 0)
+        .map(|&i| areas[i])
+        .fold(0.0, f64::max);
+    let mut speck: Vec<Option<usize>> = vec![None; loops.len()];
+    for &i in &order {
+        speck[i] = match parent[i].and_then(|j| speck[j]) {
+            Some(root) => Some(root),
+            None if depth[i] % 2 == 0 && areas[i] < fraction * largest => Some(i),
+            None => None,
+        };
+    }
+    speck
+}
+
+/// Simplifies closed loops (as traced: simple, apart from each other) to `tolerance`.
+pub(crate) fn simplify(loops: &[Vec<[f64; 2]>], tolerance: f64) -> Simplified {
+    simplify_leaving_out(loops, tolerance, &[])
+}
+
+/// Simplifies closed loops (as traced: simple, apart from each other) to `tolerance`, leaving
+/// out the loops marked in `leave_out` (indexed as `loops`; missing entries are `false`):
+/// they are dropped as too small when they are, otherwise listed in
+/// [`Simplified::left_out`], and they constrain nothing (the other loops may be simplified
+/// across them).
+pub(crate) fn simplify_leaving_out(
+    loops: &[Vec<[f64; 2]>],
+    tolerance: f64,
+    leave_out: &[bool],
+) -> Simplified {
+    let areas: Vec<f64> = loops.iter().map(|l| twice_area(l).abs() / 2.0).collect();
+    let largest_area = areas.iter().copied().fold(0.0, f64::max);
+    let min_area = (2.0 * tolerance).powi(2);
+    // Large enough loops, largest first (so a parent comes before what it holds).
+    let order = largest_first(loops, &areas, min_area);
+    let boxes: Vec<[f64; 4]> = loops.iter().map(|l| bounds(l)).collect();
+    let parent = parents(loops, &boxes, &order);
     let mut keep: Vec<Option<Vec<usize>>> = vec![None; loops.len()];
     for &i in &order {
         if parent[i].is_some_and(|j| keep[j].is_none()) {
@@ -118,14 +227,26 @@ pub(crate) fn simplify(loops: &[Vec<[f64; 2]>], tolerance: f64) -> Simplified {
             keep[i] = Some(k);
         }
     }
-    repair(loops, &boxes, &mut keep);
     let mut out = Simplified {
         largest_area,
         ..Simplified::default()
     };
+    let mut left_out = vec![false; loops.len()];
+    for (i, k) in keep.iter_mut().enumerate() {
+        if k.is_some() && leave_out.get(i).copied().unwrap_or(false) {
+            *k = None;
+            left_out[i] = true;
+            out.left_out.push(i);
+        }
+    }
+    repair(loops, &boxes, &mut keep);
     for (i, k) in keep.iter().enumerate() {
         match k {
-            Some(k) => out.loops.push(k.iter().map(|&v| loops[i][v]).collect()),
+            Some(k) => {
+                out.loops.push(k.iter().map(|&v| loops[i][v]).collect());
+                out.kept.push(i);
+            }
+            None if left_out[i] => {}
             None => out.dropped += 1,
         }
     }
@@ -253,6 +374,74 @@ mod tests {
         let s = simplify(&[big, speck, sliver], 1.0);
         assert_eq!(s.loops.len(), 1);
         assert_eq!(s.dropped, 2);
+    }
+
+    #[test]
+    fn specks_are_small_pieces_with_what_they_hold() {
+        let reversed = |mut l: Vec<[f64; 2]>| {
+            l.reverse();
+            l
+        };
+        let loops = vec![
+            circle([0.0, 0.0], 100.0, 400),          // 0: the largest piece
+            reversed(circle([0.0, 0.0], 40.0, 200)), // 1: its hole
+            circle([0.0, 0.0], 15.0, 100),           // 2: an island in it, 2.3%
+            circle([300.0, 0.0], 50.0, 200),         // 3: another piece, 25%
+            circle([0.0, 200.0], 9.0, 60),           // 4: a speck, 0.8%
+            reversed(circle([0.0, 200.0], 4.0, 30)), // 5: its hole
+            circle([200.0, 200.0], 2.0, 20),         // 6: a speck
+        ];
+        let specks = specks(&loops, 0.01);
+        assert_eq!(
+            specks,
+            vec![None, None, None, None, Some(4), Some(4), Some(6)]
+        );
+        // By nesting, not orientation: the same with every loop counter-clockwise.
+        let ccw: Vec<Vec<[f64; 2]>> = loops
+            .iter()
+            .map(|l| {
+                if twice_area(l) < 0.0 {
+                    reversed(l.clone())
+                } else {
+                    l.clone()
+                }
+            })
+            .collect();
+        assert_eq!(super::specks(&ccw, 0.01), specks);
+        // Everything is a speck of nothing but the largest piece when it is alone.
+        assert_eq!(super::specks(&loops[..1], 0.01), vec![None]);
+    }
+
+    #[test]
+    fn the_region_is_pieces_less_holes() {
+        let square = |x: f64, y: f64, s: f64| vec![[x, y], [x + s, y], [x + s, y + s], [x, y + s]];
+        let loops = [
+            square(0.0, 0.0, 10.0),
+            square(3.0, 3.0, 4.0),
+            square(4.0, 4.0, 1.0),
+            square(20.0, 0.0, 2.0),
+        ];
+        assert_eq!(region_area(&loops), 100.0 - 16.0 + 1.0 + 4.0);
+    }
+
+    #[test]
+    fn loops_left_out_constrain_nothing() {
+        // As below: without the island in the dent, the dent goes.
+        let outer = vec![
+            [0.0, 0.0],
+            [100.0, 0.0],
+            [100.0, 100.0],
+            [70.0, 100.0],
+            [65.0, 96.0],
+            [35.0, 96.0],
+            [30.0, 100.0],
+            [0.0, 100.0],
+        ];
+        let island = vec![[45.0, 97.0], [55.0, 97.0], [55.0, 107.0], [45.0, 107.0]];
+        let speck = vec![[200.0, 0.0], [200.5, 0.0], [200.5, 0.5]];
+        let s = simplify_leaving_out(&[outer, island, speck], 5.0, &[false, true, true]);
+        assert_eq!((s.loops.len(), s.loops[0].len()), (1, 4));
+        assert_eq!((s.kept, s.left_out, s.dropped), (vec![0], vec![1], 1));
     }
 
     #[test]

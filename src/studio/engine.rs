@@ -412,14 +412,16 @@ pub fn path_of(doc: &Project, meshes: &[PlanarMesh]) -> Result<Path, String> {
     Path::with_options(meshes, options).map_err(|e| people(&e.to_string()))
 }
 
-/// A library message in the page's words: keyframes and vertices counted from 1, no
-/// command-line flags.
+/// A library message in the page's words: keyframes counted from 1, no vertex or face
+/// numbers (the page does not show them), no command-line flags.
 pub fn people(message: &str) -> String {
     let mut out = String::with_capacity(message.len());
     let mut rest = message;
-    // "keyframe 1 (0-based)" -> "keyframe 2"; "vertex 2602 (0-based)" -> "a vertex".
-    while let Some(at) = rest.find(" (0-based)") {
+    // "keyframe 1 (0-based)" -> "keyframe 2"; "vertex 2602 (0-based)" -> "a vertex";
+    // "face 215 (0-based; vertices 0 2 1)" -> "a face".
+    while let Some(at) = rest.find(" (0-based") {
         let (before, after) = rest.split_at(at);
+        let close = after.find(')').map_or(after.len(), |c| c + 1);
         let digits = before.len() - before.trim_end_matches(|c: char| c.is_ascii_digit()).len();
         let (head, number) = before.split_at(before.len() - digits);
         match (head.strip_suffix("keyframe "), number.parse::<u64>()) {
@@ -432,14 +434,37 @@ pub fn people(message: &str) -> String {
                     out.push_str(h);
                     out.push_str(&format!(" a {word}"));
                 }
+                None if !number.is_empty() => {
+                    out.push_str(&format!("a {}", head.trim_end()));
+                }
                 _ => out.push_str(before),
             },
         }
-        rest = &after[" (0-based)".len()..];
+        rest = &after[close..];
     }
     out.push_str(rest);
     out.replace("; morphs with --allow-inverted", "")
         .replace(" (--allow-inverted)", "")
+}
+
+/// Why a mesh file cannot be a keyframe of the project, in the page's words.
+pub fn keyframe_problem(e: &crate::MeshError) -> String {
+    use crate::MeshError;
+    match e {
+        MeshError::FaceMissing { .. } => {
+            "a triangle of it is not one of the project's (a keyframe needs the same triangles, in any order)".into()
+        }
+        MeshError::FaceReversed { .. } => {
+            "a triangle of it is one of the project's with its corners reversed (is it mirrored?)".into()
+        }
+        MeshError::FaceRepeated { .. } => "a triangle is listed twice".into(),
+        MeshError::CountMismatch {
+            what,
+            source_count,
+            target_count,
+        } => format!("its {what} is {target_count}; the project's is {source_count}"),
+        other => people(&other.to_string()),
+    }
 }
 
 #[cfg(test)]
@@ -458,6 +483,10 @@ mod tests {
             "the piece holding a vertex has no pin"
         );
         assert_eq!(people("plain"), "plain");
+        assert_eq!(
+            people("face 215 (0-based; vertices 0 2 1) is reversed"),
+            "a face is reversed"
+        );
     }
 
     #[test]

@@ -38,6 +38,9 @@ pub struct History {
     bytes: usize,
     dropped: usize,
     next_id: u64,
+    /// The state below the oldest undo step kept (0, the opened state, until steps are
+    /// dropped).
+    base: u64,
     /// The state at the last save (0: the state the document was opened in).
     saved: Option<u64>,
     limit_bytes: usize,
@@ -59,15 +62,36 @@ impl History {
             bytes: 0,
             dropped: 0,
             next_id: 1,
+            base: 0,
             saved: Some(0),
             limit_bytes: bytes,
             limit_steps: steps.max(1),
         }
     }
 
-    /// The state the document is in: the newest undo step's number, or 0.
+    /// Sets other limits (the oldest steps go at once if over them).
+    pub fn set_limits(&mut self, bytes: usize, steps: usize) {
+        self.limit_bytes = bytes;
+        self.limit_steps = steps.max(1);
+        self.drop_oldest();
+    }
+
+    /// The state the document is in: the newest undo step's number, or the state below the
+    /// oldest kept (0: as opened).
     pub fn state(&self) -> u64 {
-        self.undo.back().map_or(0, |s| s.id)
+        self.undo.back().map_or(self.base, |s| s.id)
+    }
+
+    fn drop_oldest(&mut self) {
+        while self.undo.len() > 1
+            && (self.bytes > self.limit_bytes || self.undo.len() > self.limit_steps)
+        {
+            if let Some(old) = self.undo.pop_front() {
+                self.bytes -= old.bytes;
+                self.dropped += 1;
+                self.base = old.id;
+            }
+        }
     }
 
     /// Records a step done: `inverse` undoes it. The redo side is cleared.
@@ -89,14 +113,7 @@ impl History {
             bytes,
         });
         self.bytes += bytes;
-        while self.undo.len() > 1
-            && (self.bytes > self.limit_bytes || self.undo.len() > self.limit_steps)
-        {
-            if let Some(old) = self.undo.pop_front() {
-                self.bytes -= old.bytes;
-                self.dropped += 1;
-            }
-        }
+        self.drop_oldest();
     }
 
     /// The step undo would reverse.
@@ -242,5 +259,9 @@ mod tests {
         assert_eq!(h.undo_len(), 1, "16 KB of pose fills a 10 KB history alone");
         assert!(h.bytes() > 10_000);
         assert_eq!(h.dropped(), 8);
+        // Undone as far as kept, the document is not as opened: still unsaved.
+        let step = h.take_undo().expect("big");
+        h.undone(step, Edit::Fps(1.0));
+        assert!(h.dirty());
     }
 }

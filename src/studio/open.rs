@@ -251,19 +251,25 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
                 .options()
                 .map_err(|e| format!("{shown}: {e}"))?
                 .with_keep_specks(options.keep_specks);
-            let traced = crate::meshing::picture_outline(&texture.image, &picture_options, None)
-                .map_err(|e| format!("{shown}: {e}"))?;
-            let meshed = crate::meshing::mesh_outline(
-                &traced.outline,
+            let meshed = crate::meshing::mesh_picture(
+                &texture.image,
+                &picture_options,
                 &crate::meshing::MeshOptions::default(),
             )
             .map_err(|e| format!("{shown}: {e}"))?;
-            if traced.dropped_specks > 0 {
+            // The outline the mesh was made from, to edit in Outline mode.
+            let traced = crate::meshing::picture_outline(
+                &texture.image,
+                &picture_options,
+                meshed.stats.tolerance,
+            )
+            .map_err(|e| format!("{shown}: {e}"))?;
+            if meshed.stats.dropped_specks > 0 {
+                let k = meshed.stats.dropped_specks;
                 notes.push(format!(
-                    "{} speck{} dropped (pieces under {}% of the largest piece's area); mesh with --keep-specks to keep them",
-                    traced.dropped_specks,
-                    if traced.dropped_specks == 1 { "" } else { "s" },
-                    crate::meshing::SPECK_FRACTION * 100.0
+                    "{k} speck{} left out of {shown} (pieces under {}% of the largest piece's area); open it with --keep-specks to keep them",
+                    if k == 1 { "" } else { "s" },
+                    crate::meshing::SPECK_AREA_FRACTION * 100.0
                 ));
             }
             let uv = per_vertex_uv(

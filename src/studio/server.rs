@@ -333,12 +333,13 @@ async fn serve_socket(app: Arc<App>, mut socket: WebSocket) {
                 }
                 let items = latest_only(items);
                 let worker = app.clone();
+                // Each request's answers, then what it changed, in order.
                 let done = tokio::task::spawn_blocking(move || {
                     let mut session = worker.session();
-                    let mut answers = Vec::new();
+                    let mut out = Vec::new();
                     let mut works = Vec::new();
-                    let mut seq = 0;
                     for item in items {
+                        let mut seq = 0;
                         let reply = match item {
                             Item::Request(request) => {
                                 match &request {
@@ -350,14 +351,22 @@ async fn serve_socket(app: Arc<App>, mut socket: WebSocket) {
                             }
                             Item::Upload(bytes) => session.handle_upload(&bytes),
                         };
-                        answers.extend(reply.answers);
+                        let answered = !reply.answers.is_empty();
+                        out.extend(reply.answers);
                         works.extend(reply.work);
+                        let updates = session.updates(&mut seen, seq);
+                        let framed = updates.iter().any(|a| matches!(a, Answer::Binary(_)));
+                        out.extend(updates);
+                        if seq != 0 && !framed && !answered {
+                            out.push(Answer::Text(
+                                serde_json::json!({"type": "ack", "seq": seq}).to_string(),
+                            ));
+                        }
                     }
-                    let updates = session.updates(&mut seen, seq);
-                    (answers, updates, works, seen, seq)
+                    (out, works, seen)
                 })
                 .await;
-                let Ok((answers, updates, works, now_seen, seq)) = done else {
+                let Ok((answers, works, now_seen)) = done else {
                     let said = serde_json::json!({"type": "error", "message": "internal error"});
                     let _ = socket.send(Message::Text(said.to_string().into())).await;
                     continue;
@@ -366,13 +375,8 @@ async fn serve_socket(app: Arc<App>, mut socket: WebSocket) {
                 for (work, progress) in works {
                     spawn_work(&app, work, progress);
                 }
-                let framed = updates.iter().any(|a| matches!(a, Answer::Binary(_)));
                 let mut all = refusals;
                 all.extend(answers);
-                all.extend(updates);
-                if seq != 0 && !framed {
-                    all.push(Answer::Text(serde_json::json!({"type": "ack", "seq": seq}).to_string()));
-                }
                 let sent = send_all(&mut socket, all).await;
                 app.notify();
                 if closing || !sent {

@@ -297,6 +297,13 @@ impl Session {
         &self.history
     }
 
+    /// Sets the history's limits (the defaults are [`super::history::HISTORY_BYTES`] and
+    /// [`super::history::HISTORY_STEPS`]).
+    pub fn limit_history(&mut self, bytes: usize, steps: usize) {
+        self.history.set_limits(bytes, steps);
+        self.bump_state();
+    }
+
     /// The shared view.
     pub fn view(&self) -> &View {
         &self.view
@@ -706,10 +713,10 @@ impl Session {
         self.engine
             .rest
             .match_faces(&planar.faces)
-            .map_err(|e| format!("{name}: {}", people(&e.to_string())))?;
+            .map_err(|e| format!("{name}: {}", super::engine::keyframe_problem(&e)))?;
         planar
             .validate_allowing_inverted()
-            .map_err(|e| format!("{name}: {}", people(&e.to_string())))?;
+            .map_err(|e| format!("{name}: {}", super::engine::keyframe_problem(&e)))?;
         if self.keyframe_at_time(time).is_some() {
             return Err(format!("there is already a keyframe at {time} s"));
         }
@@ -812,7 +819,7 @@ impl Session {
                     "{} speck{} left out of the outline (pieces under {}% of the largest piece's area)",
                     traced.dropped_specks,
                     if traced.dropped_specks == 1 { "" } else { "s" },
-                    crate::meshing::SPECK_FRACTION * 100.0
+                    crate::meshing::SPECK_AREA_FRACTION * 100.0
                 ),
                 false,
             );
@@ -876,6 +883,7 @@ impl Session {
                 "the new mesh has {n} vertices: more than the {MAX_MESH_VERTICES} the studio takes (bdmorph mesh makes larger meshes, which the studio opens)"
             ));
         }
+        let off_target = meshed.stats.off_target.clone();
         let carried = super::carry::carry(&self.engine.rest, &self.doc.keyframes, &meshed.mesh);
         let uv = per_vertex_uv(&meshed.texcoords, &meshed.mesh.faces, n)
             .filter(|_| self.texture.is_some());
@@ -903,15 +911,24 @@ impl Session {
         }
         let mut said = format!("new mesh: {n} vertices");
         let off = (n as f64 - asked as f64).abs() / asked as f64;
-        if off > 0.1 {
-            said.push_str(&format!(
-                " for {asked} asked ({})",
-                if n > asked {
-                    "the outline and the smallest angle need that many"
-                } else {
-                    "the outline encloses too little area for more"
+        if off > crate::meshing::VERTEX_COUNT_SLACK {
+            use crate::meshing::OffTarget;
+            let why = match off_target {
+                Some(OffTarget::MinAngle { .. }) => {
+                    "the smallest angle allowed needs more vertices around narrow parts and sharp corners".to_owned()
                 }
-            ));
+                Some(
+                    OffTarget::Outline { outline_vertices }
+                    | OffTarget::Loops { outline_vertices, .. }
+                    | OffTarget::Detail { outline_vertices, .. }
+                    | OffTarget::Tolerance { outline_vertices, .. },
+                ) => format!(
+                    "the outline's {outline_vertices} points are needed to keep its pieces, holes and detail"
+                ),
+                _ if n < asked => "the outline encloses too little area for more".to_owned(),
+                _ => "the refinement came no closer".to_owned(),
+            };
+            said.push_str(&format!(" for {asked} asked: {why}"));
         }
         if keys > 1 {
             said.push_str(&format!("; {keys} keyframes carried over"));
@@ -1402,9 +1419,8 @@ impl Session {
 
     fn try_handle(&mut self, request: Request) -> Result<Reply, String> {
         let mut reply = Reply::default();
-        if !matches!(request, Request::Drag { .. } | Request::DragEnd) {
-            self.dragging = false;
-        }
+        // A stroke ends with drag_end, an edit, or a change of what is shown; not with a
+        // request that only reads (another tab's hello, a file list).
         match request {
             Request::Hello => {}
             Request::Select { keyframe } => {
@@ -1422,6 +1438,7 @@ impl Session {
                 if self.view.mode == "pose" {
                     self.view.drawing = None;
                 }
+                self.dragging = false;
                 self.bump_state();
             }
             Request::PinAdd { vertex } => self.pin_add(vertex)?,

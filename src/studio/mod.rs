@@ -112,7 +112,7 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
     session.offer_recoveries();
     for r in session.recovered() {
         eprintln!(
-            "studio: unsaved work of a studio that did not stop cleanly ({} keyframes{}) is offered in the page",
+            "studio: unsaved work a studio in this folder kept when it stopped ({} keyframes{}) is offered in the page",
             r.keyframes,
             r.source
                 .as_ref()

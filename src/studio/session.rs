@@ -1117,6 +1117,9 @@ impl Session {
             format!("open {name}"),
             Edit::Document(Box::new(opened.project)),
         )?;
+        // As opened, the document is its file (undo goes back to the one before, unsaved).
+        self.history.mark_saved();
+        self.workspace.clear_autosave();
         self.project_file = opened.project_file;
         self.source = Some(name.clone());
         self.show_keyframe(0);

@@ -5,8 +5,8 @@
 //!   an open page reconnects by itself; `port`: the port last used, taken again when free.
 //! - `autosave-PID.json`: the document of a running studio, written every few seconds while it
 //!   has unsaved changes ([`AUTOSAVE_SECONDS`]) and when it stops.
-//! - `recovered/`: autosaves of studios that did not stop cleanly (killed, crashed), moved
-//!   there by the next start, which offers to restore them.
+//! - `recovered/`: the autosaves of studios no longer running (stopped with unsaved changes,
+//!   killed, crashed), moved there by the next start, which offers to restore them.
 //!
 //! The page names files by plain names only ([`Workspace::file`]): letters, digits, spaces,
 //! `-`, `_` and `.`, not hidden, no folders.
@@ -44,7 +44,7 @@ pub struct Entry {
     pub modified: u64,
 }
 
-/// Work recovered from a studio that did not stop cleanly.
+/// Unsaved work of a studio no longer running.
 #[derive(Clone, Debug, Serialize)]
 pub struct Recovered {
     /// The recovery file's name (in `.bdmorph-studio/recovered/`).

@@ -69,14 +69,15 @@ on("state", (st) => {
   const r = st.recovered[0];
   banner.hidden = !r;
   if (r) {
-    $("recovered-text").textContent = `Unsaved work of a studio that did not stop cleanly was found: ${when(r.saved_at)}, ${r.keyframes} keyframes, ${r.vertices} vertices${r.source ? `, from ${r.source}` : ""}${st.recovered.length > 1 ? ` (and ${st.recovered.length - 1} more in Open)` : ""}.`;
+    $("recovered-text").textContent = `Unsaved work a studio in this folder kept when it stopped (${when(r.saved_at)}): ${r.keyframes} keyframes, ${r.vertices} vertices${r.source ? `, from ${r.source}` : ""}${st.recovered.length > 1 ? ` (and ${st.recovered.length - 1} more in Open)` : ""}.`;
     $("recovered-restore").onclick = () => send({ op: "recover", name: r.name });
     $("recovered-aside").onclick = () => send({ op: "discard", name: r.name });
   }
 });
 
+// (Scripted tests that reload on purpose set studio.leaving.)
 window.addEventListener("beforeunload", (e) => {
-  if (S.state && S.state.dirty) { e.preventDefault(); e.returnValue = ""; }
+  if (S.state && S.state.dirty && !S.leaving) { e.preventDefault(); e.returnValue = ""; }
 });
 
 // A file dropped on the page goes to the workspace, then is opened; a picture dropped on a

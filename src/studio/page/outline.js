@@ -126,8 +126,12 @@ $("outline-mode").onclick = () => {
 };
 $("pose-mode").onclick = () => send({ op: "mode", mode: "pose" });
 $("trace").onclick = trace;
+// Each change traces again with the controls' settings (the document's follow).
 for (const id of ["background", "background-colour", "threshold", "threshold-on"]) {
-  $(id).addEventListener("change", () => { syncOutlineTools(); trace(); });
+  $(id).addEventListener("change", () => {
+    $("background-colour").hidden = $("background").value !== "colour";
+    trace();
+  });
 }
 $("threshold").addEventListener("input", () => { $("threshold-readout").textContent = Number($("threshold").value).toFixed(2); });
 $("new-loop").onclick = () => send({ op: "outline_new_loop" });

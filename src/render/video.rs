@@ -47,7 +47,7 @@ pub enum VideoError {
         /// What is empty.
         what: &'static str,
     },
-    /// A frame's size differs from the first frame's.
+    /// A frame's size differs from the video's frames' size.
     #[error("frame {index} is {width}x{height} pixels, but the video's frames are {first_width}x{first_height}")]
     FrameSize {
         /// The frame's index.

@@ -300,3 +300,48 @@ fn a_blend_makes_a_one_frame_video() {
     };
     check_stream(&ffprobe, &video, 64, 64, 1, 25);
 }
+
+/// A video streamed frame by frame into a file (`Mp4Encoder`, frames rendered one at a time)
+/// is the one `encode_mp4` makes of the same frames, and a decoder reads every frame.
+#[test]
+fn a_video_streamed_into_a_file_decodes_with_every_frame() {
+    use bdmorph::render::video::{self, Mp4Encoder};
+    use bdmorph::render::{Drawing, ImageSize, Viewport};
+    let dir = scratch("streamed");
+    let mesh = generate::disk(8, 0.2);
+    let view = Viewport::fit([&mesh.positions[..]]);
+    let size = ImageSize {
+        width: 97,
+        height: 64,
+    };
+    let picture = |i: usize| {
+        let moved = generate::twist(&mesh, 0.1 * i as f64);
+        let drawing = Drawing {
+            faces: &moved.faces,
+            corner_uv: None,
+            texture: None,
+            face_colours: None,
+        };
+        raster::render(&moved.positions, &drawing, &view, size)
+    };
+    let path = dir.join("streamed.mp4");
+    let file = std::fs::File::create(&path).expect("create");
+    let mut encoder = Mp4Encoder::new(file, 97, 64, 15).expect("encoder");
+    for i in 0..31 {
+        encoder.push(&picture(i)).expect("push");
+    }
+    drop(encoder.finish().expect("finish"));
+    let frames: Vec<Image> = (0..31).map(picture).collect();
+    let whole = video::encode_mp4(&frames, 15).expect("encode_mp4");
+    assert_eq!(std::fs::read(&path).expect("read"), whole);
+    let Some((ffprobe, ffmpeg)) = ffmpeg_tools() else {
+        return;
+    };
+    check_stream(&ffprobe, &path, 98, 64, 31, 15);
+    let rgb = decode_rgb(&ffmpeg, &path);
+    assert_eq!(rgb.len(), 31 * 98 * 64 * 3);
+    for (i, picture) in frames.iter().enumerate() {
+        let db = psnr(&rgb[i * 98 * 64 * 3..][..98 * 64 * 3], 98, picture);
+        assert!(db > 30.0, "frame {i}: {db:.1} dB");
+    }
+}

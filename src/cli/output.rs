@@ -1,5 +1,6 @@
 //! Output formats: choosing one, rendering every frame to bytes, writing atomically.
 
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use bdmorph::io::{self, TexCoords};
@@ -165,7 +166,9 @@ type MakeFile<'a> = dyn Fn(usize, &Frame) -> Result<(PathBuf, Vec<u8>), String> 
 
 /// Renders every frame into files in memory: `(path, bytes)`. Frames are drawn and encoded
 /// in parallel on rayon's pool (each on its own, so the bytes do not depend on the number of
-/// threads); `progress` is called once per frame, from any thread.
+/// threads); an animation's pictures are drawn a batch at a time and pushed into its
+/// encoder, so only its compressed bytes grow with the number of frames. `progress` is
+/// called once per frame, from any thread.
 pub fn render(
     plan: &Plan,
     look: &Look,
@@ -210,16 +213,10 @@ pub fn render(
             })
             .collect::<Result<Vec<_>, String>>()
     };
-    let pictures = || -> Vec<Image> {
-        frames
-            .par_iter()
-            .enumerate()
-            .map(|(i, f)| {
-                let img = raster::render(&f.positions, &drawing(i), &view, look.size);
-                progress();
-                img
-            })
-            .collect()
+    let picture = |i: usize, f: &Frame| {
+        let img = raster::render(&f.positions, &drawing(i), &view, look.size);
+        progress();
+        img
     };
     let mut files = Vec::new();
     match plan.format {
@@ -255,15 +252,26 @@ pub fn render(
             })?;
         }
         Format::Gif => {
-            let images = pictures();
             let delay = (100 / look.fps.clamp(1, 100)) as u16;
-            files.push((name(0), raster::encode_gif(&images, delay).map_err(err)?));
+            let (w, h) = (look.size.width, look.size.height);
+            let mut gif = raster::GifEncoder::new(Vec::new(), w, h, delay).map_err(err)?;
+            in_batches(frames, &picture, &mut |images| {
+                gif.push_batch(images).map_err(err)
+            })?;
+            files.push((name(0), gif.finish().map_err(err)?));
         }
         Format::Mp4 => {
-            let images = pictures();
-            let bytes = video::encode_mp4(&images, look.fps)
-                .map_err(|e| format!("{}: {e}", name(0).display()))?;
-            files.push((name(0), bytes));
+            let fail = |e: video::VideoError| format!("{}: {e}", name(0).display());
+            let (w, h) = (look.size.width, look.size.height);
+            let mut mp4 =
+                video::Mp4Encoder::new(Cursor::new(Vec::new()), w, h, look.fps).map_err(fail)?;
+            in_batches(frames, &picture, &mut |images| {
+                images
+                    .iter()
+                    .try_for_each(|img| mp4.push(img))
+                    .map_err(fail)
+            })?;
+            files.push((name(0), mp4.finish().map_err(fail)?.into_inner()));
         }
         Format::Html => {
             let texture_png = match look.texture {
@@ -295,6 +303,36 @@ pub fn render(
         }
     }
     Ok(files)
+}
+
+/// Draws the frames' pictures a batch of 2 x threads at a time (in parallel on rayon's pool)
+/// and hands the batches in order to `push`, drawing the next batch while `push` encodes the
+/// current one: an animation holds two batches of pictures, never every frame.
+fn in_batches(
+    frames: &[Frame],
+    picture: &(dyn Fn(usize, &Frame) -> Image + Sync),
+    push: &mut (dyn FnMut(&[Image]) -> Result<(), String> + Send),
+) -> Result<(), String> {
+    let batch = 2 * rayon::current_num_threads();
+    let draw = |start: usize| -> Vec<Image> {
+        let end = frames.len().min(start.saturating_add(batch));
+        frames
+            .get(start..end)
+            .unwrap_or_default()
+            .par_iter()
+            .enumerate()
+            .map(|(k, f)| picture(start + k, f))
+            .collect()
+    };
+    let mut start = 0;
+    let mut current = draw(start);
+    while !current.is_empty() {
+        start += batch;
+        let (pushed, next) = rayon::join(|| push(&current), || draw(start));
+        pushed?;
+        current = next;
+    }
+    Ok(())
 }
 
 /// Writes rendered files, each atomically; creates the directory of per-frame output.

@@ -1,6 +1,7 @@
 //! Rasterised pictures: [`render`] a frame to an [`Image`], encode it as PNG ([`encode_png`])
-//! or a looping animated GIF ([`encode_gif`]), tile frames into a contact sheet ([`strip`]),
-//! and read PNG or JPEG textures ([`read_image`], [`decode_image`]).
+//! or a looping animated GIF ([`encode_gif`], or frame by frame with a [`GifEncoder`]), tile
+//! frames into a contact sheet ([`strip`]), and read PNG or JPEG textures ([`read_image`],
+//! [`decode_image`]).
 //!
 //! Triangles are drawn anti-aliased with [`tiny_skia`]: light blue with dark blue edges, or
 //! filled with a texture through their corner texture coordinates; triangles that are flipped
@@ -25,7 +26,7 @@ use super::{Drawing, Image, ImageSize, Viewport};
 use rayon::prelude::*;
 use std::error::Error as StdError;
 use std::fmt;
-use std::io::Cursor;
+use std::io::{Cursor, Write};
 use std::path::{Path, PathBuf};
 use tiny_skia::{
     Color, FillRule, FilterQuality, Paint, PathBuilder, Pattern, Pixmap, PixmapRef, Shader,
@@ -112,7 +113,7 @@ pub enum RenderError {
         what: &'static str,
     },
     /// The frames of an animation differ in size.
-    #[error("frame {index} is {width}x{height} pixels but frame 0 is {first_width}x{first_height}; all frames must have one size")]
+    #[error("frame {index} is {width}x{height} pixels but the animation is {first_width}x{first_height}; all frames must have one size")]
     FrameSize {
         /// The frame (0-based).
         index: usize,
@@ -120,10 +121,18 @@ pub enum RenderError {
         width: u32,
         /// Its height.
         height: u32,
-        /// Width of frame 0.
+        /// The animation's width: frame 0's for [`encode_gif`], the one a [`GifEncoder`]
+        /// was created with.
         first_width: u32,
-        /// Height of frame 0.
+        /// The animation's height.
         first_height: u32,
+    },
+    /// An earlier write of a [`GifEncoder`] failed: the file is incomplete and the encoder
+    /// takes no more frames.
+    #[error("an earlier write failed: the {format} file is incomplete")]
+    Incomplete {
+        /// The format.
+        format: &'static str,
     },
     /// The image is too large for the format (GIF allows at most 65535 pixels per side).
     #[error("{format} allows at most {max} pixels per side, the image is {width}x{height}")]
@@ -669,66 +678,316 @@ pub fn read_image(path: &Path) -> Result<Image, RenderError> {
     decode_image(&bytes).map_err(|e| e.in_file(path))
 }
 
-/// Encodes frames as an animated GIF that loops forever, each shown for
-/// `delay_centiseconds` (viewers tend to treat 0 and 1 as 10). Each frame gets its own
-/// palette: exact when it has at most 256 colours, otherwise quantised (NeuQuant).
-/// Fully transparent pixels stay transparent.
-///
-/// # Errors
-/// [`RenderError::Empty`] without frames or for frames without pixels,
-/// [`RenderError::FrameSize`] when frames differ in size, [`RenderError::TooLargeForFormat`]
-/// beyond 65535 pixels per side, [`RenderError::BadBuffer`] for a malformed frame.
-pub fn encode_gif(frames: &[Image], delay_centiseconds: u16) -> Result<Vec<u8>, RenderError> {
+/// Checks that every frame has the first one's size and a whole pixel buffer, in order, and
+/// returns that size.
+fn check_gif_frames(frames: &[Image]) -> Result<(u32, u32), RenderError> {
     let first = frames.first().ok_or(RenderError::Empty {
         what: "an animation needs at least one frame",
     })?;
     let (width, height) = (first.width, first.height);
     for (index, f) in frames.iter().enumerate() {
-        if (f.width, f.height) != (width, height) {
-            return Err(RenderError::FrameSize {
-                index,
-                width: f.width,
-                height: f.height,
-                first_width: width,
-                first_height: height,
+        check_gif_frame(f, index, width, height)?;
+    }
+    Ok((width, height))
+}
+
+/// Checks that frame `index` is `width` x `height` pixels with a whole pixel buffer.
+fn check_gif_frame(f: &Image, index: usize, width: u32, height: u32) -> Result<(), RenderError> {
+    if (f.width, f.height) != (width, height) {
+        return Err(RenderError::FrameSize {
+            index,
+            width: f.width,
+            height: f.height,
+            first_width: width,
+            first_height: height,
+        });
+    }
+    check_buffer(f)
+}
+
+/// A frame quantised to its own palette and LZW-compressed, ready to be written: what one
+/// frame of an animation costs after it is encoded.
+fn gif_frame(f: &Image, w: u16, h: u16, delay_centiseconds: u16) -> gif::Frame<'static> {
+    let mut pixels = f.rgba.clone();
+    let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
+    frame.delay = delay_centiseconds;
+    frame.make_lzw_pre_encoded();
+    frame
+}
+
+/// Where a [`GifEncoder`] is: waiting for its first frame (nothing written yet), writing, or
+/// stopped by a failed write.
+enum GifState<W: Write> {
+    Waiting(W),
+    Writing(gif::Encoder<W>),
+    Failed,
+}
+
+/// An animated GIF written frame by frame to a [`Write`] sink, so that an animation of any
+/// length holds only the frames in hand, never all of them: the same file as [`encode_gif`]
+/// (byte for byte) for the same frames and delay, whichever way they are pushed.
+///
+/// Each frame gets its own palette (exact when it has at most 256 colours, otherwise
+/// quantised with NeuQuant) and is LZW-compressed on its own, then written at once; fully
+/// transparent pixels stay transparent; the animation loops forever, each frame shown for
+/// the delay given at creation. [`push_batch`](GifEncoder::push_batch) quantises and
+/// compresses a batch of frames in parallel on rayon's pool and writes them in order (the
+/// bytes do not depend on the batch sizes or the number of threads).
+///
+/// Nothing is written before the first frame. Frames of another size than the encoder's,
+/// or with a malformed pixel buffer, are refused before anything of them is encoded, and the
+/// encoder goes on. A failed write leaves the file incomplete: the encoder then refuses more
+/// frames ([`RenderError::Incomplete`]). Dropping the encoder without
+/// [`finish`](GifEncoder::finish) ends the file as `finish` does, ignoring write errors.
+///
+/// ```
+/// use bdmorph::render::raster::{self, GifEncoder};
+/// use bdmorph::render::Image;
+///
+/// let frame = |grey: u8| Image { width: 8, height: 4, rgba: [grey, grey, grey, 255].repeat(32) };
+/// let mut encoder = GifEncoder::new(Vec::new(), 8, 4, 10)?;
+/// for i in 0..3 {
+///     encoder.push(&frame(80 * i))?;
+/// }
+/// let bytes = encoder.finish()?;
+/// assert!(bytes.starts_with(b"GIF89a"));
+/// let frames: Vec<Image> = (0..3).map(|i| frame(80 * i)).collect();
+/// assert_eq!(bytes, raster::encode_gif(&frames, 10)?);
+/// # Ok::<(), raster::RenderError>(())
+/// ```
+pub struct GifEncoder<W: Write> {
+    state: GifState<W>,
+    width: u32,
+    height: u32,
+    w: u16,
+    h: u16,
+    delay_centiseconds: u16,
+    frames: usize,
+}
+
+impl<W: Write> GifEncoder<W> {
+    /// An encoder of `width` x `height` frames, each shown for `delay_centiseconds`
+    /// (viewers tend to treat 0 and 1 as 10), writing to `sink`. Nothing is written yet.
+    ///
+    /// # Errors
+    /// [`RenderError::Empty`] for frames without pixels (a zero side),
+    /// [`RenderError::TooLargeForFormat`] beyond 65535 pixels per side.
+    ///
+    /// ```
+    /// use bdmorph::render::raster::{GifEncoder, RenderError};
+    ///
+    /// assert!(GifEncoder::new(Vec::new(), 640, 480, 4).is_ok());
+    /// assert!(matches!(
+    ///     GifEncoder::new(Vec::new(), 70_000, 10, 4),
+    ///     Err(RenderError::TooLargeForFormat { .. })
+    /// ));
+    /// assert!(matches!(GifEncoder::new(Vec::new(), 0, 10, 4), Err(RenderError::Empty { .. })));
+    /// ```
+    pub fn new(
+        sink: W,
+        width: u32,
+        height: u32,
+        delay_centiseconds: u16,
+    ) -> Result<GifEncoder<W>, RenderError> {
+        if width == 0 || height == 0 {
+            return Err(RenderError::Empty {
+                what: "the frames have no pixels",
             });
         }
-        check_buffer(f)?;
-    }
-    if width == 0 || height == 0 {
-        return Err(RenderError::Empty {
-            what: "the frames have no pixels",
-        });
-    }
-    let (Ok(w), Ok(h)) = (u16::try_from(width), u16::try_from(height)) else {
-        return Err(RenderError::TooLargeForFormat {
-            format: "GIF",
+        let (Ok(w), Ok(h)) = (u16::try_from(width), u16::try_from(height)) else {
+            return Err(RenderError::TooLargeForFormat {
+                format: "GIF",
+                width,
+                height,
+                max: u32::from(u16::MAX),
+            });
+        };
+        Ok(GifEncoder {
+            state: GifState::Waiting(sink),
             width,
             height,
-            max: u32::from(u16::MAX),
-        });
-    };
-    let fail = |e: gif::EncodingError| encode_error("GIF")(Box::new(e));
-    let mut out = Vec::new();
-    let mut encoder = gif::Encoder::new(&mut out, w, h, &[]).map_err(fail)?;
-    encoder.set_repeat(gif::Repeat::Infinite).map_err(fail)?;
-    // Each frame is quantised to its palette and LZW-compressed on its own (in parallel on
-    // rayon's pool), then written in order: the bytes do not depend on the thread count.
-    let encoded: Vec<gif::Frame<'static>> = frames
-        .par_iter()
-        .map(|f| {
-            let mut pixels = f.rgba.clone();
-            let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
-            frame.delay = delay_centiseconds;
-            frame.make_lzw_pre_encoded();
-            frame
+            w,
+            h,
+            delay_centiseconds,
+            frames: 0,
         })
-        .collect();
-    for frame in &encoded {
-        encoder.write_lzw_pre_encoded_frame(frame).map_err(fail)?;
     }
-    encoder.into_inner().map_err(fail)?;
-    Ok(out)
+
+    /// Quantises, compresses and writes one frame (on the calling thread).
+    ///
+    /// # Errors
+    /// [`RenderError::FrameSize`] for a frame of another size than the encoder's and
+    /// [`RenderError::BadBuffer`] for a malformed one (nothing written; the encoder goes on),
+    /// [`RenderError::Encode`] when writing fails, [`RenderError::Incomplete`] after an
+    /// earlier failed write.
+    ///
+    /// ```
+    /// use bdmorph::render::raster::{GifEncoder, RenderError};
+    /// use bdmorph::render::Image;
+    ///
+    /// let white = |width, height| Image { width, height, rgba: vec![255; (width * height * 4) as usize] };
+    /// let mut encoder = GifEncoder::new(Vec::new(), 4, 4, 10)?;
+    /// encoder.push(&white(4, 4))?;
+    /// let err = encoder.push(&white(4, 5)).unwrap_err();
+    /// assert!(matches!(err, RenderError::FrameSize { index: 1, height: 5, first_height: 4, .. }));
+    /// encoder.push(&white(4, 4))?;
+    /// assert_eq!(encoder.frames(), 2);
+    /// # Ok::<(), RenderError>(())
+    /// ```
+    pub fn push(&mut self, frame: &Image) -> Result<(), RenderError> {
+        self.usable()?;
+        check_gif_frame(frame, self.frames, self.width, self.height)?;
+        let encoded = gif_frame(frame, self.w, self.h, self.delay_centiseconds);
+        self.write(std::slice::from_ref(&encoded))
+    }
+
+    /// Quantises and compresses a batch of frames in parallel on rayon's pool, then writes
+    /// them in order: the same bytes as pushing them one by one. The batch is checked
+    /// whole first, so a bad frame refuses the batch before any of it is written.
+    ///
+    /// # Errors
+    /// Those of [`push`](GifEncoder::push), for the first bad frame of the batch (its
+    /// `index` counts every frame pushed before the batch).
+    ///
+    /// ```
+    /// use bdmorph::render::raster::{self, GifEncoder};
+    /// use bdmorph::render::Image;
+    ///
+    /// let frames: Vec<Image> = (0..5u8)
+    ///     .map(|i| Image { width: 6, height: 6, rgba: [50 * i, 0, 0, 255].repeat(36) })
+    ///     .collect();
+    /// let mut encoder = GifEncoder::new(Vec::new(), 6, 6, 5)?;
+    /// encoder.push_batch(&frames[..2])?;
+    /// encoder.push_batch(&frames[2..])?;
+    /// assert_eq!(encoder.finish()?, raster::encode_gif(&frames, 5)?);
+    /// # Ok::<(), raster::RenderError>(())
+    /// ```
+    pub fn push_batch(&mut self, frames: &[Image]) -> Result<(), RenderError> {
+        self.usable()?;
+        for (i, f) in frames.iter().enumerate() {
+            check_gif_frame(f, self.frames + i, self.width, self.height)?;
+        }
+        let (w, h, delay) = (self.w, self.h, self.delay_centiseconds);
+        let encoded: Vec<gif::Frame<'static>> = frames
+            .par_iter()
+            .map(|f| gif_frame(f, w, h, delay))
+            .collect();
+        self.write(&encoded)
+    }
+
+    /// How many frames have been written.
+    ///
+    /// ```
+    /// use bdmorph::render::raster::GifEncoder;
+    ///
+    /// let encoder = GifEncoder::new(std::io::sink(), 4, 4, 10)?;
+    /// assert_eq!(encoder.frames(), 0);
+    /// # Ok::<(), bdmorph::render::raster::RenderError>(())
+    /// ```
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Ends the file (its trailer) and returns the sink.
+    ///
+    /// # Errors
+    /// [`RenderError::Empty`] when no frame was pushed (nothing was written),
+    /// [`RenderError::Encode`] when writing fails, [`RenderError::Incomplete`] after an
+    /// earlier failed write.
+    ///
+    /// ```
+    /// use bdmorph::render::raster::{GifEncoder, RenderError};
+    /// use bdmorph::render::Image;
+    ///
+    /// let empty = GifEncoder::new(Vec::new(), 4, 4, 10)?;
+    /// assert!(matches!(empty.finish(), Err(RenderError::Empty { .. })));
+    ///
+    /// let mut encoder = GifEncoder::new(Vec::new(), 4, 4, 10)?;
+    /// encoder.push(&Image { width: 4, height: 4, rgba: vec![0; 64] })?;
+    /// let bytes = encoder.finish()?;
+    /// assert_eq!(bytes.last(), Some(&b';'));
+    /// # Ok::<(), RenderError>(())
+    /// ```
+    pub fn finish(self) -> Result<W, RenderError> {
+        match self.state {
+            GifState::Waiting(_) => Err(RenderError::Empty {
+                what: "an animation needs at least one frame",
+            }),
+            GifState::Writing(encoder) => encoder.into_inner().map_err(gif_error),
+            GifState::Failed => Err(RenderError::Incomplete { format: "GIF" }),
+        }
+    }
+
+    fn usable(&self) -> Result<(), RenderError> {
+        match self.state {
+            GifState::Failed => Err(RenderError::Incomplete { format: "GIF" }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Writes encoded frames in order (the header first, before the first frame); a failure
+    /// stops the encoder.
+    fn write(&mut self, encoded: &[gif::Frame<'static>]) -> Result<(), RenderError> {
+        if encoded.is_empty() {
+            return Ok(());
+        }
+        let mut encoder = match std::mem::replace(&mut self.state, GifState::Failed) {
+            GifState::Waiting(sink) => {
+                let mut encoder =
+                    gif::Encoder::new(sink, self.w, self.h, &[]).map_err(gif_error)?;
+                encoder
+                    .set_repeat(gif::Repeat::Infinite)
+                    .map_err(gif_error)?;
+                encoder
+            }
+            GifState::Writing(encoder) => encoder,
+            GifState::Failed => return Err(RenderError::Incomplete { format: "GIF" }),
+        };
+        for frame in encoded {
+            encoder
+                .write_lzw_pre_encoded_frame(frame)
+                .map_err(gif_error)?;
+            self.frames += 1;
+        }
+        self.state = GifState::Writing(encoder);
+        Ok(())
+    }
+}
+
+fn gif_error(e: gif::EncodingError) -> RenderError {
+    encode_error("GIF")(Box::new(e))
+}
+
+/// Encodes frames as an animated GIF that loops forever, each shown for
+/// `delay_centiseconds` (viewers tend to treat 0 and 1 as 10). Each frame gets its own
+/// palette: exact when it has at most 256 colours, otherwise quantised (NeuQuant).
+/// Fully transparent pixels stay transparent.
+///
+/// Every frame is checked before any is encoded; then all are encoded in parallel as one
+/// batch of a [`GifEncoder`], which makes animations frame by frame without holding them
+/// all.
+///
+/// # Errors
+/// [`RenderError::Empty`] without frames or for frames without pixels,
+/// [`RenderError::FrameSize`] when frames differ in size, [`RenderError::TooLargeForFormat`]
+/// beyond 65535 pixels per side, [`RenderError::BadBuffer`] for a malformed frame.
+///
+/// ```
+/// use bdmorph::render::{raster, Image};
+///
+/// let frames: Vec<Image> = (0..4u8)
+///     .map(|i| Image { width: 10, height: 10, rgba: [60 * i, 90, 200, 255].repeat(100) })
+///     .collect();
+/// let gif = raster::encode_gif(&frames, 8)?;
+/// assert!(gif.starts_with(b"GIF89a"));
+/// assert!(matches!(raster::encode_gif(&[], 8), Err(raster::RenderError::Empty { .. })));
+/// # Ok::<(), raster::RenderError>(())
+/// ```
+pub fn encode_gif(frames: &[Image], delay_centiseconds: u16) -> Result<Vec<u8>, RenderError> {
+    let (width, height) = check_gif_frames(frames)?;
+    let mut encoder = GifEncoder::new(Vec::new(), width, height, delay_centiseconds)?;
+    encoder.push_batch(frames)?;
+    encoder.finish()
 }
 
 /// A contact sheet: the frames tiled left to right, `columns` per row (at least 1, at most
@@ -1199,6 +1458,209 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    /// `encode_gif` as it was before `GifEncoder` (every frame checked, then all quantised
+    /// and compressed in parallel, then written), to compare bytes with.
+    fn encode_gif_whole(frames: &[Image], delay: u16) -> Vec<u8> {
+        let (w, h) = (frames[0].width as u16, frames[0].height as u16);
+        let mut out = Vec::new();
+        let mut encoder = gif::Encoder::new(&mut out, w, h, &[]).unwrap();
+        encoder.set_repeat(gif::Repeat::Infinite).unwrap();
+        let encoded: Vec<gif::Frame<'static>> = frames
+            .par_iter()
+            .map(|f| {
+                let mut pixels = f.rgba.clone();
+                let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, 10);
+                frame.delay = delay;
+                frame.make_lzw_pre_encoded();
+                frame
+            })
+            .collect();
+        for frame in &encoded {
+            encoder.write_lzw_pre_encoded_frame(frame).unwrap();
+        }
+        encoder.into_inner().unwrap();
+        out
+    }
+
+    /// Frames of a few colours (exact palettes), of noise (quantised), and with transparent
+    /// pixels.
+    fn mixed_frames(count: u32, width: u32, height: u32) -> Vec<Image> {
+        (0..count)
+            .map(|i| match i % 3 {
+                0 => noise(width, height, i),
+                1 => {
+                    let (pos, faces) = square();
+                    let size = ImageSize { width, height };
+                    let view = Viewport {
+                        min: [-0.25 - 0.05 * f64::from(i), -0.25],
+                        max: [1.25, 1.25 + 0.05 * f64::from(i)],
+                    };
+                    render(&pos, &plain(&faces), &view, size)
+                }
+                _ => {
+                    let mut img = noise(width, height, 100 + i);
+                    for p in img.rgba.chunks_exact_mut(4).step_by(3) {
+                        p[3] = 0;
+                    }
+                    img
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn streamed_gifs_are_the_whole_slice_bytes() {
+        for (count, delay) in [(1, 10), (2, 0), (17, 7)] {
+            let frames = mixed_frames(count, 37, 23);
+            let old = encode_gif_whole(&frames, delay);
+            assert_eq!(encode_gif(&frames, delay).unwrap(), old, "{count} frames");
+            // One at a time.
+            let mut one = GifEncoder::new(Vec::new(), 37, 23, delay).unwrap();
+            for f in &frames {
+                one.push(f).unwrap();
+            }
+            assert_eq!(one.frames(), frames.len());
+            assert_eq!(
+                one.finish().unwrap(),
+                old,
+                "{count} frames pushed one by one"
+            );
+            // Batches of uneven sizes, empty ones and single pushes among them.
+            let mut batched = GifEncoder::new(Vec::new(), 37, 23, delay).unwrap();
+            let mut rest = &frames[..];
+            for size in [0, 1, 4, 0, 2, 7, 1].into_iter().cycle() {
+                if rest.is_empty() {
+                    break;
+                }
+                let (batch, tail) = rest.split_at(size.min(rest.len()));
+                if batch.len() == 1 && size == 1 {
+                    batched.push(&batch[0]).unwrap();
+                } else {
+                    batched.push_batch(batch).unwrap();
+                }
+                rest = tail;
+            }
+            assert_eq!(batched.finish().unwrap(), old, "{count} frames in batches");
+        }
+        // Into a writer that is not a Vec.
+        let frames = mixed_frames(4, 16, 16);
+        let mut encoder = GifEncoder::new(Cursor::new(Vec::new()), 16, 16, 3).unwrap();
+        encoder.push_batch(&frames).unwrap();
+        let bytes = encoder.finish().unwrap().into_inner();
+        assert_eq!(bytes, encode_gif_whole(&frames, 3));
+    }
+
+    #[test]
+    fn gif_encoder_refuses_bad_frames_and_goes_on() {
+        let good = mixed_frames(3, 8, 6);
+        // A frame of another size, even the first, is refused against the encoder's size.
+        let mut encoder = GifEncoder::new(Vec::new(), 8, 6, 5).unwrap();
+        let err = encoder.push(&noise(8, 7, 0)).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                RenderError::FrameSize {
+                    index: 0,
+                    width: 8,
+                    height: 7,
+                    first_width: 8,
+                    first_height: 6
+                }
+            ),
+            "{err:?}"
+        );
+        assert_eq!(
+            err.to_string(),
+            "frame 0 is 8x7 pixels but the animation is 8x6; all frames must have one size"
+        );
+        encoder.push(&good[0]).unwrap();
+        // A batch with a bad frame is refused whole, naming the frame by its place in the
+        // animation; nothing of it is written.
+        let mut broken = good[2].clone();
+        broken.rgba.pop();
+        let batch = [good[1].clone(), broken];
+        assert!(matches!(
+            encoder.push_batch(&batch),
+            Err(RenderError::BadBuffer {
+                expected: 192,
+                actual: 191,
+                ..
+            })
+        ));
+        let batch = [good[1].clone(), noise(9, 6, 1)];
+        assert!(matches!(
+            encoder.push_batch(&batch),
+            Err(RenderError::FrameSize {
+                index: 2,
+                width: 9,
+                ..
+            })
+        ));
+        assert_eq!(encoder.frames(), 1);
+        encoder.push_batch(&good[1..]).unwrap();
+        assert_eq!(encoder.finish().unwrap(), encode_gif_whole(&good, 5));
+
+        // Nothing pushed: refused at the end, and nothing written.
+        let mut sink = Vec::new();
+        let encoder = GifEncoder::new(&mut sink, 8, 6, 5).unwrap();
+        assert!(matches!(encoder.finish(), Err(RenderError::Empty { .. })));
+        assert!(sink.is_empty());
+        // Sizes GIF cannot hold.
+        for (w, h) in [(0, 5), (5, 0), (0, 0)] {
+            assert!(matches!(
+                GifEncoder::new(Vec::new(), w, h, 5),
+                Err(RenderError::Empty { .. })
+            ));
+        }
+        assert!(matches!(
+            GifEncoder::new(Vec::new(), 65536, 1, 5),
+            Err(RenderError::TooLargeForFormat { width: 65536, .. })
+        ));
+        assert!(GifEncoder::new(Vec::new(), 65535, 1, 5).is_ok());
+    }
+
+    /// A sink that takes `room` bytes and then fails.
+    struct Full {
+        room: usize,
+    }
+
+    impl Write for Full {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.room == 0 {
+                return Err(std::io::Error::other("disk full"));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            Ok(n)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn gif_encoder_stops_after_a_failed_write() {
+        let frames = mixed_frames(3, 12, 12);
+        let whole = encode_gif_whole(&frames, 5).len();
+        for room in [0, 5, 30, whole / 2, whole - 1] {
+            let mut encoder = GifEncoder::new(Full { room }, 12, 12, 5).unwrap();
+            let mut failed = false;
+            for f in &frames {
+                match encoder.push(f) {
+                    Ok(()) => assert!(!failed, "a push after a failure must fail"),
+                    Err(RenderError::Encode { format: "GIF", .. }) if !failed => failed = true,
+                    Err(RenderError::Incomplete { format: "GIF" }) if failed => {}
+                    Err(e) => panic!("room {room}: {e:?}"),
+                }
+            }
+            let end = encoder.finish();
+            assert!(end.is_err(), "room {room}: the file cannot be complete");
+            if failed {
+                assert!(matches!(end, Err(RenderError::Incomplete { .. })));
+            }
+        }
     }
 
     #[test]

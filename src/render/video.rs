@@ -6,7 +6,8 @@
 //! (built from source with the `openh264` crate; constrained baseline profile, constant
 //! quantiser [`QUANTIZER`], every frame kept) and muxed into an MP4 (`mp4` crate) with one
 //! video track whose timescale is a multiple of the frame rate, so each frame lasts exactly
-//! `1 / fps` and the video `n / fps`.
+//! `1 / fps` and the video `n / fps`. [`encode_mp4`] takes every frame at once; an
+//! [`Mp4Encoder`] takes them one at a time, keeping only the compressed video.
 //!
 //! H.264 stores 4:2:0 pictures with whole chroma samples, so widths and heights are even: an
 //! odd width or height is rounded up by one pixel, a white column on the right or a white row
@@ -14,7 +15,7 @@
 //! pixels (or 2160x3840).
 
 use std::error::Error as StdError;
-use std::io::Cursor;
+use std::io::{Cursor, Seek, Write};
 
 use openh264::encoder::{
     Encoder, EncoderConfig, FrameRate, FrameType, IntraFramePeriod, QpRange, RateControlMode,
@@ -46,8 +47,8 @@ pub enum VideoError {
         /// What is empty.
         what: &'static str,
     },
-    /// A frame's size differs from the first frame's.
-    #[error("frame {index} is {width}x{height} pixels, but the first frame is {first_width}x{first_height}")]
+    /// A frame's size differs from the video's frames' size.
+    #[error("frame {index} is {width}x{height} pixels, but the video's frames are {first_width}x{first_height}")]
     FrameSize {
         /// The frame's index.
         index: usize,
@@ -55,9 +56,10 @@ pub enum VideoError {
         width: u32,
         /// Its height.
         height: u32,
-        /// The first frame's width.
+        /// The frames' width: the first frame's for [`encode_mp4`], the one an
+        /// [`Mp4Encoder`] was created with.
         first_width: u32,
-        /// The first frame's height.
+        /// The frames' height.
         first_height: u32,
     },
     /// A frame's pixel buffer does not have `width * height * 4` bytes.
@@ -116,6 +118,10 @@ pub enum VideoError {
         /// What is wrong with them.
         what: &'static str,
     },
+    /// An earlier frame of an [`Mp4Encoder`] failed to encode or to be written: the video is
+    /// incomplete and the encoder takes no more frames.
+    #[error("an earlier frame failed: the video is incomplete")]
+    Incomplete,
     /// The MP4 muxer failed.
     #[error("MP4 muxer: {source}")]
     Mux {
@@ -232,25 +238,7 @@ fn check_frames(frames: &[Image]) -> Result<(u32, u32), VideoError> {
     })?;
     let (width, height) = (first.width, first.height);
     for (index, f) in frames.iter().enumerate() {
-        if (f.width, f.height) != (width, height) {
-            return Err(VideoError::FrameSize {
-                index,
-                width: f.width,
-                height: f.height,
-                first_width: width,
-                first_height: height,
-            });
-        }
-        let expected = u64::from(f.width) * u64::from(f.height) * 4;
-        if f.rgba.len() as u64 != expected {
-            return Err(VideoError::BadBuffer {
-                index,
-                width: f.width,
-                height: f.height,
-                expected,
-                actual: f.rgba.len(),
-            });
-        }
+        check_frame(f, index, width, height)?;
     }
     if width == 0 || height == 0 {
         return Err(VideoError::Empty {
@@ -260,16 +248,44 @@ fn check_frames(frames: &[Image]) -> Result<(u32, u32), VideoError> {
     Ok((width, height))
 }
 
-/// Encodes the frames as H.264 access units (NAL units without start codes).
-fn encode_h264(
-    frames: &[Image],
-    fps: u32,
-    width: u32,
-    height: u32,
-) -> Result<Vec<Access>, VideoError> {
-    let enc_err = |e: openh264::Error| VideoError::Encode {
+/// Checks that frame `index` is `width` x `height` pixels with a whole pixel buffer.
+fn check_frame(f: &Image, index: usize, width: u32, height: u32) -> Result<(), VideoError> {
+    if (f.width, f.height) != (width, height) {
+        return Err(VideoError::FrameSize {
+            index,
+            width: f.width,
+            height: f.height,
+            first_width: width,
+            first_height: height,
+        });
+    }
+    let expected = u64::from(f.width) * u64::from(f.height) * 4;
+    if f.rgba.len() as u64 != expected {
+        return Err(VideoError::BadBuffer {
+            index,
+            width: f.width,
+            height: f.height,
+            expected,
+            actual: f.rgba.len(),
+        });
+    }
+    Ok(())
+}
+
+fn encode_error(e: openh264::Error) -> VideoError {
+    VideoError::Encode {
         code: e.native_code(),
-    };
+    }
+}
+
+fn mux_error(e: mp4::Error) -> VideoError {
+    VideoError::Mux {
+        source: Box::new(e),
+    }
+}
+
+/// OpenH264 set up for a video at `fps`.
+fn h264_encoder(fps: u32) -> Result<Encoder, VideoError> {
     // Constant quantiser: OpenH264's buffer-based rate control moves the quantiser within
     // the QP range, which is one value here. Screen content tools suit flat fills and sharp
     // edges (adaptive quantisation and background detection are not available with them).
@@ -283,18 +299,237 @@ fn encode_h264(
         .skip_frames(false)
         .intra_frame_period(IntraFramePeriod::from_num_frames(fps.saturating_mul(2)))
         .vui(VuiConfig::bt709());
-    let mut encoder =
-        Encoder::with_api_config(OpenH264API::from_source(), config).map_err(enc_err)?;
-    let mut planes = Planes::new(width, height);
-    let (w, h) = (width as usize, height as usize);
-    let mut out = Vec::with_capacity(frames.len());
-    for (index, img) in frames.iter().enumerate() {
+    Encoder::with_api_config(OpenH264API::from_source(), config).map_err(encode_error)
+}
+
+/// NAL unit types (H.264 table 7-1).
+const NAL_SPS: u8 = 7;
+const NAL_PPS: u8 = 8;
+const NAL_IDR: u8 = 5;
+
+/// A NAL unit's type.
+fn nal_kind(nal: &[u8]) -> u8 {
+    nal.first().map_or(0, |b| b & 0x1f)
+}
+
+/// Where an [`Mp4Encoder`]'s output is: the sink, untouched until the first frame gives the
+/// parameter sets the track's header needs; the muxer writing into it with those parameter
+/// sets; or nothing, after a failure.
+enum Muxer<W: Write + Seek> {
+    Waiting(W),
+    Writing {
+        writer: mp4::Mp4Writer<W>,
+        sps: Vec<u8>,
+        pps: Vec<u8>,
+    },
+    Failed,
+}
+
+/// An H.264 MP4 video made frame by frame: each [`push`](Mp4Encoder::push) encodes its frame
+/// at once and writes the compressed picture to the sink, so a video of any length holds
+/// one frame's pictures and the encoder's reference frames, never all frames. The same file
+/// as [`encode_mp4`] (byte for byte) for the same frames and frame rate.
+///
+/// The sink is a [`Write`] + [`Seek`]: a [`File`](std::fs::File), or a
+/// [`Cursor<Vec<u8>>`](Cursor) for the bytes in memory. The muxer writes the compressed
+/// frames as they come (in chunks of about a second of video) and, at
+/// [`finish`](Mp4Encoder::finish), seeks back to fix the size of the media data and appends
+/// the index (a few bytes per frame). Nothing is written before the first frame.
+///
+/// Frames of another size than the encoder's, or with a malformed pixel buffer, are refused
+/// before anything of them is encoded, and the encoder goes on. After a failure of the H.264
+/// encoder or the muxer (a write to the sink, for example) the video is incomplete: the
+/// encoder then refuses more frames ([`VideoError::Incomplete`]). A video dropped without
+/// `finish` has no index, and players will not open it.
+///
+/// ```
+/// use std::io::Cursor;
+/// use bdmorph::render::video::{self, Mp4Encoder};
+/// use bdmorph::render::Image;
+///
+/// // A red square moving over white, frame by frame.
+/// let frame = |i: u32| {
+///     let mut rgba = vec![255u8; 32 * 32 * 4];
+///     for p in (0..32 * 32u32).filter(|p| (p % 32).abs_diff(2 * i + 8) < 4 && p / 32 < 8) {
+///         rgba[p as usize * 4..][..4].copy_from_slice(&[220, 30, 40, 255]);
+///     }
+///     Image { width: 32, height: 32, rgba }
+/// };
+/// let mut encoder = Mp4Encoder::new(Cursor::new(Vec::new()), 32, 32, 12)?;
+/// for i in 0..6 {
+///     encoder.push(&frame(i))?;
+/// }
+/// let mp4 = encoder.finish()?.into_inner();
+/// assert_eq!(&mp4[4..8], b"ftyp");
+/// let frames: Vec<Image> = (0..6).map(frame).collect();
+/// assert_eq!(mp4, video::encode_mp4(&frames, 12)?);
+/// # Ok::<(), video::VideoError>(())
+/// ```
+pub struct Mp4Encoder<W: Write + Seek> {
+    encoder: Encoder,
+    planes: Planes,
+    /// The frames' size.
+    width: u32,
+    height: u32,
+    /// The video's (even) size.
+    video_width: u32,
+    video_height: u32,
+    fps: u32,
+    frames: usize,
+    muxer: Muxer<W>,
+    /// One frame's sample (length-prefixed NAL units), reused.
+    sample: Vec<u8>,
+}
+
+impl<W: Write + Seek> Mp4Encoder<W> {
+    /// An encoder of frames of `width` x `height` pixels at `fps` frames per second,
+    /// writing to `sink`: the video is [`video_size`]`(width, height)` (odd sides padded
+    /// with white). Nothing is written yet.
+    ///
+    /// # Errors
+    /// [`VideoError::FrameRate`] for `fps = 0`, [`VideoError::Empty`] for frames without
+    /// pixels (a zero side), [`VideoError::TooSmall`] and [`VideoError::TooLarge`] beyond
+    /// the encoder's sizes, [`VideoError::Encode`] when OpenH264 cannot start.
+    ///
+    /// ```
+    /// use std::io::Cursor;
+    /// use bdmorph::render::video::{Mp4Encoder, VideoError};
+    ///
+    /// let sink = || Cursor::new(Vec::new());
+    /// assert!(Mp4Encoder::new(sink(), 641, 480, 25).is_ok());
+    /// assert!(matches!(Mp4Encoder::new(sink(), 640, 480, 0), Err(VideoError::FrameRate)));
+    /// assert!(matches!(
+    ///     Mp4Encoder::new(sink(), 8, 480, 25),
+    ///     Err(VideoError::TooSmall { width: 8, height: 480 })
+    /// ));
+    /// ```
+    pub fn new(sink: W, width: u32, height: u32, fps: u32) -> Result<Mp4Encoder<W>, VideoError> {
+        if fps == 0 {
+            return Err(VideoError::FrameRate);
+        }
+        if width == 0 || height == 0 {
+            return Err(VideoError::Empty {
+                what: "the frames have no pixels",
+            });
+        }
+        let (video_width, video_height) = video_size(width, height)?;
+        Ok(Mp4Encoder {
+            encoder: h264_encoder(fps)?,
+            planes: Planes::new(video_width, video_height),
+            width,
+            height,
+            video_width,
+            video_height,
+            fps,
+            frames: 0,
+            muxer: Muxer::Waiting(sink),
+            sample: Vec::new(),
+        })
+    }
+
+    /// Encodes one frame and writes its compressed picture: shown for `1 / fps` seconds
+    /// after the frames before it, a key frame every two seconds.
+    ///
+    /// # Errors
+    /// [`VideoError::FrameSize`] for a frame of another size than the encoder's and
+    /// [`VideoError::BadBuffer`] for a malformed one (nothing encoded; the encoder goes on);
+    /// [`VideoError::Encode`], [`VideoError::Dropped`], [`VideoError::ParameterSets`] and
+    /// [`VideoError::Mux`] when the encoder or the muxer fail, and
+    /// [`VideoError::Incomplete`] after such a failure.
+    ///
+    /// ```
+    /// use std::io::Cursor;
+    /// use bdmorph::render::video::{Mp4Encoder, VideoError};
+    /// use bdmorph::render::Image;
+    ///
+    /// let white = |width, height| Image { width, height, rgba: vec![255; (width * height * 4) as usize] };
+    /// let mut encoder = Mp4Encoder::new(Cursor::new(Vec::new()), 16, 16, 25)?;
+    /// encoder.push(&white(16, 16))?;
+    /// assert!(matches!(
+    ///     encoder.push(&white(16, 18)),
+    ///     Err(VideoError::FrameSize { index: 1, height: 18, first_height: 16, .. })
+    /// ));
+    /// encoder.push(&white(16, 16))?;
+    /// assert_eq!(encoder.frames(), 2);
+    /// # Ok::<(), VideoError>(())
+    /// ```
+    pub fn push(&mut self, frame: &Image) -> Result<(), VideoError> {
+        if matches!(self.muxer, Muxer::Failed) {
+            return Err(VideoError::Incomplete);
+        }
+        check_frame(frame, self.frames, self.width, self.height)?;
+        let unit = self.encode(frame);
+        let muxed = unit.and_then(|unit| self.mux(&unit));
+        if muxed.is_err() {
+            self.muxer = Muxer::Failed;
+        } else {
+            self.frames += 1;
+        }
+        muxed
+    }
+
+    /// How many frames have been encoded.
+    ///
+    /// ```
+    /// use std::io::Cursor;
+    /// use bdmorph::render::video::Mp4Encoder;
+    ///
+    /// let encoder = Mp4Encoder::new(Cursor::new(Vec::new()), 16, 16, 25)?;
+    /// assert_eq!(encoder.frames(), 0);
+    /// # Ok::<(), bdmorph::render::video::VideoError>(())
+    /// ```
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Ends the video (writes the index of its frames) and returns the sink.
+    ///
+    /// # Errors
+    /// [`VideoError::Empty`] when no frame was pushed (nothing was written),
+    /// [`VideoError::Mux`] when the muxer fails, [`VideoError::Incomplete`] after an
+    /// earlier failure.
+    ///
+    /// ```
+    /// use std::io::Cursor;
+    /// use bdmorph::render::video::{Mp4Encoder, VideoError};
+    /// use bdmorph::render::Image;
+    ///
+    /// let empty = Mp4Encoder::new(Cursor::new(Vec::new()), 16, 16, 25)?;
+    /// assert!(matches!(empty.finish(), Err(VideoError::Empty { .. })));
+    ///
+    /// let mut encoder = Mp4Encoder::new(Cursor::new(Vec::new()), 16, 16, 25)?;
+    /// encoder.push(&Image { width: 16, height: 16, rgba: vec![0; 16 * 16 * 4] })?;
+    /// let mp4: Vec<u8> = encoder.finish()?.into_inner();
+    /// assert!(mp4.windows(4).any(|w| w == b"moov"));
+    /// # Ok::<(), VideoError>(())
+    /// ```
+    pub fn finish(self) -> Result<W, VideoError> {
+        match self.muxer {
+            Muxer::Waiting(_) => Err(VideoError::Empty {
+                what: "a video needs at least one frame",
+            }),
+            Muxer::Writing { mut writer, .. } => {
+                writer.write_end().map_err(mux_error)?;
+                Ok(writer.into_writer())
+            }
+            Muxer::Failed => Err(VideoError::Incomplete),
+        }
+    }
+
+    /// Encodes frame number `self.frames` as an H.264 access unit (NAL units without start
+    /// codes).
+    fn encode(&mut self, img: &Image) -> Result<Access, VideoError> {
+        let (width, height) = (self.video_width, self.video_height);
+        let planes = &mut self.planes;
         planes.fill(img, width, height);
+        let (w, h) = (width as usize, height as usize);
         let yuv = YUVSlices::new((&planes.y, &planes.u, &planes.v), (w, h), (w, w / 2, w / 2));
-        let millis = index as u64 * 1000 / u64::from(fps);
-        let stream = encoder
+        let index = self.frames;
+        let millis = (index as u64).saturating_mul(1000) / u64::from(self.fps);
+        let stream = self
+            .encoder
             .encode_at(&yuv, Timestamp::from_millis(millis))
-            .map_err(enc_err)?;
+            .map_err(encode_error)?;
         let idr = stream.frame_type() == FrameType::IDR;
         let mut nals = Vec::new();
         for l in 0..stream.num_layers() {
@@ -313,109 +548,103 @@ fn encode_h264(
         if nals.is_empty() || matches!(stream.frame_type(), FrameType::Skip | FrameType::Invalid) {
             return Err(VideoError::Dropped { index });
         }
-        out.push(Access { nals, idr });
+        Ok(Access { nals, idr })
     }
-    Ok(out)
-}
 
-/// NAL unit types (H.264 table 7-1).
-const NAL_SPS: u8 = 7;
-const NAL_PPS: u8 = 8;
-const NAL_IDR: u8 = 5;
-
-/// Muxes access units into an MP4 with one AVC video track, each frame `1 / fps` long.
-fn mux_mp4(units: &[Access], fps: u32, width: u32, height: u32) -> Result<Vec<u8>, VideoError> {
-    let mux_err = |e: mp4::Error| VideoError::Mux {
-        source: Box::new(e),
-    };
-    // The parameter sets go into the track's configuration, not the samples.
-    let kind = |nal: &[u8]| nal.first().map_or(0, |b| b & 0x1f);
-    let mut sps: Option<&[u8]> = None;
-    let mut pps: Option<&[u8]> = None;
-    for unit in units {
-        for nal in &unit.nals {
-            let slot = match kind(nal) {
-                NAL_SPS => &mut sps,
-                NAL_PPS => &mut pps,
-                _ => continue,
-            };
-            match slot {
-                None => *slot = Some(nal),
-                Some(first) if *first == nal.as_slice() => {}
-                Some(_) => {
-                    return Err(VideoError::ParameterSets {
-                        what: "changing between frames",
-                    })
-                }
-            }
-        }
-    }
-    let (Some(sps), Some(pps)) = (sps, pps) else {
-        return Err(VideoError::ParameterSets { what: "missing" });
-    };
-    if sps.len() < 4 {
-        return Err(VideoError::ParameterSets { what: "truncated" });
-    }
-    let (Ok(w16), Ok(h16)) = (u16::try_from(width), u16::try_from(height)) else {
-        return Err(VideoError::TooLarge { width, height });
-    };
-    let scale = timescale(fps);
-    let config = mp4::Mp4Config {
-        major_brand: mp4::FourCC::from(*b"isom"),
-        minor_version: 512,
-        compatible_brands: [b"isom", b"iso2", b"avc1", b"mp41"]
-            .into_iter()
-            .map(|b| mp4::FourCC::from(*b))
-            .collect(),
-        timescale: scale,
-    };
-    let mut writer =
-        mp4::Mp4Writer::write_start(Cursor::new(Vec::new()), &config).map_err(mux_err)?;
-    writer
-        .add_track(&mp4::TrackConfig {
-            track_type: mp4::TrackType::Video,
-            timescale: scale,
-            language: "und".to_owned(),
-            media_conf: mp4::MediaConfig::AvcConfig(mp4::AvcConfig {
-                width: w16,
-                height: h16,
-                seq_param_set: sps.to_vec(),
-                pic_param_set: pps.to_vec(),
-            }),
-        })
-        .map_err(mux_err)?;
-    let duration = scale / fps;
-    let mut sample = Vec::new();
-    for (i, unit) in units.iter().enumerate() {
-        sample.clear();
+    /// Writes an access unit as the next sample; the first one's parameter sets go into
+    /// the track's configuration (and start the file), later ones must repeat them.
+    fn mux(&mut self, unit: &Access) -> Result<(), VideoError> {
+        let (mut writer, sps, pps) = match std::mem::replace(&mut self.muxer, Muxer::Failed) {
+            Muxer::Waiting(sink) => self.start(sink, unit)?,
+            Muxer::Writing { writer, sps, pps } => (writer, sps, pps),
+            Muxer::Failed => return Err(VideoError::Incomplete),
+        };
+        self.sample.clear();
         let mut idr = unit.idr;
         for nal in &unit.nals {
-            match kind(nal) {
-                NAL_SPS | NAL_PPS => continue,
-                NAL_IDR => idr = true,
-                _ => {}
+            let known = match nal_kind(nal) {
+                NAL_SPS => &sps,
+                NAL_PPS => &pps,
+                kind => {
+                    if kind == NAL_IDR {
+                        idr = true;
+                    }
+                    let len = u32::try_from(nal.len()).map_err(|_| VideoError::Mux {
+                        source: "a NAL unit of 4 GiB or more".into(),
+                    })?;
+                    self.sample.extend_from_slice(&len.to_be_bytes());
+                    self.sample.extend_from_slice(nal);
+                    continue;
+                }
+            };
+            if known != nal {
+                return Err(VideoError::ParameterSets {
+                    what: "changing between frames",
+                });
             }
-            let len = u32::try_from(nal.len()).map_err(|_| VideoError::Mux {
-                source: "a NAL unit of 4 GiB or more".into(),
-            })?;
-            sample.extend_from_slice(&len.to_be_bytes());
-            sample.extend_from_slice(nal);
         }
+        let duration = timescale(self.fps) / self.fps;
         writer
             .write_sample(
                 1,
                 &mp4::Mp4Sample {
-                    start_time: i as u64 * u64::from(duration),
+                    start_time: (self.frames as u64).saturating_mul(u64::from(duration)),
                     duration,
                     rendering_offset: 0,
                     is_sync: idr,
-                    bytes: mp4::Bytes::copy_from_slice(&sample),
+                    bytes: mp4::Bytes::copy_from_slice(&self.sample),
                 },
             )
-            .map_err(mux_err)?;
+            .map_err(mux_error)?;
+        self.muxer = Muxer::Writing { writer, sps, pps };
+        Ok(())
     }
-    writer.write_end().map_err(mux_err)?;
-    Ok(writer.into_writer().into_inner())
+
+    /// Starts the file in `sink` with a video track configured by the first access unit's
+    /// parameter sets.
+    #[allow(clippy::type_complexity)]
+    fn start(
+        &self,
+        sink: W,
+        unit: &Access,
+    ) -> Result<(mp4::Mp4Writer<W>, Vec<u8>, Vec<u8>), VideoError> {
+        let find = |kind: u8| unit.nals.iter().find(|n| nal_kind(n) == kind);
+        let (Some(sps), Some(pps)) = (find(NAL_SPS), find(NAL_PPS)) else {
+            return Err(VideoError::ParameterSets { what: "missing" });
+        };
+        if sps.len() < 4 {
+            return Err(VideoError::ParameterSets { what: "truncated" });
+        }
+        let (width, height) = (self.video_width, self.video_height);
+        let (Ok(w16), Ok(h16)) = (u16::try_from(width), u16::try_from(height)) else {
+            return Err(VideoError::TooLarge { width, height });
+        };
+        let scale = timescale(self.fps);
+        let config = mp4::Mp4Config {
+            major_brand: mp4::FourCC::from(*b"isom"),
+            minor_version: 512,
+            compatible_brands: [b"isom", b"iso2", b"avc1", b"mp41"]
+                .into_iter()
+                .map(|b| mp4::FourCC::from(*b))
+                .collect(),
+            timescale: scale,
+        };
+        let mut writer = mp4::Mp4Writer::write_start(sink, &config).map_err(mux_error)?;
+        writer
+            .add_track(&mp4::TrackConfig {
+                track_type: mp4::TrackType::Video,
+                timescale: scale,
+                language: "und".to_owned(),
+                media_conf: mp4::MediaConfig::AvcConfig(mp4::AvcConfig {
+                    width: w16,
+                    height: h16,
+                    seq_param_set: sps.clone(),
+                    pic_param_set: pps.clone(),
+                }),
+            })
+            .map_err(mux_error)?;
+        Ok((writer, sps.clone(), pps.clone()))
+    }
 }
 
 /// Encodes frames as an H.264 MP4 video at `fps` frames per second: `frames.len()` frames,
@@ -427,20 +656,37 @@ fn mux_mp4(units: &[Access], fps: u32, width: u32, height: u32) -> Result<Vec<u8
 /// screen content (flat fills and sharp edges), so quality does not depend on the length
 /// or the motion, and the size follows the content.
 ///
+/// Every frame is checked before any is encoded; then they go through an [`Mp4Encoder`],
+/// which makes videos frame by frame without holding every frame.
+///
 /// # Errors
 /// [`VideoError::Empty`] without frames or for frames without pixels,
 /// [`VideoError::FrameSize`] when frames differ in size, [`VideoError::BadBuffer`] for a
 /// malformed frame, [`VideoError::TooSmall`] and [`VideoError::TooLarge`] beyond the
 /// encoder's sizes (see [`video_size`]),
 /// [`VideoError::FrameRate`] for `fps = 0`, and the encoder's and muxer's failures.
+///
+/// ```
+/// use bdmorph::render::{video, Image};
+///
+/// let frames: Vec<Image> = (0..3u8)
+///     .map(|i| Image { width: 20, height: 16, rgba: [90 * i, 90, 200, 255].repeat(320) })
+///     .collect();
+/// let mp4 = video::encode_mp4(&frames, 25)?;
+/// assert_eq!(&mp4[4..8], b"ftyp");
+/// assert!(matches!(video::encode_mp4(&[], 25), Err(video::VideoError::Empty { .. })));
+/// # Ok::<(), video::VideoError>(())
+/// ```
 pub fn encode_mp4(frames: &[Image], fps: u32) -> Result<Vec<u8>, VideoError> {
     if fps == 0 {
         return Err(VideoError::FrameRate);
     }
-    let (w, h) = check_frames(frames)?;
-    let (width, height) = video_size(w, h)?;
-    let units = encode_h264(frames, fps, width, height)?;
-    mux_mp4(&units, fps, width, height)
+    let (width, height) = check_frames(frames)?;
+    let mut encoder = Mp4Encoder::new(Cursor::new(Vec::new()), width, height, fps)?;
+    for frame in frames {
+        encoder.push(frame)?;
+    }
+    Ok(encoder.finish()?.into_inner())
 }
 
 #[cfg(test)]
@@ -570,6 +816,171 @@ mod tests {
         10.0 * (255.0f64.powi(2) / mse.max(1e-12)).log10()
     }
 
+    // `encode_mp4` as it was before `Mp4Encoder` (every frame encoded, then every access
+    // unit muxed), to compare bytes with.
+
+    /// Encodes the frames as H.264 access units (NAL units without start codes).
+    fn encode_h264(
+        frames: &[Image],
+        fps: u32,
+        width: u32,
+        height: u32,
+    ) -> Result<Vec<Access>, VideoError> {
+        let enc_err = |e: openh264::Error| VideoError::Encode {
+            code: e.native_code(),
+        };
+        // Constant quantiser: OpenH264's buffer-based rate control moves the quantiser within
+        // the QP range, which is one value here. Screen content tools suit flat fills and sharp
+        // edges (adaptive quantisation and background detection are not available with them).
+        let config = EncoderConfig::new()
+            .usage_type(UsageType::ScreenContentRealTime)
+            .rate_control_mode(RateControlMode::Bufferbased)
+            .qp(QpRange::new(QUANTIZER, QUANTIZER))
+            .adaptive_quantization(false)
+            .background_detection(false)
+            .max_frame_rate(FrameRate::from_hz(fps as f32))
+            .skip_frames(false)
+            .intra_frame_period(IntraFramePeriod::from_num_frames(fps.saturating_mul(2)))
+            .vui(VuiConfig::bt709());
+        let mut encoder =
+            Encoder::with_api_config(OpenH264API::from_source(), config).map_err(enc_err)?;
+        let mut planes = Planes::new(width, height);
+        let (w, h) = (width as usize, height as usize);
+        let mut out = Vec::with_capacity(frames.len());
+        for (index, img) in frames.iter().enumerate() {
+            planes.fill(img, width, height);
+            let yuv = YUVSlices::new((&planes.y, &planes.u, &planes.v), (w, h), (w, w / 2, w / 2));
+            let millis = index as u64 * 1000 / u64::from(fps);
+            let stream = encoder
+                .encode_at(&yuv, Timestamp::from_millis(millis))
+                .map_err(enc_err)?;
+            let idr = stream.frame_type() == FrameType::IDR;
+            let mut nals = Vec::new();
+            for l in 0..stream.num_layers() {
+                let Some(layer) = stream.layer(l) else {
+                    continue;
+                };
+                for n in 0..layer.nal_count() {
+                    if let Some(nal) = layer.nal_unit(n) {
+                        let nal = strip_start_code(nal);
+                        if !nal.is_empty() {
+                            nals.push(nal.to_vec());
+                        }
+                    }
+                }
+            }
+            if nals.is_empty()
+                || matches!(stream.frame_type(), FrameType::Skip | FrameType::Invalid)
+            {
+                return Err(VideoError::Dropped { index });
+            }
+            out.push(Access { nals, idr });
+        }
+        Ok(out)
+    }
+
+    /// Muxes access units into an MP4 with one AVC video track, each frame `1 / fps` long.
+    fn mux_mp4(units: &[Access], fps: u32, width: u32, height: u32) -> Result<Vec<u8>, VideoError> {
+        let mux_err = |e: mp4::Error| VideoError::Mux {
+            source: Box::new(e),
+        };
+        // The parameter sets go into the track's configuration, not the samples.
+        let kind = |nal: &[u8]| nal.first().map_or(0, |b| b & 0x1f);
+        let mut sps: Option<&[u8]> = None;
+        let mut pps: Option<&[u8]> = None;
+        for unit in units {
+            for nal in &unit.nals {
+                let slot = match kind(nal) {
+                    NAL_SPS => &mut sps,
+                    NAL_PPS => &mut pps,
+                    _ => continue,
+                };
+                match slot {
+                    None => *slot = Some(nal),
+                    Some(first) if *first == nal.as_slice() => {}
+                    Some(_) => {
+                        return Err(VideoError::ParameterSets {
+                            what: "changing between frames",
+                        })
+                    }
+                }
+            }
+        }
+        let (Some(sps), Some(pps)) = (sps, pps) else {
+            return Err(VideoError::ParameterSets { what: "missing" });
+        };
+        if sps.len() < 4 {
+            return Err(VideoError::ParameterSets { what: "truncated" });
+        }
+        let (Ok(w16), Ok(h16)) = (u16::try_from(width), u16::try_from(height)) else {
+            return Err(VideoError::TooLarge { width, height });
+        };
+        let scale = timescale(fps);
+        let config = mp4::Mp4Config {
+            major_brand: mp4::FourCC::from(*b"isom"),
+            minor_version: 512,
+            compatible_brands: [b"isom", b"iso2", b"avc1", b"mp41"]
+                .into_iter()
+                .map(|b| mp4::FourCC::from(*b))
+                .collect(),
+            timescale: scale,
+        };
+        let mut writer =
+            mp4::Mp4Writer::write_start(Cursor::new(Vec::new()), &config).map_err(mux_err)?;
+        writer
+            .add_track(&mp4::TrackConfig {
+                track_type: mp4::TrackType::Video,
+                timescale: scale,
+                language: "und".to_owned(),
+                media_conf: mp4::MediaConfig::AvcConfig(mp4::AvcConfig {
+                    width: w16,
+                    height: h16,
+                    seq_param_set: sps.to_vec(),
+                    pic_param_set: pps.to_vec(),
+                }),
+            })
+            .map_err(mux_err)?;
+        let duration = scale / fps;
+        let mut sample = Vec::new();
+        for (i, unit) in units.iter().enumerate() {
+            sample.clear();
+            let mut idr = unit.idr;
+            for nal in &unit.nals {
+                match kind(nal) {
+                    NAL_SPS | NAL_PPS => continue,
+                    NAL_IDR => idr = true,
+                    _ => {}
+                }
+                let len = u32::try_from(nal.len()).map_err(|_| VideoError::Mux {
+                    source: "a NAL unit of 4 GiB or more".into(),
+                })?;
+                sample.extend_from_slice(&len.to_be_bytes());
+                sample.extend_from_slice(nal);
+            }
+            writer
+                .write_sample(
+                    1,
+                    &mp4::Mp4Sample {
+                        start_time: i as u64 * u64::from(duration),
+                        duration,
+                        rendering_offset: 0,
+                        is_sync: idr,
+                        bytes: mp4::Bytes::copy_from_slice(&sample),
+                    },
+                )
+                .map_err(mux_err)?;
+        }
+        writer.write_end().map_err(mux_err)?;
+        Ok(writer.into_writer().into_inner())
+    }
+
+    fn encode_mp4_whole(frames: &[Image], fps: u32) -> Vec<u8> {
+        let (w, h) = check_frames(frames).unwrap();
+        let (width, height) = video_size(w, h).unwrap();
+        let units = encode_h264(frames, fps, width, height).unwrap();
+        mux_mp4(&units, fps, width, height).unwrap()
+    }
+
     #[test]
     fn frames_round_trip_through_a_decoder() {
         let (w, h, fps) = (64u32, 48u32, 24u32);
@@ -684,6 +1095,187 @@ mod tests {
             "a key frame every 2 s: {keys:?}"
         );
         assert_eq!(decode(&track).len(), 30);
+    }
+
+    #[test]
+    fn streamed_videos_are_the_whole_slice_bytes() {
+        // One frame; a few; many across key frames at a frame rate that does not divide
+        // the timescale; an odd size with transparency (the frames' band).
+        for (count, w, h, fps) in [(1, 32, 32, 25), (5, 64, 48, 24), (40, 48, 32, 7)]
+            .into_iter()
+            .chain([(9, 45, 33, 10)])
+        {
+            let frames: Vec<Image> = (0..count)
+                .map(|i| frame(w, h, (3 * i) % (w - 16), (i * 5) % (h - 16)))
+                .collect();
+            let old = encode_mp4_whole(&frames, fps);
+            assert_eq!(encode_mp4(&frames, fps).unwrap(), old, "{count} frames");
+            let mut encoder = Mp4Encoder::new(Cursor::new(Vec::new()), w, h, fps).unwrap();
+            for f in &frames {
+                encoder.push(f).unwrap();
+            }
+            assert_eq!(encoder.frames(), frames.len());
+            let streamed = encoder.finish().unwrap().into_inner();
+            assert_eq!(streamed, old, "{count} frames pushed one by one");
+            let track = read_track(&streamed);
+            assert_eq!(track.samples.len(), frames.len());
+            assert_eq!(decode(&track).len(), frames.len(), "every frame decodes");
+        }
+    }
+
+    #[test]
+    fn videos_stream_into_a_file() {
+        let frames: Vec<Image> = (0..20).map(|i| frame(40, 40, i, 20 - i)).collect();
+        let path = std::env::temp_dir().join(format!("bdmorph-mp4-{}.mp4", std::process::id()));
+        let file = std::fs::File::create(&path).unwrap();
+        let mut encoder = Mp4Encoder::new(file, 40, 40, 30).unwrap();
+        for f in &frames {
+            encoder.push(f).unwrap();
+        }
+        drop(encoder.finish().unwrap());
+        let written = std::fs::read(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(written, encode_mp4_whole(&frames, 30));
+    }
+
+    #[test]
+    fn mp4_encoder_refuses_bad_frames_and_goes_on() {
+        let sink = || Cursor::new(Vec::new());
+        let good: Vec<Image> = (0..3).map(|i| frame(32, 32, 4 * i, 8)).collect();
+        let mut encoder = Mp4Encoder::new(sink(), 32, 32, 25).unwrap();
+        // Even the first frame is held to the encoder's size.
+        let err = encoder.push(&frame(34, 32, 0, 0)).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                VideoError::FrameSize {
+                    index: 0,
+                    width: 34,
+                    height: 32,
+                    first_width: 32,
+                    first_height: 32
+                }
+            ),
+            "{err:?}"
+        );
+        assert_eq!(
+            err.to_string(),
+            "frame 0 is 34x32 pixels, but the video's frames are 32x32"
+        );
+        encoder.push(&good[0]).unwrap();
+        let mut short = good[1].clone();
+        short.rgba.truncate(100);
+        assert!(matches!(
+            encoder.push(&short),
+            Err(VideoError::BadBuffer {
+                index: 1,
+                expected: 4096,
+                actual: 100,
+                ..
+            })
+        ));
+        assert!(matches!(
+            encoder.push(&frame(32, 31, 0, 0)),
+            Err(VideoError::FrameSize { index: 1, .. })
+        ));
+        encoder.push(&good[1]).unwrap();
+        encoder.push(&good[2]).unwrap();
+        let bytes = encoder.finish().unwrap().into_inner();
+        assert_eq!(bytes, encode_mp4_whole(&good, 25));
+
+        // Nothing pushed: refused at the end, and nothing written.
+        let mut out = Vec::new();
+        let encoder = Mp4Encoder::new(Cursor::new(&mut out), 32, 32, 25).unwrap();
+        assert!(matches!(encoder.finish(), Err(VideoError::Empty { .. })));
+        assert!(out.is_empty());
+        // Creation: the frame rate, no pixels, the video size rules.
+        assert!(matches!(
+            Mp4Encoder::new(sink(), 32, 32, 0),
+            Err(VideoError::FrameRate)
+        ));
+        for (w, h) in [(0, 32), (32, 0)] {
+            assert!(matches!(
+                Mp4Encoder::new(sink(), w, h, 25),
+                Err(VideoError::Empty { .. })
+            ));
+        }
+        assert!(matches!(
+            Mp4Encoder::new(sink(), 13, 40, 25),
+            Err(VideoError::TooSmall {
+                width: 14,
+                height: 40
+            })
+        ));
+        assert!(matches!(
+            Mp4Encoder::new(sink(), 3841, 100, 25),
+            Err(VideoError::TooLarge { width: 3842, .. })
+        ));
+        assert!(matches!(
+            Mp4Encoder::new(sink(), u32::MAX, u32::MAX, u32::MAX),
+            Err(VideoError::TooLarge { .. })
+        ));
+        // Extreme frame rates work.
+        for fps in [1, 1000, u32::MAX] {
+            let mut encoder = Mp4Encoder::new(sink(), 16, 16, fps).unwrap();
+            encoder.push(&frame(16, 16, 0, 0)).unwrap();
+            encoder.push(&frame(16, 16, 0, 0)).unwrap();
+            let track = read_track(&encoder.finish().unwrap().into_inner());
+            assert_eq!(track.samples.len(), 2, "{fps} fps");
+        }
+    }
+
+    /// A sink that takes `room` bytes and then fails.
+    struct Full {
+        inner: Cursor<Vec<u8>>,
+        room: usize,
+    }
+
+    impl Write for Full {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.room == 0 {
+                return Err(std::io::Error::other("disk full"));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            self.inner.write(&buf[..n])
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Seek for Full {
+        fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+            self.inner.seek(pos)
+        }
+    }
+
+    #[test]
+    fn mp4_encoder_stops_after_a_failed_write() {
+        // About a second of video per chunk: 40 frames at 10 fps write several chunks.
+        let frames: Vec<Image> = (0..40).map(|i| frame(32, 32, i % 16, 4)).collect();
+        let whole = encode_mp4_whole(&frames, 10).len();
+        for room in [0, 10, 100, whole / 2, whole - 1] {
+            let full = Full {
+                inner: Cursor::new(Vec::new()),
+                room,
+            };
+            let mut encoder = Mp4Encoder::new(full, 32, 32, 10).unwrap();
+            let mut failed = false;
+            for f in &frames {
+                match encoder.push(f) {
+                    Ok(()) => assert!(!failed, "room {room}: a push after a failure must fail"),
+                    Err(VideoError::Mux { .. }) if !failed => failed = true,
+                    Err(VideoError::Incomplete) if failed => {}
+                    Err(e) => panic!("room {room}: {e:?}"),
+                }
+            }
+            let end = encoder.finish();
+            assert!(end.is_err(), "room {room}: the video cannot be complete");
+            if failed {
+                assert!(matches!(end, Err(VideoError::Incomplete)));
+            }
+        }
     }
 
     #[test]

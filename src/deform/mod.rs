@@ -35,6 +35,7 @@
 mod arap;
 mod bounded;
 mod kvf;
+mod untangle;
 
 use crate::mesh::{MeshError, PlanarMesh};
 use crate::param::frames::Frames;
@@ -42,6 +43,7 @@ use crate::param::frames::Frames;
 pub use arap::ArapOptions;
 pub use bounded::BoundedPoseOptions;
 pub use kvf::KvfOptions;
+pub use untangle::{untangle, UntangleOptions, UntangleReport, Untangled};
 
 /// How the mesh follows its handles.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -18,6 +18,9 @@
 //! energy, largest conformal distortion, flipped triangles, the handles' residual.
 //! Meshes of several pieces, with holes, pose as well: every piece needs a handle.
 //!
+//! A pose left with flipped triangles (a quick KVF drag on a thin limb, say) is repaired by
+//! [`untangle`]: the bounded-distortion projections on the region around the flips only.
+//!
 //! ```
 //! use bdmorph::deform::{Deformer, Method};
 //! use bdmorph::generate;

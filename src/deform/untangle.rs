@@ -1,25 +1,4 @@
-//! Repairing a pose with flipped triangles ([`untangle`]): the bounded-distortion
-//! projections of [`crate::param::bounded`] (Kovalsky et al. 2015), started from the flipped
-//! pose, on the part of the mesh around the flips only.
-//!
-//! The part moved (the region) is every vertex within a number of rings (edges) of a flipped
-//! triangle's vertices, pins excepted; the vertices just outside it (its rim) and the pins
-//! are held where the pose has them, so nothing beyond the region moves at all. In the
-//! region, each projection moves every triangle's Jacobian (from the rest shape) onto the
-//! set of distortion at most `K` with a positive determinant, and a least-squares step
-//! brings the vertices as close as they can come to the projected Jacobians: triangles
-//! already within the bound are their own targets, so they move only as their neighbours
-//! must. A region that covers a whole piece without a pin has that piece's vertex furthest
-//! from the flips held instead of a rim (nothing else stops it from sliding). While a
-//! triangle is flipped its Jacobian is projected under the bound 2 rather than `K`
-//! ([`BoundedOptions::inverted_bound`]): well inside the set rather than onto a sliver at
-//! its edge, which untangles a fold in a few iterations where a loose `K` can take
-//! hundreds.
-//!
-//! An attempt that does not meet the bound is followed by another from the pose again,
-//! with the region twice as wide when a triangle left flipped or over the bound touches
-//! the rim (the rim holds it), or with `K` doubled otherwise, up to
-//! [`UntangleOptions::raises`] doublings; the iteration budget covers every attempt.
+//! Repairing a pose with flipped triangles: [`untangle`].
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -143,7 +122,9 @@ pub struct Untangled {
 /// Repairs a pose of `rest` (a valid planar mesh, counter-clockwise, any number of pieces
 /// and holes) whose triangles are partly flipped: moves the vertices near the flipped
 /// triangles until none is flipped and each triangle moved has a conformal distortion of
-/// at most a bound (see the [module docs](self) and [`UntangleOptions`]).
+/// at most a bound (see [How](#how) and [`UntangleOptions`]): the bounded-distortion
+/// projections of [`crate::param::bounded`] (Kovalsky et al. 2015), started from the
+/// flipped pose, on the part of the mesh around the flips only.
 ///
 /// - The `pins` stay exactly where `pose` has them; nothing else needs a pin (a piece
 ///   without one keeps the vertex furthest from its flips, or its rim, where it is).
@@ -153,9 +134,30 @@ pub struct Untangled {
 ///   [`UntangleOptions::raises`] allows, the iteration budget spent or the region grown
 ///   over the whole of the flipped pieces, the result is `Ok` with
 ///   [`UntangleReport::success`] false: the attempt with the fewest flips left (then the
-///   lowest distortion) is returned, and the pose given when no attempt improved on it
-///   (a triangle whose three vertices are pinned flipped, say). The positions returned are
+///   lowest distortion) is returned, and the pose given when no attempt left fewer flips
+///   (a disk's centre pinned outside its pinned rim, say). The positions returned are
 ///   always finite.
+///
+/// # How
+///
+/// The part moved (the region) is every vertex within a number of rings (edges) of a flipped
+/// triangle's vertices, pins excepted; the vertices just outside it (its rim) and the pins
+/// are held where the pose has them, so nothing beyond the region moves at all. In the
+/// region, each projection moves every triangle's Jacobian (from the rest shape) onto the
+/// set of distortion at most `K` with a positive determinant, and a least-squares step
+/// brings the vertices as close as they can come to the projected Jacobians: triangles
+/// already within the bound are their own targets, so they move only as their neighbours
+/// must. A region that covers a whole piece without a pin has that piece's vertex furthest
+/// from the flips held instead of a rim (nothing else stops it from sliding). While a
+/// triangle is flipped its Jacobian is projected under the bound 2 rather than `K`
+/// ([`BoundedOptions::inverted_bound`]): well inside the set rather than onto a sliver at
+/// its edge, which untangles a fold in a few iterations where a loose `K` can take
+/// hundreds.
+///
+/// An attempt that does not meet the bound is followed by another from the pose again,
+/// with the region twice as wide when a triangle left flipped or over the bound touches
+/// the rim (the rim holds it), or with `K` doubled otherwise, up to
+/// [`UntangleOptions::raises`] doublings; the iteration budget covers every attempt.
 ///
 /// # Errors
 /// [`DeformError::Mesh`] for an invalid rest shape, [`DeformError::PositionCount`] and

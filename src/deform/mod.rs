@@ -18,6 +18,9 @@
 //! energy, largest conformal distortion, flipped triangles, the handles' residual.
 //! Meshes of several pieces, with holes, pose as well: every piece needs a handle.
 //!
+//! A pose left with flipped triangles (a quick KVF drag on a thin limb, say) is repaired by
+//! [`untangle`]: the bounded-distortion projections on the region around the flips only.
+//!
 //! ```
 //! use bdmorph::deform::{Deformer, Method};
 //! use bdmorph::generate;
@@ -35,6 +38,7 @@
 mod arap;
 mod bounded;
 mod kvf;
+mod untangle;
 
 use crate::mesh::{MeshError, PlanarMesh};
 use crate::param::frames::Frames;
@@ -42,6 +46,7 @@ use crate::param::frames::Frames;
 pub use arap::ArapOptions;
 pub use bounded::BoundedPoseOptions;
 pub use kvf::KvfOptions;
+pub use untangle::{untangle, UntangleOptions, UntangleReport, Untangled};
 
 /// How the mesh follows its handles.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -201,16 +206,7 @@ impl Deformer {
     /// number of pieces and holes) and prepares the method's constants. Nothing is factored
     /// until [`Deformer::set_pins`].
     pub fn new(mesh: &PlanarMesh, method: Method) -> Result<Deformer, DeformError> {
-        mesh.validate()?;
-        let surface = crate::SurfaceMesh {
-            positions: mesh.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
-            faces: mesh.faces.clone(),
-            texcoords: None,
-        };
-        let frames = Frames::new(&surface).map_err(|face| MeshError::Degenerate {
-            face,
-            area: mesh.signed_area(&mesh.faces[face]),
-        })?;
+        let frames = planar_frames(mesh)?;
         let n = mesh.positions.len();
         let solver = match method {
             Method::Kvf(options) => Solver::Kvf(kvf::Kvf::new(&frames, n, options)),
@@ -242,19 +238,7 @@ impl Deformer {
     /// targets) and factors the system. The pose so far is kept as the next drag's start.
     pub fn set_pins(&mut self, pins: &[u32]) -> Result<(), DeformError> {
         let n = self.rest.positions.len();
-        let mut pinned = vec![false; n];
-        for (pin, &v) in pins.iter().enumerate() {
-            if v as usize >= n {
-                return Err(DeformError::PinOutOfRange {
-                    pin,
-                    vertex: v,
-                    n_vertices: n,
-                });
-            }
-            if std::mem::replace(&mut pinned[v as usize], true) {
-                return Err(DeformError::PinnedTwice { vertex: v });
-            }
-        }
+        let pinned = pinned_vertices(n, pins)?;
         if let Some(vertex) = unpinned_piece(n, &self.rest.faces, &pinned) {
             return Err(DeformError::PieceWithoutPin { vertex });
         }
@@ -306,12 +290,7 @@ impl Deformer {
     fn measure(&self, targets: &[[f64; 2]], report: &mut DragReport) {
         let (mut energy, mut worst, mut flipped) = (0.0, 1.0f64, 0);
         for f in 0..self.frames.len() {
-            let j = self.frames.gradient(f, &self.positions);
-            let [[a, b], [c, d]] = j;
-            let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
-            let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
-            let q = (e * e + h * h).sqrt();
-            let r = (fq * fq + g * g).sqrt();
+            let (q, r) = similarity_parts(self.frames.gradient(f, &self.positions));
             energy += self.frames.area[f] * (2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r * r);
             // σ₁ = q + r, σ₂ = q − r (signed): flipped when σ₂ ≤ 0.
             if q - r <= 0.0 {
@@ -377,6 +356,47 @@ impl Deformer {
         self.positions.copy_from_slice(positions);
         Ok(())
     }
+}
+
+/// Checks the mesh (valid and counter-clockwise) and computes its triangles' constants.
+fn planar_frames(mesh: &PlanarMesh) -> Result<Frames, DeformError> {
+    mesh.validate()?;
+    let surface = crate::SurfaceMesh {
+        positions: mesh.positions.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+        faces: mesh.faces.clone(),
+        texcoords: None,
+    };
+    Ok(Frames::new(&surface).map_err(|face| MeshError::Degenerate {
+        face,
+        area: mesh.signed_area(&mesh.faces[face]),
+    })?)
+}
+
+/// Whether each of `n` vertices is pinned, the pins checked: in range, none twice.
+fn pinned_vertices(n: usize, pins: &[u32]) -> Result<Vec<bool>, DeformError> {
+    let mut pinned = vec![false; n];
+    for (pin, &v) in pins.iter().enumerate() {
+        if v as usize >= n {
+            return Err(DeformError::PinOutOfRange {
+                pin,
+                vertex: v,
+                n_vertices: n,
+            });
+        }
+        if std::mem::replace(&mut pinned[v as usize], true) {
+            return Err(DeformError::PinnedTwice { vertex: v });
+        }
+    }
+    Ok(pinned)
+}
+
+/// A Jacobian's similarity and anti-similarity parts `(q, r)`: its singular values are
+/// `q + r` and, signed, `q − r` (non-positive when the triangle is flipped).
+fn similarity_parts(j: [[f64; 2]; 2]) -> (f64, f64) {
+    let [[a, b], [c, d]] = j;
+    let (e, h) = (0.5 * (a + d), 0.5 * (c - b));
+    let (fq, g) = (0.5 * (a - d), 0.5 * (c + b));
+    ((e * e + h * h).sqrt(), (fq * fq + g * g).sqrt())
 }
 
 /// A vertex of a piece (faces connected through shared vertices) with no pinned vertex.

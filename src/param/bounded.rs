@@ -83,6 +83,16 @@ pub fn distortion(c: [[f64; 2]; 2]) -> f64 {
     }
 }
 
+/// Refuses bounds that are not finite numbers of at least 1.
+fn check_bounds(options: &BoundedOptions) -> Result<(), ParamError> {
+    for k in std::iter::once(options.max_distortion).chain(options.inverted_bound) {
+        if !(k >= 1.0 && k.is_finite()) {
+            return Err(ParamError::BadBound(k));
+        }
+    }
+    Ok(())
+}
+
 /// Options of [`BoundedDistortion`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
@@ -96,6 +106,14 @@ pub struct BoundedOptions {
     /// Whether stalled alternating projections hand over to the projected Newton finish
     /// (default true; see [`BoundedDistortion::solve_with`]).
     pub newton_finish: bool,
+    /// The bound the projections use for a triangle while it is inverted, when smaller than
+    /// `max_distortion` (default `None`: `max_distortion` for every triangle). An inverted
+    /// Jacobian's projection has the smaller singular value `(k σ₁ + σ₂) / (k² + 1)`: near
+    /// zero for a large `k` (a sliver, which its neighbours fold back), well inside for
+    /// `k` about 2 or 3, so a folded start untangles in far fewer iterations. The maps the
+    /// iterations stop at are the same: every triangle within `max_distortion`, none
+    /// inverted.
+    pub inverted_bound: Option<f64>,
 }
 
 impl BoundedOptions {
@@ -106,6 +124,7 @@ impl BoundedOptions {
             iterations: 5000,
             tolerance: 1e-3,
             newton_finish: true,
+            inverted_bound: None,
         }
     }
     /// Sets the iteration limit.
@@ -116,6 +135,12 @@ impl BoundedOptions {
     /// Turns the projected Newton finish on or off (alternating projections only).
     pub fn with_newton_finish(mut self, on: bool) -> Self {
         self.newton_finish = on;
+        self
+    }
+    /// Sets the bound the projections use for inverted triangles (see
+    /// [`BoundedOptions::inverted_bound`]).
+    pub fn with_inverted_bound(mut self, k: f64) -> Self {
+        self.inverted_bound = Some(k);
         self
     }
 }
@@ -185,9 +210,7 @@ impl BoundedDistortion {
         pins: &[(u32, [f64; 2])],
         options: BoundedOptions,
     ) -> Result<BoundedDistortion, ParamError> {
-        if !(options.max_distortion >= 1.0 && options.max_distortion.is_finite()) {
-            return Err(ParamError::BadBound(options.max_distortion));
-        }
+        check_bounds(&options)?;
         if let Some(vertex) = mesh
             .positions
             .iter()
@@ -218,9 +241,7 @@ impl BoundedDistortion {
         pins: &[u32],
         options: BoundedOptions,
     ) -> Result<BoundedDistortion, ParamError> {
-        if !(options.max_distortion >= 1.0 && options.max_distortion.is_finite()) {
-            return Err(ParamError::BadBound(options.max_distortion));
-        }
+        check_bounds(&options)?;
         let pins: Vec<(u32, [f64; 2])> = pins.iter().map(|&v| (v, [0.0; 2])).collect();
         BoundedDistortion::with_frames(frames, n, &pins, 0, options)
     }
@@ -405,6 +426,7 @@ impl BoundedDistortion {
     pub fn iterate(&mut self, uv: &mut [[f64; 2]]) -> Result<(), ParamError> {
         let k = self.rhs.len() / 2;
         let kb = self.options.max_distortion;
+        let k_inverted = self.options.inverted_bound.map_or(kb, |k| k.min(kb));
         // 1. Project; the right-hand side Tᵀ W p (less the fixed vertices' part), and the
         //    half-space row η = Tᵀ W n with n = z - p, and its constant ⟨n, p⟩ (less the
         //    fixed vertices' part).
@@ -414,7 +436,8 @@ impl BoundedDistortion {
         let mut active = false;
         for f in 0..self.frames.len() {
             let z = self.frames.gradient(f, uv);
-            let p = project(z, kb);
+            let inverted = z[0][0] * z[1][1] - z[0][1] * z[1][0] <= 0.0;
+            let p = project(z, if inverted { k_inverted } else { kb });
             self.projected[f] = p;
             let nrm = [
                 [z[0][0] - p[0][0], z[0][1] - p[0][1]],

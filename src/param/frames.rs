@@ -62,6 +62,24 @@ impl Frames {
         Ok(fr)
     }
 
+    /// The constants of the triangles `faces` (indices into these), their vertices
+    /// renumbered by `local` (global vertex to local index; every vertex of those faces
+    /// mapped): a part of the mesh solved on its own, with the same constants.
+    pub fn select(&self, faces: &[usize], local: &[u32]) -> Frames {
+        let area: Vec<f64> = faces.iter().map(|&f| self.area[f]).collect();
+        Frames {
+            faces: faces
+                .iter()
+                .map(|&f| self.faces[f].map(|v| local[v as usize]))
+                .collect(),
+            local: faces.iter().map(|&f| self.local[f]).collect(),
+            g: faces.iter().map(|&f| self.g[f]).collect(),
+            cot: faces.iter().map(|&f| self.cot[f]).collect(),
+            total_area: area.iter().sum(),
+            area,
+        }
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.faces.len()

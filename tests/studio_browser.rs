@@ -527,7 +527,7 @@ fn document(studio: &Studio, dir: &Path, name: &str) -> Vec<u8> {
     serde_json::to_vec(&project).expect("json")
 }
 
-/// 1. A picture with stray specks and a second real piece: the specks are left out (and
+/// Defect 1: a picture with stray specks and a second real piece: the specks are left out (and
 /// said so); the two pieces are outlined in their own colours; a pin on one piece poses it
 /// while the other keeps its place; pins accumulate on both pieces.
 #[test]
@@ -610,7 +610,7 @@ fn defect_1_a_mesh_of_several_pieces_poses_and_its_pieces_show() {
     assert_eq!(c.state["pieces"], 5);
 }
 
-/// 2. Pins drawn after a reload and in a second tab; a click there adds a pin (never
+/// Defect 2: pins drawn after a reload and in a second tab; a click there adds a pin (never
 /// replaces the keyframe's pins or changes its pose); each tab sees the other's edits.
 #[test]
 fn defect_2_a_reload_and_a_second_tab_show_the_same_pins_and_edits() {
@@ -667,7 +667,7 @@ fn defect_2_a_reload_and_a_second_tab_show_the_same_pins_and_edits() {
     assert_eq!(a.eval("studio.state.undo"), "drag on keyframe 2");
 }
 
-/// 3. Create mesh (only in outline mode) keeps all four keyframes, as one undoable step.
+/// Defect 3: create mesh (only in outline mode) keeps all four keyframes, as one undoable step.
 #[test]
 fn defect_3_create_mesh_keeps_the_animation_and_is_undone() {
     let Some(browser) = browser() else { return };
@@ -713,7 +713,7 @@ fn defect_3_create_mesh_keeps_the_animation_and_is_undone() {
     assert_eq!(page.num("studio.state.keyframes.length"), 4.0);
 }
 
-/// 4. Every kind of edit is undone by Ctrl+Z: deleting a keyframe (after a confirmation),
+/// Defect 4: every kind of edit is undone by Ctrl+Z: deleting a keyframe (after a confirmation),
 /// clearing pins, removing a pin, an outline point, a time, an easing, the method.
 #[test]
 fn defect_4_every_kind_of_edit_is_undone() {
@@ -799,7 +799,7 @@ fn flipped_project(dir: &Path) -> (Project, usize) {
     (project, flipped)
 }
 
-/// 5. A keyframe with flipped triangles: scrubbing and playing work, the keyframe is marked
+/// Defect 5: a keyframe with flipped triangles: scrubbing and playing work, the keyframe is marked
 /// on the timeline, its flips are drawn over the picture, and Repair fixes them (undoable).
 #[test]
 fn defect_5_flipped_triangles_never_block_and_show() {
@@ -862,7 +862,7 @@ fn defect_5_flipped_triangles_never_block_and_show() {
     );
 }
 
-/// 6. A picture without transparency opens (its background told by its border); in Outline
+/// Defect 6: a picture without transparency opens (its background told by its border); in Outline
 /// mode the background settings trace again as they change; an OBJ opens with the picture of
 /// its name; a picture is attached to a mesh from the page.
 #[test]
@@ -929,7 +929,7 @@ fn defect_6_any_picture_opens_and_pictures_attach() {
     page.shot("6-attached.png");
 }
 
-/// 7. Open and Save as in the page, Ctrl+S, the unsaved mark and the warning before
+/// Defect 7: open and Save as in the page, Ctrl+S, the unsaved mark and the warning before
 /// closing; after Ctrl-C and a restart in the same folder the page reconnects by itself and
 /// the unsaved work is offered back; a project whose picture is missing opens untextured.
 #[test]
@@ -1034,7 +1034,7 @@ fn defect_7_files_save_and_a_restart_reconnects() {
     );
 }
 
-/// 8. An MP4 export runs in the background with progress and Cancel; scrubs are answered
+/// Defect 8: an MP4 export runs in the background with progress and Cancel; scrubs are answered
 /// meanwhile; the result stays visible until dismissed.
 #[test]
 fn defect_8_exports_run_in_the_background() {
@@ -1088,7 +1088,7 @@ fn defect_8_exports_run_in_the_background() {
     );
 }
 
-/// 9. The smaller ones: the time field follows the keyframe shown; a click on a frame
+/// Defect 9: the smaller ones: the time field follows the keyframe shown; a click on a frame
 /// between keyframes acts on it (it becomes a keyframe) rather than jumping to another;
 /// outline tools are hidden in pose mode; messages count from 1 and do not move the canvas;
 /// the vertex count asked for is met; playback keeps the frame rate; the favicon is served.
@@ -1183,7 +1183,7 @@ fn defect_9_the_smaller_ones() {
     assert_eq!(status, 204);
 }
 
-/// 11. Pins dragged far off the canvas, the view zoomed out as far as it goes: the pose stays
+/// Defect 11: pins dragged far off the canvas, the view zoomed out as far as it goes: the pose stays
 /// finite, is saved, and the project opens again.
 #[test]
 fn defect_11_a_pose_is_never_other_than_finite() {

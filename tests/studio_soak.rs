@@ -1,12 +1,16 @@
-//! The studio under a long session: 10,000 random edits over the socket (pins, drags,
-//! keyframes added, copied, moved, retimed, deleted, frames made keyframes, easings, methods,
-//! scrubs, undo and redo, and hostile values among them) on a 5K-vertex project with 20
-//! keyframes. The server keeps serving, every refusal leaves it as it was, and its resident
-//! memory stays within a stated bound: the history's budget and the project's own limits
-//! hold however long the session. The memory is printed at every thousand edits.
+//! The studio under a long session: random edits over the socket (pins, drags, keyframes
+//! added, copied, moved, retimed, deleted, frames made keyframes, easings, methods, scrubs,
+//! undo and redo, and hostile values among them) on a 5K-vertex project with 20 keyframes.
+//! The server keeps serving and its resident memory stays within a stated bound: the
+//! history's budget and the project's own limits hold however long the session. The memory
+//! is printed at every thousand edits.
 //!
-//! Also measured (reported, not asserted): how long a scrub takes while a 250-frame MP4 of a
-//! 10K-vertex project is exported in the background.
+//! `cargo test` runs 1,000 edits; CI runs 10,000 on the release build:
+//! `BDMORPH_BIN=target/release/bdmorph BDMORPH_SOAK_EDITS=10000 cargo test --test studio_soak -- --include-ignored`
+//! (BDMORPH_BIN: the program to run; the test build's by default).
+//!
+//! Also measured (reported, not asserted; ignored by a plain `cargo test`): how long a scrub
+//! takes while a 250-frame MP4 of a 10K-vertex project is exported in the background.
 
 mod studio_common;
 
@@ -81,7 +85,12 @@ fn random_request(rng: &mut Rng, c: &mut Client) -> String {
         13 => serde_json::json!({"op": "set_time", "keyframe": k(rng), "time": time(rng)}),
         14 => serde_json::json!({"op": "frame_to_keyframe", "time": time(rng)}),
         15 => {
-            let easing = ["linear", "ease-in-out", "cubic-bezier(0.3,0,0.7,1)", "wobbly"][rng.below(4)];
+            let easing = [
+                "linear",
+                "ease-in-out",
+                "cubic-bezier(0.3,0,0.7,1)",
+                "wobbly",
+            ][rng.below(4)];
             serde_json::json!({"op": "set_easing", "keyframe": k(rng), "easing": easing})
         }
         16 => {
@@ -106,7 +115,11 @@ fn random_request(rng: &mut Rng, c: &mut Client) -> String {
 }
 
 #[test]
-fn ten_thousand_random_edits_stay_within_a_memory_bound() {
+fn random_edits_stay_within_a_memory_bound() {
+    let edits: usize = std::env::var("BDMORPH_SOAK_EDITS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1000);
     let dir = scratch("soak");
     let mesh = generate::disk(generate::rings_for(5000), 0.1);
     let mut project = Project::new(&mesh, None);
@@ -126,7 +139,7 @@ fn ten_thousand_random_edits_stay_within_a_memory_bound() {
     let mut peak = first;
     let mut rng = Rng(0xdead_beef_cafe_f00d);
     let (mut refused, mut carried) = (0, 0);
-    for edit in 1..=10_000 {
+    for edit in 1..=edits {
         let request = random_request(&mut rng, &mut c);
         match c.request(&request) {
             Some(_) => refused += 1,
@@ -153,7 +166,10 @@ fn ten_thousand_random_edits_stay_within_a_memory_bound() {
         RESIDENT_BOUND >> 20,
         start.elapsed().as_secs_f64()
     );
-    assert!(carried > 3000 && refused > 300, "{carried} {refused}");
+    assert!(
+        carried > edits / 3 && refused > edits / 30,
+        "{carried} {refused}"
+    );
     assert!(studio.page_is_served(), "still serving");
     assert!(peak < RESIDENT_BOUND, "peak {} MB", peak >> 20);
     // The document it ends with is whole: it saves, and opens again.
@@ -162,8 +178,9 @@ fn ten_thousand_random_edits_stay_within_a_memory_bound() {
 }
 
 /// Scrubs answered while a 250-frame MP4 of a 10K-vertex project is exported (reported:
-/// BENCHMARKS.md records the numbers).
+/// BENCHMARKS.md records the numbers; run on the release build).
 #[test]
+#[ignore = "a measurement: run with BDMORPH_BIN=target/release/bdmorph and --include-ignored"]
 fn scrubs_during_an_export_are_measured() {
     let dir = scratch("export-latency");
     let mesh = generate::disk(generate::rings_for(10_000), 0.2);
@@ -188,7 +205,9 @@ fn scrubs_during_an_export_are_measured() {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let idle: Vec<f64> = (0..40).map(|i| scrub(&mut c, 0.1 + 0.2 * i as f64)).collect();
+    let idle: Vec<f64> = (0..40)
+        .map(|i| scrub(&mut c, 0.1 + 0.2 * i as f64))
+        .collect();
     assert_eq!(
         c.request(r#"{"op":"export","format":"mp4","name":"ten.mp4"}"#),
         None
@@ -204,10 +223,17 @@ fn scrubs_during_an_export_are_measured() {
         during.push(scrub(&mut c, 0.15 + 0.2 * (i % 49) as f64));
         i += 1;
         std::thread::sleep(Duration::from_millis(20));
-        assert!(started.elapsed() < Duration::from_secs(600), "the export ends");
+        assert!(
+            started.elapsed() < Duration::from_secs(600),
+            "the export ends"
+        );
     }
     let export_seconds = started.elapsed().as_secs_f64();
-    assert!(c.notes().iter().any(|n| n.contains("ten.mp4")), "{:?}", c.notes());
+    assert!(
+        c.notes().iter().any(|n| n.contains("ten.mp4")),
+        "{:?}",
+        c.notes()
+    );
     let worst = during.iter().copied().fold(0.0, f64::max);
     eprintln!(
         "export latency: a 251-frame MP4 of {} vertices took {export_seconds:.1} s; scrubs: median {:.1} ms idle, median {:.1} ms and worst {worst:.1} ms during the export ({} scrubs)",

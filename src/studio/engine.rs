@@ -15,6 +15,9 @@ use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
 use crate::{Easing, MorphOptions, Path, PathOptions};
 
+/// How much larger than the rest mesh a pose may spread before a drag is refused.
+pub const MAX_POSE_SPREAD: f64 = 100.0;
+
 /// The posing method a project names.
 pub fn method_of(m: &MethodData) -> Result<Method, String> {
     m.check()?;
@@ -295,26 +298,7 @@ impl Engine {
         let result = self.deformer.drag(&self.targets);
         let bad = match &result {
             Err(e) => Some(people(&e.to_string())),
-            Ok(_) => {
-                let pose = PlanarMesh {
-                    positions: self.deformer.positions().to_vec(),
-                    faces: self.rest.faces.clone(),
-                };
-                match pose.validate_allowing_inverted() {
-                    Ok(_) => None,
-                    Err(crate::MeshError::NonFinite { .. }) => Some(
-                        "the handles are too far apart for the mesh to follow (the pose would not be finite)"
-                            .to_owned(),
-                    ),
-                    Err(crate::MeshError::Degenerate { .. }) => {
-                        Some("the pose would collapse a triangle".to_owned())
-                    }
-                    Err(crate::MeshError::Mirrored { .. }) => {
-                        Some("the pose would turn the mesh inside out".to_owned())
-                    }
-                    Err(e) => Some(people(&e.to_string())),
-                }
-            }
+            Ok(_) => pose_problem(&self.rest, self.deformer.positions()),
         };
         if let Some(why) = bad {
             // The keyframe keeps its pose; the deformer goes back to it.
@@ -395,6 +379,50 @@ impl Engine {
     pub fn held(&self) -> &[u32] {
         &self.held
     }
+}
+
+/// Why `pose` (of `rest`'s triangles) cannot be kept, if it cannot: a point not finite, a
+/// triangle collapsed, the mesh turned inside out (more triangles flipped than not), or a
+/// vertex thrown far beyond the mesh (a soft method overshooting). Allocates nothing.
+pub fn pose_problem(rest: &PlanarMesh, pose: &[[f64; 2]]) -> Option<String> {
+    if pose.iter().flatten().any(|c| !c.is_finite()) {
+        return Some(
+            "the handles are too far apart for the mesh to follow (the pose would not be finite)"
+                .into(),
+        );
+    }
+    let bounds = |points: &[[f64; 2]]| {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in points {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+    };
+    let size = bounds(pose);
+    if size > MAX_POSE_SPREAD * bounds(&rest.positions) {
+        return Some(
+            "the mesh could not follow the handles (a vertex was thrown far away); move them less at a time"
+                .into(),
+        );
+    }
+    let eps = 1e-14 * size * size;
+    let (mut flipped, mut collapsed) = (0, false);
+    for f in &rest.faces {
+        let [a, b, c] = f.map(|v| pose[v as usize]);
+        let area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]));
+        if area.abs() <= eps {
+            collapsed = true;
+        } else if area < 0.0 {
+            flipped += 1;
+        }
+    }
+    if 2 * flipped > rest.faces.len() {
+        return Some("the pose would turn the mesh inside out".into());
+    }
+    collapsed.then(|| "the pose would collapse a triangle".into())
 }
 
 /// The path through `meshes` (the keyframes' poses) with the document's times and easings.

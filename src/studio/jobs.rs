@@ -132,8 +132,16 @@ pub struct ExportWork {
 
 /// Where frames go, one at a time.
 enum Sink {
-    /// Pictures for an animated GIF or an MP4 (encoded at the end).
-    Pictures(Vec<Image>),
+    /// An animated GIF, encoded as the frames come, into a temporary file.
+    Gif(
+        Box<raster::GifEncoder<std::io::BufWriter<std::fs::File>>>,
+        PathBuf,
+    ),
+    /// An MP4, encoded as the frames come, into a temporary file.
+    Mp4(
+        Box<crate::render::video::Mp4Encoder<std::io::BufWriter<std::fs::File>>>,
+        PathBuf,
+    ),
     /// A strip of coloured frames.
     Strip(Vec<Image>),
     /// The HTML viewer's frames (positions: what the page embeds).
@@ -212,8 +220,35 @@ impl ExportWork {
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
             path.with_file_name(format!(".{name}.part-{}", std::process::id()))
         };
+        let file = |path: &PathBuf| {
+            let temp = temp_dir(path);
+            std::fs::File::create(&temp)
+                .map(|f| (std::io::BufWriter::new(f), temp.clone()))
+                .map_err(|e| format!("{}: {e}", temp.display()))
+        };
         let mut sink = match self.format.as_str() {
-            "gif" | "mp4" => Sink::Pictures(Vec::new()),
+            "gif" => {
+                let (out, temp) = file(&self.path)?;
+                let delay = (100.0 / self.project.fps).round().max(2.0) as u16;
+                match raster::GifEncoder::new(out, size.width, size.height, delay) {
+                    Ok(encoder) => Sink::Gif(Box::new(encoder), temp),
+                    Err(e) => {
+                        let _ = std::fs::remove_file(&temp);
+                        return Err(format!("export: {e}"));
+                    }
+                }
+            }
+            "mp4" => {
+                let (out, temp) = file(&self.path)?;
+                let fps = self.project.fps.round().max(1.0) as u32;
+                match crate::render::video::Mp4Encoder::new(out, size.width, size.height, fps) {
+                    Ok(encoder) => Sink::Mp4(Box::new(encoder), temp),
+                    Err(e) => {
+                        let _ = std::fs::remove_file(&temp);
+                        return Err(format!("export: {e}"));
+                    }
+                }
+            }
             "png" => Sink::Strip(Vec::new()),
             "html" => Sink::Html(Vec::new()),
             "obj" => {
@@ -231,16 +266,19 @@ impl ExportWork {
             for (k, &i) in picks.iter().enumerate() {
                 progress.cancelled()?;
                 let time = at(i, &mut frame)?;
+                let drawing = Drawing {
+                    faces: &faces,
+                    corner_uv: corner_uv.as_deref(),
+                    texture,
+                    face_colours: None,
+                };
                 match &mut sink {
-                    Sink::Pictures(images) => {
-                        let drawing = Drawing {
-                            faces: &faces,
-                            corner_uv: corner_uv.as_deref(),
-                            texture,
-                            face_colours: None,
-                        };
-                        images.push(raster::render(&frame, &drawing, &view, size));
-                    }
+                    Sink::Gif(encoder, _) => encoder
+                        .push(&raster::render(&frame, &drawing, &view, size))
+                        .map_err(|e| format!("export: {e}"))?,
+                    Sink::Mp4(encoder, _) => encoder
+                        .push(&raster::render(&frame, &drawing, &view, size))
+                        .map_err(|e| format!("export: {e}"))?,
                     Sink::Strip(_) => {
                         shape.distortion_into(&frame, &mut distortion);
                         strip_frames.push((frame.clone(), distortion.clone()));
@@ -257,25 +295,38 @@ impl ExportWork {
             Ok(())
         })();
         if let Err(e) = result {
-            if let Sink::Obj(dir) = &sink {
-                let _ = std::fs::remove_dir_all(dir);
+            match &sink {
+                Sink::Obj(dir) => {
+                    let _ = std::fs::remove_dir_all(dir);
+                }
+                Sink::Gif(_, temp) | Sink::Mp4(_, temp) => {
+                    let _ = std::fs::remove_file(temp);
+                }
+                _ => {}
             }
             return Err(e);
         }
         let failed = |e: &dyn std::fmt::Display| format!("export: {e}");
         match sink {
-            Sink::Pictures(images) => {
-                let bytes = if self.format == "gif" {
-                    let delay = (100.0 / self.project.fps).round().max(2.0) as u16;
-                    raster::encode_gif(&images, delay).map_err(|e| failed(&e))?
-                } else {
-                    crate::render::video::encode_mp4(
-                        &images,
-                        self.project.fps.round().max(1.0) as u32,
-                    )
-                    .map_err(|e| failed(&e))?
-                };
-                crate::io::write_bytes_atomic(&self.path, &bytes).map_err(|e| failed(&e))?;
+            Sink::Gif(encoder, temp) => {
+                let finished = encoder
+                    .finish()
+                    .map_err(|e| failed(&e))
+                    .and_then(|out| finish_file(out, &temp, &self.path));
+                if finished.is_err() {
+                    let _ = std::fs::remove_file(&temp);
+                }
+                finished?;
+            }
+            Sink::Mp4(encoder, temp) => {
+                let finished = encoder
+                    .finish()
+                    .map_err(|e| failed(&e))
+                    .and_then(|out| finish_file(out, &temp, &self.path));
+                if finished.is_err() {
+                    let _ = std::fs::remove_file(&temp);
+                }
+                finished?;
             }
             Sink::Strip(mut images) => {
                 let max = colour::distortion_scale(strip_frames.iter().map(|f| f.1.as_slice()));
@@ -327,6 +378,18 @@ impl ExportWork {
             frames: picks.len(),
         })
     }
+}
+
+/// A finished temporary file flushed, synced and renamed over `path`.
+fn finish_file(
+    out: std::io::BufWriter<std::fs::File>,
+    temp: &std::path::Path,
+    path: &std::path::Path,
+) -> Result<(), String> {
+    let failed = |e: &dyn std::fmt::Display| format!("export: {e}");
+    let file = out.into_inner().map_err(|e| failed(e.error()))?;
+    file.sync_all().map_err(|e| failed(&e))?;
+    std::fs::rename(temp, path).map_err(|e| failed(&e))
 }
 
 /// A new mesh from an outline.

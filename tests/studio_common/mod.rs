@@ -22,7 +22,12 @@ pub struct Studio {
 impl Studio {
     /// `bdmorph studio ARGS...` in `dir`.
     pub fn start_with(dir: &Path, args: &[&str]) -> Studio {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_bdmorph"));
+        // BDMORPH_BIN runs another build of the program (the release one, for timings).
+        let program = std::env::var_os("BDMORPH_BIN").map_or_else(
+            || PathBuf::from(env!("CARGO_BIN_EXE_bdmorph")),
+            PathBuf::from,
+        );
+        let mut c = Command::new(program);
         c.arg("studio").args(args).current_dir(dir);
         let mut child = c
             .stdout(Stdio::piped())

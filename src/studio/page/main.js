@@ -67,7 +67,10 @@ for (const id of ["edges", "colours", "texture", "overlay", "anchor", "pieces"])
 $("fit").onclick = fit;
 
 window.addEventListener("keydown", (e) => {
-  const typing = e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement || e.target instanceof HTMLTextAreaElement;
+  // Typing is in a text field, a number field or a list; on the time slider, a checkbox or a
+  // button the keys are the studio's (Space plays right after a scrub).
+  const t = e.target;
+  const typing = (t instanceof HTMLInputElement && !["range", "checkbox", "button", "submit"].includes(t.type)) || t instanceof HTMLSelectElement || t instanceof HTMLTextAreaElement;
   const mod = e.ctrlKey || e.metaKey;
   if (mod && e.key.toLowerCase() === "s") { e.preventDefault(); save(); return; }
   if (typing || document.querySelector("dialog[open]")) return;

@@ -20,22 +20,30 @@ function setSlider(time) {
 
 export function drawTimeline() {
   const st = S.state, keys = $("keys");
-  keys.textContent = "";
   const duration = Math.max(st.duration, 1e-9);
   const posing = "keyframe" in st.shown;
-  st.keyframes.forEach((k, i) => {
+  // The keys' elements are kept and updated in place: a click in progress never lands on one
+  // that a redraw has just replaced.
+  while (keys.children.length > st.keyframes.length) keys.lastChild.remove();
+  while (keys.children.length < st.keyframes.length) {
     const el = document.createElement("div");
-    el.className = "key" + (i === st.current && posing ? " current" : "") + (k.flipped ? " flipped" : "");
-    el.style.left = `${(100 * k.time) / duration}%`;
-    el.title = `keyframe ${nth(i)} at ${k.time} s (${k.easing})` + (k.flipped ? `: ${k.flipped} flipped triangles (Repair fixes them)` : "");
-    el.dataset.index = String(i);
-    if (k.flipped) el.textContent = "!";
     el.onmousedown = (e) => {
       if (e.button !== 0) return;
       e.preventDefault();
-      S.keyDrag = { index: i, startX: e.clientX, moved: false };
+      S.keyDrag = { index: Number(el.dataset.index), startX: e.clientX, moved: false };
     };
     keys.appendChild(el);
+  }
+  st.keyframes.forEach((k, i) => {
+    const el = keys.children[i];
+    const className = "key" + (i === st.current && posing ? " current" : "") + (k.flipped ? " flipped" : "");
+    if (el.className !== className) el.className = className;
+    const left = `${(100 * k.time) / duration}%`;
+    if (el.style.left !== left && !(S.keyDrag && S.keyDrag.index === i && S.keyDrag.moved)) el.style.left = left;
+    el.title = `keyframe ${nth(i)} at ${k.time} s (${k.easing})` + (k.flipped ? `: ${k.flipped} flipped triangles (Repair fixes them)` : "");
+    el.dataset.index = String(i);
+    const text = k.flipped ? "!" : "";
+    if (el.textContent !== text) el.textContent = text;
   });
   // The fields follow the keyframe shown (never another's).
   const key = st.keyframes[st.current];

@@ -5,8 +5,9 @@
 //! history's budget and the project's own limits hold however long the session. The memory
 //! is printed at every thousand edits.
 //!
-//! `cargo test` runs 1,000 edits; CI runs 10,000 on the release build:
-//! `BDMORPH_BIN=target/release/bdmorph BDMORPH_SOAK_EDITS=10000 cargo test --test studio_soak -- --include-ignored`
+//! `cargo test` runs 1,000 edits; CI runs 10,000 (`BDMORPH_SOAK_EDITS=10000`); BENCHMARKS.md's
+//! numbers are from the release build:
+//! `BDMORPH_BIN=target/release/bdmorph BDMORPH_SOAK_EDITS=10000 cargo test --test studio_soak -- --include-ignored --nocapture`
 //! (BDMORPH_BIN: the program to run; the test build's by default).
 //!
 //! Also measured (reported, not asserted; ignored by a plain `cargo test`): how long a scrub

@@ -647,9 +647,14 @@ impl Session {
             return Ok(());
         }
         let time = self.engine.compute(&self.doc, time)?;
+        // The pages learn a new time from the frame itself; the state changes only when a
+        // keyframe was shown before (not at every step of a scrub).
+        let was_time = matches!(self.view.shown, Shown::Time(_));
         self.view.shown = Shown::Time(time);
         self.bump_shown();
-        self.bump_state();
+        if !was_time {
+            self.bump_state();
+        }
         Ok(())
     }
 

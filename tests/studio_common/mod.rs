@@ -23,9 +23,10 @@ impl Studio {
     /// `bdmorph studio ARGS...` in `dir`.
     pub fn start_with(dir: &Path, args: &[&str]) -> Studio {
         // BDMORPH_BIN runs another build of the program (the release one, for timings).
+        // A relative path is taken from where the tests run (the program runs in `dir`).
         let program = std::env::var_os("BDMORPH_BIN").map_or_else(
             || PathBuf::from(env!("CARGO_BIN_EXE_bdmorph")),
-            PathBuf::from,
+            |p| std::path::absolute(PathBuf::from(p)).expect("BDMORPH_BIN: a path"),
         );
         let mut c = Command::new(program);
         c.arg("studio").args(args).current_dir(dir);

@@ -3,8 +3,8 @@
 // with every tab), playback at the project's frame rate (frames dropped, never slowed), and
 // the keyframe commands.
 
-import { S, $, nth, redraw } from "./view.js";
-import { send, request } from "./net.js";
+import { S, $, nth, redraw, KIND_FRAME } from "./view.js";
+import { send, request, on } from "./net.js";
 import { confirmDialog } from "./panels.js";
 
 export function sliderTime() {
@@ -53,7 +53,7 @@ export function drawTimeline() {
   $("key-easing").value = [...$("key-easing").options].some((o) => o.value === key.easing) ? key.easing : "linear";
   if (document.activeElement !== $("fps")) $("fps").value = st.fps;
   $("delete-key").disabled = st.current === 0;
-  if (!S.playing && !S.sliding && "time" in st.shown) setSlider(st.shown.time);
+  if (!S.playing && !S.sliding && "time" in st.shown && S.showing === "frame") setSlider(S.frameInfo.time);
   if (!S.playing && !S.sliding && posing) setSlider(key.time);
 }
 
@@ -84,6 +84,11 @@ window.addEventListener("mouseup", (e) => {
   S.keyDrag = null;
   if (moved) send({ op: "set_time", keyframe: index, time: keyDragTime(e.clientX) });
   send({ op: "select", keyframe: index });
+});
+
+// A frame shown (asked for here or in another tab): the slider follows its time.
+on("frame", (kind) => {
+  if (kind === KIND_FRAME && !S.playing && !S.sliding && S.state) setSlider(S.frameInfo.time);
 });
 
 $("time").addEventListener("input", () => {

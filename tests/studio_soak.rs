@@ -5,7 +5,7 @@
 //! history's budget and the project's own limits hold however long the session. The memory
 //! is printed at every thousand edits.
 //!
-//! `cargo test` runs 1,000 edits; CI runs 10,000 (`BDMORPH_SOAK_EDITS=10000`); BENCHMARKS.md's
+//! `cargo test` runs 1,000 edits; CI runs 5,000 (`BDMORPH_SOAK_EDITS=5000`); BENCHMARKS.md's
 //! numbers are from the release build:
 //! `BDMORPH_BIN=target/release/bdmorph BDMORPH_SOAK_EDITS=10000 cargo test --test studio_soak -- --include-ignored --nocapture`
 //! (BDMORPH_BIN: the program to run; the test build's by default).

@@ -53,8 +53,8 @@ export function connect() {
   };
   ws.onmessage = (event) => {
     const t0 = performance.now();
-    if (typeof event.data === "string") { S.stats.messages.text++; onText(JSON.parse(event.data)); }
-    else { S.stats.messages.binary++; onBinary(event.data); }
+    if (typeof event.data === "string") onText(JSON.parse(event.data));
+    else onBinary(event.data);
     S.stats.handleMs += performance.now() - t0;
   };
 }
@@ -69,7 +69,7 @@ function settle(seq) {
 
 function onText(msg) {
   switch (msg.type) {
-    case "state": S.stats.messages.state++; S.state = msg; emit("state", msg); break;
+    case "state": S.state = msg; emit("state", msg); break;
     case "pins": S.pins = msg.pins.slice(); S.pinsKeyframe = msg.keyframe; emit("pins", msg); break;
     case "outline": S.outline = msg.loops; emit("outline", msg); break;
     case "files": emit("files", msg); break;

@@ -33,7 +33,7 @@ export const S = {
   playing: false,
   connected: false,
   errors: [],             // this page's refused requests, until dismissed
-  stats: { poseUpdates: 0, frameUpdates: 0, latencies: [], drawMs: [], sent: new Map(), messages: { text: 0, binary: 0, state: 0 }, handleMs: 0 },
+  stats: { poseUpdates: 0, frameUpdates: 0, latencies: [], drawMs: [], sent: new Map(), handleMs: 0 },
 };
 window.studio = S;
 

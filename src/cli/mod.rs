@@ -805,12 +805,20 @@ pub fn run(cli: Cli) -> Result<(), String> {
     }
 }
 
+/// The most frames one command computes: 100,000 (at 60 frames a second, 27 minutes of
+/// animation). Their times are held (8 bytes each); their positions are streamed or counted
+/// against what `morph` keeps in memory.
+pub const MAX_FRAMES: usize = 100_000;
+
 /// The frame times: one `t` (any finite number: the solver checks how far it may go), or `n`
-/// evenly spaced over [0, 1].
+/// evenly spaced over [0, 1] (at most [`MAX_FRAMES`]).
 fn times(t: Option<f64>, frames: Option<usize>) -> Result<Vec<f64>, String> {
     match (t, frames) {
         (Some(t), None) if t.is_finite() => Ok(vec![t]),
         (Some(t), None) => Err(format!("--t {t} is not a finite number")),
+        (None, Some(n)) if n > MAX_FRAMES => Err(format!(
+            "--frames {n}: more than the {MAX_FRAMES} frames one command computes"
+        )),
         (None, Some(n)) if n >= 2 => Ok((0..n).map(|i| i as f64 / (n - 1) as f64).collect()),
         (None, Some(n)) => Err(format!("--frames {n}: at least 2 frames are needed")),
         _ => Err("give either --t T or --frames N".into()),

@@ -319,6 +319,17 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         .filter(|&(k, _)| !inverted[k].is_empty())
         .map(|(k, t)| (t, k))
         .collect();
+    let vertices = keys[0].positions.len();
+    let faces_n = keys[0].faces.len();
+    // OBJ frames stream to their directory a chunk at a time; every other output keeps the
+    // frames' positions (pictures are framed to fit every frame, animations hold them all),
+    // within MAX_KEPT_BYTES, checked before any frame is computed.
+    let streams = plan
+        .as_ref()
+        .is_some_and(|p| p.directory && p.format == output::Format::Obj);
+    if let Some(plan) = plan.as_ref().filter(|_| !streams) {
+        check_kept(plan, times.len(), vertices, colour.then_some(faces_n))?;
+    }
     let bar = progress_bar(times.len(), args.out.quiet, "morphing");
     let keep = plan.is_some();
     let solve = |engine: &mut Animation, range: std::ops::Range<usize>| {
@@ -341,78 +352,67 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             })
             .collect::<Vec<_>>()
     };
-    let ranges = stretch_ranges(times.len(), stretches);
-    let solved: Vec<Result<Solved, MorphError>> = engines
-        .par_iter_mut()
-        .zip(ranges)
-        .map(|(engine, range)| solve(engine, range))
-        .collect::<Vec<_>>()
-        .into_iter()
-        .flatten()
-        .collect();
-    bar.finish_and_clear();
-    let animation = &engines[0];
-    let mut frames = Vec::with_capacity(if plan.is_some() { times.len() } else { 0 });
+    let animation_faces = engines[0].faces().to_vec();
+    let mut frames = Vec::new();
     let mut stdout = std::io::stdout().lock();
     let mut failed = 0usize;
-    for ((index, &t), solved) in times.iter().enumerate().zip(solved) {
-        let frame = match solved {
-            Ok(frame) => frame,
-            // One frame: its error is the command's. Several: report it, write the others.
-            Err(e) if times.len() == 1 => return Err(inputs.frame_error(e)),
-            Err(e) => {
-                failed += 1;
-                let e = inputs.frame_error(e);
-                if args.out.stats {
-                    writeln!(stdout, "{{\"t\":{t},\"error\":\"{}\"}}", json_escape(&e))
-                        .map_err(|e| e.to_string())?;
+    let mut streamed = 0usize;
+    let names: Vec<String> = args
+        .meshes
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    let title = format!("bdmorph: {}", names.join(" -> "));
+    // A chunk of frames at a time: solved in parallel stretches (each engine warm-started
+    // from its previous frame), reported in order, and (OBJ frames) written; memory does not
+    // grow with the number of frames.
+    for chunk_start in (0..times.len()).step_by(CHUNK) {
+        let chunk_end = times.len().min(chunk_start + CHUNK);
+        let ranges = stretch_ranges(chunk_end - chunk_start, stretches)
+            .into_iter()
+            .map(|r| chunk_start + r.start..chunk_start + r.end);
+        let solved: Vec<Result<Solved, MorphError>> = engines
+            .par_iter_mut()
+            .zip(ranges.collect::<Vec<_>>())
+            .map(|(engine, range)| solve(engine, range))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .flatten()
+            .collect();
+        for (index, solved) in (chunk_start..chunk_end).zip(solved) {
+            let t = times[index];
+            let frame = match solved {
+                Ok(frame) => frame,
+                // One frame: its error is the command's. Several: report it, write the others.
+                Err(e) if times.len() == 1 => return Err(inputs.frame_error(e)),
+                Err(e) => {
+                    failed += 1;
+                    let e = inputs.frame_error(e);
+                    if args.out.stats {
+                        writeln!(stdout, "{{\"t\":{t},\"error\":\"{}\"}}", json_escape(&e))
+                            .map_err(|e| e.to_string())?;
+                    }
+                    eprintln!("bdmorph: error: {e}; frame skipped");
+                    continue;
                 }
-                eprintln!("bdmorph: error: {e}; frame skipped");
-                continue;
+            };
+            report(&args.out, &inputs, &inverted, t, &frame, &mut stdout)?;
+            if let Some(positions) = frame.positions {
+                frames.push(output::Frame {
+                    index,
+                    t,
+                    positions,
+                    distortion: frame.distortion,
+                });
             }
-        };
-        let at_folded = frame.at_folded;
-        if args.out.stats {
-            let mut json = frame.stats.to_json();
-            if let Some((k, deviation)) = at_folded {
-                json.pop();
-                json += &format!(
-                    ",\"keyframe\":{k},\"inverted_triangles\":{},\"keyframe_deviation\":{deviation:e}}}",
-                    inverted[k].len()
-                );
-            }
-            writeln!(stdout, "{json}").map_err(|e| e.to_string())?;
         }
-        if let (Some((k, deviation)), false) = (at_folded, args.out.quiet) {
-            let size = inputs.keyframes[k].diameter();
-            let inverted = &inverted[k];
-            eprintln!(
-                "bdmorph: note: t = {t} is keyframe {k} ({}), which has {} inverted \
-                 triangle{} (face {}, 0-based): the frame is the flat shape nearest its side \
-                 lengths, not that pose; it differs from it by up to {deviation:.3e} ({:.2}% \
-                 of its size)",
-                inputs.paths[k].display(),
-                inverted.len(),
-                if inverted.len() == 1 { "" } else { "s" },
-                listed(inverted),
-                100.0 * deviation / size.max(f64::MIN_POSITIVE)
-            );
-        }
-        if frame.stats.flipped_triangles > 0 && !args.out.quiet {
-            eprintln!(
-                "bdmorph: warning: t = {t}: {} flipped triangles",
-                frame.stats.flipped_triangles
-            );
-        }
-        if let Some(positions) = frame.positions {
-            frames.push(output::Frame {
-                index,
-                t,
-                positions,
-                distortion: frame.distortion,
-            });
+        stdout.flush().map_err(|e| e.to_string())?;
+        if let (true, Some(plan)) = (streams, plan.as_ref()) {
+            streamed += write_files(plan, &args.out, &inputs, &animation_faces, &title, &frames)?;
+            frames.clear();
         }
     }
+    bar.finish_and_clear();
     let n_times = times.len();
     let writes = plan.is_some();
     let failures = move || {
@@ -424,28 +424,95 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let Some(plan) = plan else {
         return if failed > 0 { Err(failures()) } else { Ok(()) };
     };
-    if frames.is_empty() {
+    if frames.is_empty() && streamed == 0 {
         return Err(format!(
             "no frame could be computed; nothing was written to {}",
             plan.path.display()
         ));
     }
-    let names: Vec<String> = args
-        .meshes
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect();
-    let title = format!("bdmorph: {}", names.join(" -> "));
-    write_frames(
-        &plan,
-        &args.out,
-        &inputs,
-        animation.faces(),
-        &title,
-        &frames,
-    )?;
+    if streams {
+        tell_written(&plan, &args.out, streamed);
+    } else {
+        write_frames(&plan, &args.out, &inputs, &animation_faces, &title, &frames)?;
+    }
     if failed > 0 {
         return Err(failures());
+    }
+    Ok(())
+}
+
+/// Frames solved, reported and (OBJ frames) written at a time.
+const CHUNK: usize = 512;
+
+/// The most bytes of frame positions (and distortions) kept in memory for an output that
+/// needs every frame before it is written: 2 GiB.
+pub(super) const MAX_KEPT_BYTES: u64 = 2 << 30;
+
+/// Refuses, before any frame is computed, an output whose frames would not fit in
+/// [`MAX_KEPT_BYTES`].
+pub(super) fn check_kept(
+    plan: &Plan,
+    frames: usize,
+    vertices: usize,
+    shaded_faces: Option<usize>,
+) -> Result<(), String> {
+    let per_frame = 16 * vertices as u64 + 8 * shaded_faces.unwrap_or(0) as u64 + 64;
+    let bytes = per_frame.saturating_mul(frames as u64);
+    if bytes <= MAX_KEPT_BYTES {
+        return Ok(());
+    }
+    Err(format!(
+        "{}: {frames} frames of {vertices} vertices need {:.1} GiB in memory before they are \
+         written, over the {} GiB limit; ask for fewer frames, or write OBJ frames to a \
+         directory (they stream)",
+        plan.path.display(),
+        bytes as f64 / f64::from(1u32 << 30),
+        MAX_KEPT_BYTES >> 30
+    ))
+}
+
+/// Reports one solved frame: its `--stats` line, and notes about keyframes with inverted
+/// triangles and flipped triangles.
+fn report(
+    out: &OutputArgs,
+    inputs: &Inputs,
+    inverted: &[Vec<usize>],
+    t: f64,
+    frame: &Solved,
+    stdout: &mut impl Write,
+) -> Result<(), String> {
+    let at_folded = frame.at_folded;
+    if out.stats {
+        let mut json = frame.stats.to_json();
+        if let Some((k, deviation)) = at_folded {
+            json.pop();
+            json += &format!(
+                ",\"keyframe\":{k},\"inverted_triangles\":{},\"keyframe_deviation\":{deviation:e}}}",
+                inverted[k].len()
+            );
+        }
+        writeln!(stdout, "{json}").map_err(|e| e.to_string())?;
+    }
+    if let (Some((k, deviation)), false) = (at_folded, out.quiet) {
+        let size = inputs.keyframes[k].diameter();
+        let inverted = &inverted[k];
+        eprintln!(
+            "bdmorph: note: t = {t} is keyframe {k} ({}), which has {} inverted \
+             triangle{} (face {}, 0-based): the frame is the flat shape nearest its side \
+             lengths, not that pose; it differs from it by up to {deviation:.3e} ({:.2}% \
+             of its size)",
+            inputs.paths[k].display(),
+            inverted.len(),
+            if inverted.len() == 1 { "" } else { "s" },
+            listed(inverted),
+            100.0 * deviation / size.max(f64::MIN_POSITIVE)
+        );
+    }
+    if frame.stats.flipped_triangles > 0 && !out.quiet {
+        eprintln!(
+            "bdmorph: warning: t = {t}: {} flipped triangles",
+            frame.stats.flipped_triangles
+        );
     }
     Ok(())
 }
@@ -505,6 +572,23 @@ pub(super) fn write_frames(
     title: &str,
     frames: &[output::Frame],
 ) -> Result<(), String> {
+    let written = write_files(plan, out, inputs, faces, title, frames)?;
+    tell_written(plan, out, written);
+    Ok(())
+}
+
+/// Renders and writes computed frames as `plan` says; returns how many files were written.
+fn write_files(
+    plan: &Plan,
+    out: &OutputArgs,
+    inputs: &Inputs,
+    faces: &[[u32; 3]],
+    title: &str,
+    frames: &[output::Frame],
+) -> Result<usize, String> {
+    if frames.is_empty() {
+        return Ok(0);
+    }
     let corner_uv = inputs.texture.as_ref().map(|_| {
         inputs
             .texcoords
@@ -524,14 +608,18 @@ pub(super) fn write_frames(
     let files = output::render(plan, &look, frames, || bar.inc(1))?;
     bar.finish_and_clear();
     output::write(plan, &files)?;
+    Ok(files.len())
+}
+
+/// Tells where the files went (unless quiet).
+fn tell_written(plan: &Plan, out: &OutputArgs, files: usize) {
     if !out.quiet {
         if plan.directory {
-            eprintln!("wrote {} files to {}", files.len(), plan.path.display());
+            eprintln!("wrote {files} files to {}", plan.path.display());
         } else {
             eprintln!("wrote {}", plan.path.display());
         }
     }
-    Ok(())
 }
 
 /// Largest distance between corresponding positions.

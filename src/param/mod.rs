@@ -112,7 +112,9 @@ pub struct ParamOptions {
     /// methods, 200 for projected Newton).
     pub iterations: Option<u32>,
     /// Stop when an iteration decreases the energy by less than this fraction of it (default
-    /// 1e-9), or when the gradient norm falls below `1e-10`.
+    /// 1e-9), when the energy and its decrease are below this fraction of the starting energy
+    /// (an energy whose minimum is zero), when an iteration moves no vertex by more than
+    /// [`MIN_MOVE`] of the map's size, or when the gradient norm falls below `1e-10`.
     pub tolerance: f64,
     /// For `arap-newton`: the weight `w` of the collapse barrier added to ARAP
     /// ([`Energy::ArapBarrier`], default [`DEFAULT_COLLAPSE_BARRIER`]). ARAP is finite on a
@@ -137,6 +139,40 @@ pub const COLLAPSE_RATIO: f64 = 1e6;
 /// still above [`STALL_GRADIENT`] of its first value, after which
 /// [`Parameterization::solve`] gives up and reports [`Stop::Stalled`].
 pub const STALL_ITERATIONS: u32 = 3;
+
+/// The largest vertex move of an iteration, as a fraction of the map's size, below which
+/// the iterations have converged (the map no longer changes beyond rounding).
+pub const MIN_MOVE: f64 = 1e-13;
+
+/// The largest distance between corresponding points of `a` and `b`, as a fraction of
+/// [`map_size`] of `b`.
+pub(crate) fn relative_move(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    let moved = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+        .fold(0.0, f64::max);
+    moved / map_size(b)
+}
+
+/// The diagonal of the bounding box of `uv` (1 for a point or a non-finite box, so that a
+/// move is then measured absolutely).
+pub(crate) fn map_size(uv: &[[f64; 2]]) -> f64 {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in uv {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let size = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+    if size > 0.0 && size.is_finite() {
+        size
+    } else {
+        1.0
+    }
+}
 
 /// The fraction of the Newton step below which a step counts towards a stall.
 pub const STALL_STEP: f64 = 1e-2;
@@ -477,6 +513,7 @@ impl Parameterization {
         match &mut self.solver {
             Solver::Direct => Ok(None),
             Solver::LocalGlobal(lg) => {
+                let previous = self.uv.clone();
                 let (before, after) = lg.iterate(&self.frames, &mut self.uv)?;
                 Ok(Some(StepReport {
                     energy_before: before,
@@ -485,6 +522,7 @@ impl Parameterization {
                     step: 1.0,
                     max_step: f64::NAN,
                     limiting_face: None,
+                    moved: relative_move(&previous, &self.uv),
                 }))
             }
             Solver::Newton(newton) => newton.iterate(&self.frames, &mut self.uv).map(Some),
@@ -511,6 +549,7 @@ impl Parameterization {
             _ => Stop::IterationLimit,
         };
         let (mut first_gradient, mut gradient_norm) = (f64::NAN, f64::NAN);
+        let mut first_energy = 0.0f64;
         let mut blocked_run = 0;
         let mut limiting_face = None;
         while iterations < limit {
@@ -533,14 +572,24 @@ impl Parameterization {
                 && report.step < STALL_STEP
                 && decrease < STALL_DECREASE * report.energy_after.abs();
             blocked_run = if blocked { blocked_run + 1 } else { 0 };
+            if iterations == 1 {
+                first_energy = report.energy_before.abs();
+            }
+            // An energy whose minimum is zero (a developable surface's ARAP) falls by a
+            // constant fraction per local/global iteration: relative to itself it never
+            // settles. Once it is below the tolerance of where it started it is zero.
+            let scale = report.energy_after.abs().max(first_energy);
+            let settled = (decrease.is_finite()
+                && decrease.abs() <= self.options.tolerance * report.energy_after.abs())
+                || (decrease.is_finite()
+                    && report.energy_after.abs() <= self.options.tolerance * scale
+                    && decrease.abs() <= self.options.tolerance * scale)
+                || report.moved <= MIN_MOVE;
             if report.gradient_norm < 1e-10 {
                 stop = Stop::Converged;
             } else if blocked_run >= STALL_ITERATIONS || (report.step == 0.0 && far) {
                 stop = Stop::Stalled;
-            } else if (decrease.is_finite()
-                && decrease.abs() <= self.options.tolerance * report.energy_after.abs())
-                || report.step == 0.0
-            {
+            } else if settled || report.step == 0.0 {
                 // (An energy that rose, to infinity or by more than the tolerance, is no
                 // convergence.)
                 // A negligible decrease from a tiny step with a large gradient is a stall

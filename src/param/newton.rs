@@ -59,6 +59,8 @@ pub struct StepReport {
     pub max_step: f64,
     /// The triangle whose inversion bounds `max_step` (`None` when nothing does).
     pub limiting_face: Option<usize>,
+    /// The largest vertex move of the step, as a fraction of the map's size.
+    pub moved: f64,
 }
 
 impl Newton {
@@ -278,6 +280,11 @@ impl Newton {
         if !(tried_partial && partial_step) {
             self.mu = 1.0;
         }
+        let longest = self
+            .step
+            .chunks_exact(2)
+            .map(|d| d[0].hypot(d[1]))
+            .fold(0.0, f64::max);
         Ok(StepReport {
             energy_before,
             energy_after,
@@ -285,6 +292,7 @@ impl Newton {
             step: taken,
             max_step,
             limiting_face,
+            moved: taken * longest / super::map_size(uv),
         })
     }
 

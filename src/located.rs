@@ -26,7 +26,8 @@
 //! assert_eq!(
 //!     err.to_string(),
 //!     "square.obj:8: face 2 (0-based) is clockwise (signed area -2.5e-1); \
-//!      triangles must be counter-clockwise, consistently"
+//!      triangles must be counter-clockwise, consistently (a keyframe with a few inverted \
+//!      triangles morphs with --allow-inverted)"
 //! );
 //!
 //! // Errors found later, here by the compiler, are located the same way.

@@ -4,10 +4,21 @@ mod cli;
 
 use std::process::ExitCode;
 
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches};
+
+/// Every (sub)command with negative numbers allowed as values (`--frames -1`, `--t -0.5`):
+/// they reach the option's own check rather than being taken for flags.
+fn allow_negative_numbers(command: clap::Command) -> clap::Command {
+    command
+        .allow_negative_numbers(true)
+        .mut_subcommands(allow_negative_numbers)
+}
 
 fn main() -> ExitCode {
-    let args = match cli::Cli::try_parse() {
+    let parsed = allow_negative_numbers(cli::Cli::command())
+        .try_get_matches()
+        .and_then(|matches| cli::Cli::from_arg_matches(&matches));
+    let args = match parsed {
         Ok(args) => args,
         Err(e) => {
             use clap::error::ErrorKind;

@@ -63,7 +63,7 @@ pub enum MeshError {
     },
     /// A triangle is clockwise, and no more triangles are clockwise than counter-clockwise
     /// (otherwise the mesh is [`MeshError::Mirrored`]).
-    #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently")]
+    #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently (a keyframe with a few inverted triangles morphs with --allow-inverted)")]
     Clockwise {
         /// The face.
         face: usize,

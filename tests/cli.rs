@@ -1214,7 +1214,10 @@ fn a_clockwise_face_is_named_with_its_line_in_obj_and_off_by_every_command() {
                 err.starts_with(&format!("bdmorph: error: {expected}")),
                 "{command:?}: {err}"
             );
-            assert!(err.ends_with("; triangles must be counter-clockwise, consistently\n"));
+            assert!(err.ends_with(
+                "; triangles must be counter-clockwise, consistently (a keyframe with a few \
+                 inverted triangles morphs with --allow-inverted)\n"
+            ));
         }
         let info = morphable(&path);
         assert!(

@@ -228,6 +228,12 @@ impl BoundedDistortion {
                 n_vertices: n,
             });
         }
+        let mut seen = vec![false; n];
+        for &(v, _) in pins {
+            if std::mem::replace(&mut seen[v as usize], true) {
+                return Err(ParamError::PinnedTwice { vertex: v });
+            }
+        }
         let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
         BoundedDistortion::with_frames(frames, n, pins, 0, options)
     }

@@ -155,6 +155,23 @@ pub(crate) fn relative_move(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
     moved / map_size(b)
 }
 
+/// Why a mesh is not a disk, in a parameterisation's words (the compiler's speak of its
+/// programs).
+fn disk_problem(e: &CompileError) -> String {
+    match e {
+        CompileError::HasHoles { loops, euler } => format!(
+            "the mesh has {loops} boundary loops (Euler characteristic {euler}): it has holes, \
+             and a parameterisation flattens a disk (one boundary loop); cut the holes open to \
+             the outer boundary, or fill them"
+        ),
+        CompileError::Disconnected { face } => format!(
+            "the mesh is not connected: {face} (0-based) cannot be reached from face 0; \
+             flatten each piece on its own"
+        ),
+        other => other.to_string(),
+    }
+}
+
 /// The diagonal of the bounding box of `uv` (1 for a point or a non-finite box, so that a
 /// move is then measured absolutely).
 pub(crate) fn map_size(uv: &[[f64; 2]]) -> f64 {
@@ -218,7 +235,7 @@ impl ParamOptions {
 #[non_exhaustive]
 pub enum ParamError {
     /// The mesh is not a disk: closed, with several boundaries, non-manifold, disconnected...
-    #[error("not a disk: {0}")]
+    #[error("not a disk: {}", disk_problem(.0))]
     NotADisk(#[from] CompileError),
     /// A coordinate is NaN or infinite.
     #[error("vertex {vertex} (0-based) has a non-finite coordinate")]
@@ -238,6 +255,12 @@ pub enum ParamError {
     /// A collapse-barrier weight that is negative or not finite.
     #[error("the collapse-barrier weight {0} must be a finite number of at least 0")]
     BadBarrier(f64),
+    /// Two positional constraints on one vertex.
+    #[error("vertex {vertex} (0-based) is pinned twice")]
+    PinnedTwice {
+        /// The vertex.
+        vertex: u32,
+    },
     /// A positional constraint on a vertex that does not exist, or to a non-finite point.
     #[error("constraint on vertex {vertex} (0-based): no such vertex (the mesh has {n_vertices}) or a non-finite target")]
     BadPin {

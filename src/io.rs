@@ -285,6 +285,50 @@ pub fn read_mesh(path: &Path) -> Result<SurfaceMesh, ReadError> {
     read_mesh_with_lines(path).map(|(mesh, _)| mesh)
 }
 
+/// The largest input file read: 1 GiB (a mesh of tens of millions of triangles, a picture
+/// at the largest size decoded).
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// Reads an input file whole, refusing, before opening it, anything but a regular file (a
+/// FIFO would block, a device such as `/dev/zero` never ends, a directory is no file) and a
+/// file over `limit` bytes; the read itself stops at `limit` (a file growing meanwhile).
+///
+/// # Errors
+/// The I/O error, or one of kind `InvalidInput` saying what the path is or how large.
+pub fn read_input(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    use std::io::Read;
+    let meta = fs::metadata(path)?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "a directory"
+        } else {
+            "not a regular file (a pipe, socket or device)"
+        };
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("is {what}"),
+        ));
+    }
+    let too_large = |size: u64| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "is {size} bytes, over the {} MiB an input file may have",
+                limit >> 20
+            ),
+        )
+    };
+    if meta.len() > limit {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    File::open(path)?.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
 /// As [`read_mesh`], also returning the line each vertex and face was read from.
 pub fn read_mesh_with_lines(path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
@@ -293,7 +337,7 @@ pub fn read_mesh_with_lines(path: &Path) -> Result<(SurfaceMesh, LineMap), ReadE
         "off" => parse_off_with_lines,
         _ => return Err(ReadError::UnknownFormat { path: path.into() }),
     };
-    let bytes = fs::read(path).map_err(|source| ReadError::Io {
+    let bytes = read_input(path, MAX_INPUT_BYTES).map_err(|source| ReadError::Io {
         path: path.into(),
         source,
     })?;

@@ -48,7 +48,8 @@ pub(super) fn load(
     source_path: &Path,
     source: &PlanarMesh,
 ) -> Result<Program, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let bytes = bdmorph::io::read_input(path, bdmorph::io::MAX_INPUT_BYTES)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let (program, file) =
         Program::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     let mesh = key(source);

@@ -84,7 +84,7 @@ pub(super) fn run(args: MeshArgs) -> Result<(), String> {
         picture = picture.with_threshold(t);
     }
     picture = picture.with_keep_specks(args.keep_specks);
-    let kind = std::fs::read(&args.input)
+    let kind = bdmorph::io::read_input(&args.input, bdmorph::io::MAX_INPUT_BYTES)
         .ok()
         .and_then(|bytes| InputKind::of(&args.input, &bytes));
     let picture_only: Vec<&str> = [

@@ -696,9 +696,11 @@ pub fn mesh_file(
 ) -> Result<Meshed, MeshingError> {
     let start = Instant::now();
     options.validate()?;
-    let bytes = std::fs::read(path).map_err(|source| MeshingError::Read {
-        path: path.to_path_buf(),
-        source,
+    let bytes = crate::io::read_input(path, crate::io::MAX_INPUT_BYTES).map_err(|source| {
+        MeshingError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     let kind = InputKind::of(path, &bytes).ok_or_else(|| MeshingError::UnknownInput {
         path: path.to_path_buf(),

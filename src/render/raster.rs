@@ -671,9 +671,11 @@ pub fn decode_image(bytes: &[u8]) -> Result<Image, RenderError> {
 /// [`RenderError::Read`] when the file cannot be read; otherwise those of [`decode_image`],
 /// naming the file.
 pub fn read_image(path: &Path) -> Result<Image, RenderError> {
-    let bytes = std::fs::read(path).map_err(|source| RenderError::Read {
-        path: path.to_path_buf(),
-        source,
+    let bytes = crate::io::read_input(path, crate::io::MAX_INPUT_BYTES).map_err(|source| {
+        RenderError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     decode_image(&bytes).map_err(|e| e.in_file(path))
 }

@@ -86,6 +86,20 @@ pub enum RenderError {
         /// The largest supported side.
         max: u32,
     },
+    /// A picture whose header claims more pixels than its data could hold (compressed, a
+    /// byte of PNG or JPEG data holds at most about a thousand pixels' bytes): damaged or
+    /// hostile, refused before its pixels are allocated.
+    #[error("{}image claims {width}x{height} pixels but its file holds only {bytes} bytes", FilePrefix(.path))]
+    Unbacked {
+        /// The file, when the bytes came from one.
+        path: Option<PathBuf>,
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
+        /// The file's size.
+        bytes: usize,
+    },
     /// The encoder failed.
     #[error("cannot encode {format}: {source}")]
     Encode {
@@ -166,7 +180,8 @@ impl RenderError {
         match &mut self {
             RenderError::UnknownFormat { path }
             | RenderError::Decode { path, .. }
-            | RenderError::TooLarge { path, .. } => *path = Some(file.to_path_buf()),
+            | RenderError::TooLarge { path, .. }
+            | RenderError::Unbacked { path, .. } => *path = Some(file.to_path_buf()),
             _ => {}
         }
         self
@@ -523,13 +538,28 @@ pub fn encode_png(img: &Image) -> Result<Vec<u8>, RenderError> {
     Ok(out)
 }
 
-fn too_large(width: u32, height: u32) -> Result<(), RenderError> {
+/// Decoded bytes (RGBA) one byte of a compressed picture may claim: deflate expands a byte
+/// at most 1032-fold, and a flat JPEG block of 8 x 8 pixels takes a few bits.
+const MAX_EXPANSION: usize = 2048;
+
+/// Refuses a picture over [`MAX_DECODED_SIDE`] a side, or claiming more pixels than `data`
+/// bytes of file could hold (beyond 16 MiB decoded), before its pixels are allocated.
+fn too_large(width: u32, height: u32, data: usize) -> Result<(), RenderError> {
     if width > MAX_DECODED_SIDE || height > MAX_DECODED_SIDE {
         return Err(RenderError::TooLarge {
             path: None,
             width,
             height,
             max: MAX_DECODED_SIDE,
+        });
+    }
+    let decoded = 4 * width as usize * height as usize;
+    if decoded > (16 << 20) + MAX_EXPANSION.saturating_mul(data) {
+        return Err(RenderError::Unbacked {
+            path: None,
+            width,
+            height,
+            bytes: data,
         });
     }
     Ok(())
@@ -552,16 +582,26 @@ fn to_rgba(pixels: &[u8], channels: usize) -> Vec<u8> {
 }
 
 fn decode_png(bytes: &[u8]) -> Result<Image, RenderError> {
-    let fail = |e: png::DecodingError| RenderError::Decode {
-        path: None,
-        format: "PNG",
-        source: Box::new(e),
+    let fail = |e: png::DecodingError| {
+        // The decoder's own words, unless they would print a damaged chunk's bytes.
+        let text = e.to_string();
+        let source: Box<dyn StdError + Send + Sync> =
+            if text.contains("ChunkType") || !text.chars().all(|c| c.is_ascii() && !c.is_control()) {
+                "damaged data (a chunk of an unknown kind where a known one was needed)".into()
+            } else {
+                Box::new(e)
+            };
+        RenderError::Decode {
+            path: None,
+            format: "PNG",
+            source,
+        }
     };
     let mut decoder = png::Decoder::new(Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
     let mut reader = decoder.read_info().map_err(fail)?;
     let (width, height) = (reader.info().width, reader.info().height);
-    too_large(width, height)?;
+    too_large(width, height, bytes.len())?;
     let len = reader
         .output_buffer_size()
         .ok_or_else(|| RenderError::TooLarge {
@@ -620,7 +660,7 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Image, RenderError> {
         u32::try_from(w).unwrap_or(u32::MAX),
         u32::try_from(h).unwrap_or(u32::MAX),
     );
-    too_large(width, height)?;
+    too_large(width, height, bytes.len())?;
     let pixels = decoder.decode().map_err(|e| fail(Box::new(e)))?;
     let channels = match decoder.output_colorspace() {
         Some(ColorSpace::RGBA) => 4,

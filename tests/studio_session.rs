@@ -4,6 +4,8 @@
 //! flipped triangles play, a new mesh carries the animation over as one undoable step, poses
 //! that are not finite are never kept, and the history stays within its budget.
 
+mod studio_fuzz_cases;
+
 use bdmorph::generate;
 use bdmorph::studio::project::{Keyframe, Project};
 use bdmorph::studio::protocol::Request;

@@ -585,12 +585,13 @@ fn decode_png(bytes: &[u8]) -> Result<Image, RenderError> {
     let fail = |e: png::DecodingError| {
         // The decoder's own words, unless they would print a damaged chunk's bytes.
         let text = e.to_string();
-        let source: Box<dyn StdError + Send + Sync> =
-            if text.contains("ChunkType") || !text.chars().all(|c| c.is_ascii() && !c.is_control()) {
-                "damaged data (a chunk of an unknown kind where a known one was needed)".into()
-            } else {
-                Box::new(e)
-            };
+        let source: Box<dyn StdError + Send + Sync> = if text.contains("ChunkType")
+            || !text.chars().all(|c| c.is_ascii() && !c.is_control())
+        {
+            "damaged data (a chunk of an unknown kind where a known one was needed)".into()
+        } else {
+            Box::new(e)
+        };
         RenderError::Decode {
             path: None,
             format: "PNG",

@@ -802,7 +802,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 // The file named here is the user's own choice, and so is its picture.
                 pictures_inside: false,
             },
-            ..bdmorph::studio::StudioOptions::default()
+            limits: bdmorph::studio::listen::ConnectionLimits::from_env(),
         })
         .map_err(|e| e.to_string()),
     }

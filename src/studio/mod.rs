@@ -21,6 +21,7 @@ pub mod engine;
 pub mod guard;
 pub mod history;
 pub mod jobs;
+pub mod listen;
 pub mod open;
 pub mod project;
 pub mod protocol;
@@ -45,6 +46,8 @@ pub struct StudioOptions {
     pub open: bool,
     /// How a picture is opened and a mesh textured.
     pub opening: open::OpenOptions,
+    /// How many connections the server holds, and for how long without a request.
+    pub limits: listen::ConnectionLimits,
 }
 
 /// Why the studio could not start.
@@ -176,20 +179,11 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
             job_threads: (threads / 2).max(1),
         });
         tokio::spawn(autosave(app.clone()));
-        // Small frames go out at once (no Nagle delay): latency is the point.
-        use axum::serve::ListenerExt as _;
-        let listener = listener.tap_io(|stream| {
-            if let Err(e) = stream.set_nodelay(true) {
-                eprintln!("studio: TCP_NODELAY not set: {e}");
-            }
-        });
-        let served = axum::serve(listener, server::router(app.clone()))
-            .with_graceful_shutdown(async {
-                let _ = tokio::signal::ctrl_c().await;
-                eprintln!("studio: stopping");
-            })
-            .await
-            .map_err(|e| StudioError::Server(e.to_string()));
+        listen::serve(listener, server::router(app.clone()), options.limits, async {
+            let _ = tokio::signal::ctrl_c().await;
+            eprintln!("studio: stopping");
+        })
+        .await;
         // Unsaved work is kept for the next start.
         let last = app.session().autosave_copy();
         match last {
@@ -202,7 +196,7 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
             },
             None => workspace.clear_autosave(),
         }
-        served
+        Ok(())
     })
 }
 

@@ -13,7 +13,13 @@
 //! socket carry a secret token (kept owner-only in the workspace so that pages reconnect after
 //! a restart), `Host` and `Origin` must be the server's own (against DNS rebinding and other
 //! sites' pages), messages are bounded, and the studio writes only into its workspace (the
-//! opened file's folder, or the current one) by plain file names, atomically.
+//! opened file's folder, or the current one) by plain file names, atomically; a name that is
+//! a link leading out of the workspace is refused, for reading as for writing
+//! ([`workspace`]). Pictures are read only as regular files of bounded size, without blocking
+//! on a pipe, and a project opened from the page may name only a picture inside the workspace
+//! ([`open`]). At most [`listen::MAX_CONNECTIONS`] connections are open at once, and each
+//! must send a request within [`listen::HEADER_TIMEOUT_SECONDS`] seconds of opening or of its
+//! last answer ([`listen`]).
 
 pub mod carry;
 pub mod edit;

@@ -799,7 +799,10 @@ pub fn run(cli: Cli) -> Result<(), String> {
                 },
                 texture: args.texture,
                 keep_specks: args.keep_specks,
+                // The file named here is the user's own choice, and so is its picture.
+                pictures_inside: false,
             },
+            limits: bdmorph::studio::listen::ConnectionLimits::from_env(),
         })
         .map_err(|e| e.to_string()),
     }

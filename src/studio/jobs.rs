@@ -222,7 +222,12 @@ impl ExportWork {
         };
         let file = |path: &PathBuf| {
             let temp = temp_dir(path);
-            std::fs::File::create(&temp)
+            // A fresh file: a stale one (or a link of that name) is removed, not written through.
+            let _ = std::fs::remove_file(&temp);
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&temp)
                 .map(|f| (std::io::BufWriter::new(f), temp.clone()))
                 .map_err(|e| format!("{}: {e}", temp.display()))
         };
@@ -252,9 +257,11 @@ impl ExportWork {
             "png" => Sink::Strip(Vec::new()),
             "html" => Sink::Html(Vec::new()),
             "obj" => {
+                // A fresh folder of our own: a stale one is removed (a link only unlinked, never
+                // followed), and the frames go into one this export created.
                 let dir = temp_dir(&self.path);
                 let _ = std::fs::remove_dir_all(&dir);
-                std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                std::fs::create_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
                 Sink::Obj(dir)
             }
             other => return Err(format!("unknown export format '{other}'")),
@@ -363,8 +370,9 @@ impl ExportWork {
                     .map_err(|e| failed(&e))?;
             }
             Sink::Obj(dir) => {
-                // The finished folder replaces the old one whole.
-                if self.path.exists() {
+                // The finished folder replaces the old one whole (checked when the export was
+                // asked for: a folder of earlier frames; a link is moved aside, not followed).
+                if std::fs::symlink_metadata(&self.path).is_ok() {
                     let old = temp_dir(&self.path).with_extension("old");
                     let _ = std::fs::remove_dir_all(&old);
                     std::fs::rename(&self.path, &old).map_err(|e| failed(&e))?;

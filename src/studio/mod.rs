@@ -13,7 +13,13 @@
 //! socket carry a secret token (kept owner-only in the workspace so that pages reconnect after
 //! a restart), `Host` and `Origin` must be the server's own (against DNS rebinding and other
 //! sites' pages), messages are bounded, and the studio writes only into its workspace (the
-//! opened file's folder, or the current one) by plain file names, atomically.
+//! opened file's folder, or the current one) by plain file names, atomically; a name that is
+//! a link leading out of the workspace is refused, for reading as for writing
+//! ([`workspace`]). Pictures are read only as regular files of bounded size, without blocking
+//! on a pipe, and a project opened from the page may name only a picture inside the workspace
+//! ([`open`]). At most [`listen::MAX_CONNECTIONS`] connections are open at once, and each
+//! must send a request within [`listen::HEADER_TIMEOUT_SECONDS`] seconds of opening or of its
+//! last answer ([`listen`]).
 
 pub mod carry;
 pub mod edit;
@@ -21,6 +27,7 @@ pub mod engine;
 pub mod guard;
 pub mod history;
 pub mod jobs;
+pub mod listen;
 pub mod open;
 pub mod project;
 pub mod protocol;
@@ -45,6 +52,8 @@ pub struct StudioOptions {
     pub open: bool,
     /// How a picture is opened and a mesh textured.
     pub opening: open::OpenOptions,
+    /// How many connections the server holds, and for how long without a request.
+    pub limits: listen::ConnectionLimits,
 }
 
 /// Why the studio could not start.
@@ -176,20 +185,11 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
             job_threads: (threads / 2).max(1),
         });
         tokio::spawn(autosave(app.clone()));
-        // Small frames go out at once (no Nagle delay): latency is the point.
-        use axum::serve::ListenerExt as _;
-        let listener = listener.tap_io(|stream| {
-            if let Err(e) = stream.set_nodelay(true) {
-                eprintln!("studio: TCP_NODELAY not set: {e}");
-            }
-        });
-        let served = axum::serve(listener, server::router(app.clone()))
-            .with_graceful_shutdown(async {
-                let _ = tokio::signal::ctrl_c().await;
-                eprintln!("studio: stopping");
-            })
-            .await
-            .map_err(|e| StudioError::Server(e.to_string()));
+        listen::serve(listener, server::router(app.clone()), options.limits, async {
+            let _ = tokio::signal::ctrl_c().await;
+            eprintln!("studio: stopping");
+        })
+        .await;
         // Unsaved work is kept for the next start.
         let last = app.session().autosave_copy();
         match last {
@@ -202,7 +202,7 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
             },
             None => workspace.clear_autosave(),
         }
-        served
+        Ok(())
     })
 }
 

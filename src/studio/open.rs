@@ -5,11 +5,18 @@
 //!
 //! What cannot be used is said, not fatal where the rest can be: a project whose picture is
 //! missing opens untextured, with a note naming both files.
+//!
+//! Pictures are read as regular files of at most [`MAX_PICTURE_BYTES`] (a pipe, device or
+//! folder is refused without blocking on it). A project opened from the page may name only a
+//! picture inside the workspace ([`OpenOptions::pictures_inside`]); one outside is not read,
+//! and the project opens without it, as without a missing one. A picture given on the command
+//! line (`--texture`) is the user's own choice and may lie anywhere.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::project::{PictureSettings, Project};
+use super::workspace::{read_regular, ReadError, Workspace, MAX_UPLOAD};
 use crate::render::{raster, Image};
 
 /// A picture drawn on the mesh, as decoded and as the page gets it.
@@ -25,10 +32,48 @@ pub struct Texture {
     pub content_type: &'static str,
 }
 
-/// Reads a picture file as a texture named `name`.
-pub fn read_texture(path: &Path, name: &str) -> Result<Texture, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let image = raster::decode_image(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+/// The largest picture file the studio reads (64 MiB, as large as an upload may be).
+pub const MAX_PICTURE_BYTES: u64 = MAX_UPLOAD as u64;
+
+/// Why a picture could not be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TextureError {
+    /// Not a regular file, too large, or unreadable.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// Not a PNG or JPEG picture that decodes.
+    #[error("{}: {source}", .path.display())]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: crate::render::raster::RenderError,
+    },
+    /// Outside the workspace (named by a project from the page).
+    #[error("{} is outside the workspace {}: the studio reads a project's picture only inside its folder", .path.display(), .workspace.display())]
+    Outside {
+        /// The file.
+        path: PathBuf,
+        /// The workspace.
+        workspace: PathBuf,
+    },
+}
+
+impl From<TextureError> for String {
+    fn from(e: TextureError) -> String {
+        e.to_string()
+    }
+}
+
+/// Reads a picture file as a texture named `name`: a regular file (links followed) of at most
+/// [`MAX_PICTURE_BYTES`].
+pub fn read_texture(path: &Path, name: &str) -> Result<Texture, TextureError> {
+    let bytes = read_regular(path, MAX_PICTURE_BYTES)?;
+    let image = raster::decode_image(&bytes).map_err(|source| TextureError::Decode {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let content_type = if bytes.starts_with(b"\x89PNG") {
         "image/png"
     } else {
@@ -145,6 +190,26 @@ pub struct OpenOptions {
     pub texture: Option<PathBuf>,
     /// For a picture: keep specks (pieces far smaller than the subject).
     pub keep_specks: bool,
+    /// For a project: its picture is read only when it lies inside the workspace (every link
+    /// resolved). Set for files opened from the page; a file named on the command line is the
+    /// user's own choice.
+    pub pictures_inside: bool,
+}
+
+/// Reads the picture a document names, at `path`: only inside `workspace` when `inside_only`.
+pub fn read_named_texture(
+    path: &Path,
+    name: &str,
+    workspace: &Path,
+    inside_only: bool,
+) -> Result<Texture, TextureError> {
+    if inside_only && path.exists() && !Workspace::new(workspace.to_path_buf()).contains(path) {
+        return Err(TextureError::Outside {
+            path: path.to_path_buf(),
+            workspace: workspace.to_path_buf(),
+        });
+    }
+    read_texture(path, name)
 }
 
 /// The name a file is kept under in a document: relative to `workspace` when inside it.
@@ -172,7 +237,7 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
                 Some(t) => {
                     let path = file.parent().unwrap_or(Path::new(".")).join(&t);
                     let name = name_in(workspace, &path);
-                    match read_texture(&path, &name) {
+                    match read_named_texture(&path, &name, workspace, options.pictures_inside) {
                         Ok(texture) => {
                             project.texture = Some(name);
                             Some(Arc::new(texture))
@@ -232,7 +297,7 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
                         project.texture = Some(name);
                         texture = Some(Arc::new(t));
                     }
-                    Err(e) if options.texture.is_some() => return Err(e),
+                    Err(e) if options.texture.is_some() => return Err(e.to_string()),
                     Err(e) => notes.push(format!("the picture beside it was not used: {e}")),
                 }
             }

@@ -20,10 +20,12 @@ use super::edit::{keyframe_at, Edit, Touched};
 use super::engine::{people, Engine};
 use super::history::History;
 use super::jobs::{ExportWork, MeshWork, OpenWork, Outcome, Progress, Work};
-use super::open::{fitted_uv, per_vertex_uv, read_texture, OpenOptions, Texture};
+use super::open::{
+    fitted_uv, per_vertex_uv, read_named_texture, read_texture, OpenOptions, Texture,
+};
 use super::project::{Keyframe, PictureSettings, Project};
 use super::protocol::{frame_bytes, kind, mesh_bytes, upload, Request};
-use super::workspace::{kind_of, Recovered, Workspace};
+use super::workspace::{kind_of, read_regular, Recovered, Workspace, MAX_UPLOAD};
 use crate::mesh::PlanarMesh;
 use crate::render::{colour, raster, Drawing, ImageSize, Viewport};
 
@@ -138,6 +140,9 @@ pub struct Session {
     texture: Option<Arc<Texture>>,
     /// Pictures read before, by name (undo and redo of a new picture do not read it again).
     textures: Vec<Arc<Texture>>,
+    /// The picture the session started with (perhaps given on the command line, from outside
+    /// the workspace): kept, never read again.
+    given_texture: Option<Arc<Texture>>,
     revs: Revs,
     tick: u64,
     notes: Vec<Note>,
@@ -241,6 +246,7 @@ impl Session {
             project_file,
             source: None,
             textures: texture.iter().cloned().collect(),
+            given_texture: texture.clone(),
             texture,
             revs: Revs::default(),
             tick: 0,
@@ -451,9 +457,20 @@ impl Session {
         }
         self.texture = match wanted {
             None => None,
-            Some(name) => match self.textures.iter().find(|t| t.name == name) {
+            Some(name) => match self
+                .textures
+                .iter()
+                .chain(&self.given_texture)
+                .find(|t| t.name == name)
+            {
                 Some(t) => Some(t.clone()),
-                None => match read_texture(&self.workspace.root().join(&name), &name) {
+                // Named by the document: read only inside the workspace.
+                None => match read_named_texture(
+                    &self.workspace.root().join(&name),
+                    &name,
+                    self.workspace.root(),
+                    true,
+                ) {
                     Ok(t) => {
                         let t = Arc::new(t);
                         self.textures.push(t.clone());
@@ -1010,7 +1027,11 @@ impl Session {
             "obj" => &[],
             other => return Err(format!("unknown export format '{other}'")),
         };
-        let path = self.workspace.file(name, endings)?;
+        let path = if format == "obj" {
+            self.workspace.frame_folder(name)?
+        } else {
+            self.workspace.file(name, endings)?
+        };
         if format == "still" {
             self.export_still(&path, time)?;
             self.note(format!("exported {}", path.display()), false);
@@ -1108,6 +1129,7 @@ impl Session {
             workspace: self.workspace.root().to_path_buf(),
             options: OpenOptions {
                 picture: self.doc.picture.clone(),
+                pictures_inside: true,
                 ..OpenOptions::default()
             },
         }))
@@ -1644,8 +1666,9 @@ impl Session {
             Request::Open { name } => {
                 if kind_of(&name) == Some("outline") {
                     let path = self.workspace.file(&name, &[])?;
-                    let text =
-                        std::fs::read_to_string(&path).map_err(|e| format!("{name}: {e}"))?;
+                    let bytes = read_regular(&path, MAX_UPLOAD as u64)?;
+                    let text = String::from_utf8(bytes)
+                        .map_err(|_| format!("{name}: not text (UTF-8)"))?;
                     let vertices = self.doc.mesh.positions.len().clamp(MIN_MESH_VERTICES, 2000);
                     return self.try_handle(Request::ImportOutline {
                         name,

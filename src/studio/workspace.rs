@@ -9,7 +9,13 @@
 //!   killed, crashed), moved there by the next start, which offers to restore them.
 //!
 //! The page names files by plain names only ([`Workspace::file`]): letters, digits, spaces,
-//! `-`, `_` and `.`, not hidden, no folders.
+//! `-`, `_` and `.`, not hidden, no folders. A name that is a symbolic link is followed only
+//! when it resolves inside the workspace (a link leading out of it, or to nothing, is refused
+//! with [`PathError`]); an export's frame folder must be a real folder of the workspace (not a
+//! link), new or holding only frames of an earlier export ([`Workspace::frame_folder`]).
+//!
+//! Files are read through [`read_regular`]: regular files only (a pipe, device or folder is
+//! refused before it is opened, and opened without blocking), of a bounded size.
 
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -29,6 +35,190 @@ pub const MAX_UPLOAD: usize = 64 << 20;
 #[derive(Clone, Debug)]
 pub struct Workspace {
     root: PathBuf,
+    /// The root with every link resolved (what paths are checked against).
+    canonical: PathBuf,
+}
+
+/// Why a name the page gave cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PathError {
+    /// Not a plain file name.
+    #[error("'{name}' is not a plain file name: the studio writes only into {}, by names of letters, digits, spaces, '-', '_' and '.'", .root.display())]
+    NotPlain {
+        /// The name.
+        name: String,
+        /// The workspace.
+        root: PathBuf,
+    },
+    /// Not one of the endings wanted.
+    #[error("'{name}' must end with {endings}")]
+    Ending {
+        /// The name.
+        name: String,
+        /// The endings wanted, said.
+        endings: String,
+    },
+    /// A link that resolves outside the workspace.
+    #[error("'{name}' is a link to {}, outside {}: the studio reads and writes only inside its folder", .target.display(), .root.display())]
+    Outside {
+        /// The name.
+        name: String,
+        /// Where it leads.
+        target: PathBuf,
+        /// The workspace.
+        root: PathBuf,
+    },
+    /// A link to nothing.
+    #[error("'{name}' is a link to nothing")]
+    Dangling {
+        /// The name.
+        name: String,
+    },
+    /// A frame folder that is a link.
+    #[error("'{name}' is a link: frames are exported only into a folder of the workspace's own")]
+    LinkedFolder {
+        /// The name.
+        name: String,
+    },
+    /// A frame folder that exists as something else than a folder.
+    #[error("'{name}' exists and is not a folder: frames are exported into a folder")]
+    NotAFolder {
+        /// The name.
+        name: String,
+    },
+    /// A frame folder holding other things than frames (it would be replaced whole).
+    #[error("'{name}' holds other files than exported frames ({found}): give a new folder name")]
+    NotFrames {
+        /// The name.
+        name: String,
+        /// The first other entry found.
+        found: String,
+    },
+}
+
+impl From<PathError> for String {
+    fn from(e: PathError) -> String {
+        e.to_string()
+    }
+}
+
+/// Why a file could not be read.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReadError {
+    /// Not a regular file (a folder, pipe, device or socket).
+    #[error("{} is {kind}, not a file", .path.display())]
+    NotAFile {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        kind: &'static str,
+    },
+    /// Larger than the limit.
+    #[error("{} is {} MiB; files of at most {} MiB are read", .path.display(), .bytes >> 20, .limit >> 20)]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size (at least; it may still grow).
+        bytes: u64,
+        /// The limit.
+        limit: u64,
+    },
+    /// Reading failed.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+impl From<ReadError> for String {
+    fn from(e: ReadError) -> String {
+        e.to_string()
+    }
+}
+
+/// What a file that is not a regular file is, in words.
+fn kind_of_node(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a pipe (FIFO)";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a folder"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// The bytes of `path` (links followed), which must be a regular file of at most `limit`
+/// bytes. Its type and size are checked before it is opened, it is opened without blocking
+/// (a pipe swapped in meanwhile does not hang), checked again once open, and read no further
+/// than `limit` bytes.
+pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    use std::io::Read;
+    let io = |source| ReadError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let check = |meta: &std::fs::Metadata| {
+        if !meta.is_file() {
+            return Err(ReadError::NotAFile {
+                path: path.to_path_buf(),
+                kind: kind_of_node(&meta.file_type()),
+            });
+        }
+        if meta.len() > limit {
+            return Err(ReadError::TooLarge {
+                path: path.to_path_buf(),
+                bytes: meta.len(),
+                limit,
+            });
+        }
+        Ok(())
+    };
+    check(&std::fs::metadata(path).map_err(io)?)?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file = options.open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    check(&meta)?;
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(ReadError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: bytes.len() as u64,
+            limit,
+        });
+    }
+    Ok(bytes)
+}
+
+/// Whether `name` is the name of a frame an OBJ export writes (`frame_0000.obj`, ...).
+fn is_frame_name(name: &str) -> bool {
+    name.strip_prefix("frame_")
+        .and_then(|r| r.strip_suffix(".obj"))
+        .is_some_and(|d| d.len() >= 4 && d.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// A file the studio can open, as listed to the page.
@@ -143,7 +333,13 @@ fn running(pid: u32) -> bool {
 impl Workspace {
     /// The workspace at `root`.
     pub fn new(root: PathBuf) -> Workspace {
-        Workspace { root }
+        let canonical = std::fs::canonicalize(&root).unwrap_or_else(|_| root.clone());
+        Workspace { root, canonical }
+    }
+
+    /// Whether `path` (which must exist) resolves inside the workspace, every link followed.
+    pub fn contains(&self, path: &Path) -> bool {
+        std::fs::canonicalize(path).is_ok_and(|p| p.starts_with(&self.canonical))
     }
 
     /// Its folder.
@@ -156,18 +352,69 @@ impl Workspace {
     }
 
     /// A file of the workspace by a plain name with one of `endings` (any when empty).
-    pub fn file(&self, name: &str, endings: &[&str]) -> Result<PathBuf, String> {
+    /// A name that is a link is taken only when it resolves inside the workspace.
+    pub fn file(&self, name: &str, endings: &[&str]) -> Result<PathBuf, PathError> {
         if !is_plain(name) {
-            return Err(format!(
-                "'{name}' is not a plain file name: the studio writes only into {}, by names of letters, digits, spaces, '-', '_' and '.'",
-                self.root.display()
-            ));
+            return Err(PathError::NotPlain {
+                name: name.to_owned(),
+                root: self.root.clone(),
+            });
         }
         let lower = name.to_ascii_lowercase();
         if !endings.is_empty() && !endings.iter().any(|e| lower.ends_with(e)) {
-            return Err(format!("'{name}' must end with {}", endings.join(" or ")));
+            return Err(PathError::Ending {
+                name: name.to_owned(),
+                endings: endings.join(" or "),
+            });
         }
-        Ok(self.root.join(name))
+        let path = self.root.join(name);
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_symlink()) {
+            let target = std::fs::canonicalize(&path).map_err(|_| PathError::Dangling {
+                name: name.to_owned(),
+            })?;
+            if !target.starts_with(&self.canonical) {
+                return Err(PathError::Outside {
+                    name: name.to_owned(),
+                    target,
+                    root: self.root.clone(),
+                });
+            }
+        }
+        Ok(path)
+    }
+
+    /// A folder of the workspace for an OBJ export's frames, by a plain name: not a link,
+    /// and new or holding only the frames of an earlier export (the export replaces it whole).
+    pub fn frame_folder(&self, name: &str) -> Result<PathBuf, PathError> {
+        let path = self.file(name, &[])?;
+        let Ok(meta) = std::fs::symlink_metadata(&path) else {
+            return Ok(path);
+        };
+        let named = || name.to_owned();
+        if meta.file_type().is_symlink() {
+            return Err(PathError::LinkedFolder { name: named() });
+        }
+        if !meta.is_dir() {
+            return Err(PathError::NotAFolder { name: named() });
+        }
+        let other = std::fs::read_dir(&path)
+            .map_err(|e| PathError::NotFrames {
+                name: named(),
+                found: e.to_string(),
+            })?
+            .filter_map(Result::ok)
+            .find(|e| {
+                let frame = e.file_type().is_ok_and(|t| t.is_file())
+                    && e.file_name().to_str().is_some_and(is_frame_name);
+                !frame
+            });
+        match other {
+            Some(e) => Err(PathError::NotFrames {
+                name: named(),
+                found: e.file_name().to_string_lossy().into_owned(),
+            }),
+            None => Ok(path),
+        }
     }
 
     /// The files the studio can open, by name.
@@ -181,7 +428,8 @@ impl Workspace {
                 let name = e.file_name().into_string().ok()?;
                 let kind = kind_of(&name)?;
                 let meta = e.metadata().ok().filter(std::fs::Metadata::is_file)?;
-                if !is_plain(&name) {
+                // Links leading out of the workspace are not listed (nor opened).
+                if !is_plain(&name) || self.file(&name, &[]).is_err() {
                     return None;
                 }
                 let modified = meta
@@ -389,15 +637,26 @@ impl Workspace {
             } else {
                 format!("{stem}-{k}.{ext}")
             };
-            let path = self.file(&candidate, &[])?;
-            match std::fs::read(&path) {
-                Ok(existing) if existing == bytes => return Ok(candidate),
-                Ok(_) => continue,
-                Err(_) if path.exists() => continue,
+            let path = match self.file(&candidate, &[]) {
+                Ok(path) => path,
+                // A link out of the workspace, or to nothing: another name.
+                Err(PathError::Outside { .. } | PathError::Dangling { .. }) => continue,
+                Err(e) => return Err(e.to_string()),
+            };
+            match std::fs::symlink_metadata(&path) {
                 Err(_) => {
                     crate::io::write_bytes_atomic(&path, bytes)
                         .map_err(|e| format!("{candidate}: {e}"))?;
                     return Ok(candidate);
+                }
+                // The same file uploaded again (only a regular file of the same size is read).
+                Ok(_) => {
+                    let same = std::fs::metadata(&path)
+                        .is_ok_and(|m| m.is_file() && m.len() == bytes.len() as u64)
+                        && read_regular(&path, MAX_UPLOAD as u64).is_ok_and(|b| b == bytes);
+                    if same {
+                        return Ok(candidate);
+                    }
                 }
             }
         }

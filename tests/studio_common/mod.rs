@@ -22,6 +22,11 @@ pub struct Studio {
 impl Studio {
     /// `bdmorph studio ARGS...` in `dir`.
     pub fn start_with(dir: &Path, args: &[&str]) -> Studio {
+        Studio::start_env(dir, args, &[])
+    }
+
+    /// `bdmorph studio ARGS...` in `dir` with the environment variables `env` set.
+    pub fn start_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Studio {
         // BDMORPH_BIN runs another build of the program (the release one, for timings).
         // A relative path is taken from where the tests run (the program runs in `dir`).
         let program = std::env::var_os("BDMORPH_BIN").map_or_else(
@@ -30,6 +35,7 @@ impl Studio {
         );
         let mut c = Command::new(program);
         c.arg("studio").args(args).current_dir(dir);
+        c.envs(env.iter().copied());
         let mut child = c
             .stdout(Stdio::piped())
             .stderr(Stdio::null())

@@ -437,11 +437,28 @@ fn svg_element() -> impl Strategy<Value = String> {
     let n = outline_number;
     prop_oneof![
         (n(), n(), n()).prop_map(|(x, y, r)| format!("<circle cx=\"{x}\" cy=\"{y}\" r=\"{r}\"/>")),
-        (n(), n(), n(), n()).prop_map(|(x, y, w, h)| format!("<rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\" rx=\"2\"/>")),
+        (n(), n(), n(), n()).prop_map(|(x, y, w, h)| format!(
+            "<rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\" rx=\"2\"/>"
+        )),
         vec(n(), 0..10).prop_map(|v| format!("<polygon points=\"{}\"/>", v.join(","))),
-        vec((select(vec!["M", "L", "C", "Q", "A", "Z", "H", "V", "a", "l"]), vec(n(), 0..8)), 1..8)
-            .prop_map(|cmds| format!("<path d=\"{}\"/>", cmds.iter().map(|(c, v)| format!("{c}{}", v.join(" "))).collect::<Vec<_>>().join(" "))),
-        (select(vec!["translate", "scale", "rotate", "matrix", "skewX"]), vec(n(), 0..7))
+        vec(
+            (
+                select(vec!["M", "L", "C", "Q", "A", "Z", "H", "V", "a", "l"]),
+                vec(n(), 0..8)
+            ),
+            1..8
+        )
+        .prop_map(|cmds| format!(
+            "<path d=\"{}\"/>",
+            cmds.iter()
+                .map(|(c, v)| format!("{c}{}", v.join(" ")))
+                .collect::<Vec<_>>()
+                .join(" ")
+        )),
+        (
+            select(vec!["translate", "scale", "rotate", "matrix", "skewX"]),
+            vec(n(), 0..7)
+        )
             .prop_map(|(t, v)| format!("<g transform=\"{t}({})\">", v.join(" "))),
         Just("<g>".to_string()),
         Just("</g>".to_string()),
@@ -452,7 +469,11 @@ fn svg_element() -> impl Strategy<Value = String> {
 
 fn svg_text() -> impl Strategy<Value = String> {
     (any::<bool>(), vec(svg_element(), 0..8)).prop_map(|(view_box, elements)| {
-        let open = if view_box { "<svg viewBox=\"0 0 100 100\">" } else { "<svg>" };
+        let open = if view_box {
+            "<svg viewBox=\"0 0 100 100\">"
+        } else {
+            "<svg>"
+        };
         format!("{open}\n{}\n</svg>\n", elements.join("\n"))
     })
 }
@@ -518,7 +539,10 @@ proptest! {
 
 #[test]
 fn valid_outlines_mesh() {
-    for (text, format) in [(VALID_SVG, check::OutlineFormat::Svg), (VALID_POLY, check::OutlineFormat::Poly)] {
+    for (text, format) in [
+        (VALID_SVG, check::OutlineFormat::Svg),
+        (VALID_POLY, check::OutlineFormat::Poly),
+    ] {
         outline(text.as_bytes(), format);
     }
     assert!(bdmorph::meshing::parse_svg(VALID_SVG, None).is_ok());

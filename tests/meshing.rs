@@ -964,7 +964,8 @@ fn a_bow_tie_polygon_is_said_to_cross_itself() {
 
 #[test]
 fn coordinates_out_of_range_are_named_with_their_line() {
-    let overflow = "<svg>\n<polygon points=\"0,0 1e308,0 0,1e308\" transform=\"scale(10)\"/>\n</svg>";
+    let overflow =
+        "<svg>\n<polygon points=\"0,0 1e308,0 0,1e308\" transform=\"scale(10)\"/>\n</svg>";
     let e = meshing::parse_svg(overflow, None).unwrap_err();
     assert!(matches!(e, MeshingError::OutOfRange { .. }), "{e}");
     assert!(

@@ -494,8 +494,16 @@ fn deeply_nested_groups_are_read() {
 fn poly_counts_beyond_the_file_are_refused_without_allocating() {
     let dir = scratch("poly-counts");
     for (name, header, what) in [
-        ("vertices.poly", "1000000000 2 0 0", "1000000000 vertices declared, but only 4 lines follow"),
-        ("huge.poly", "100000000000000 2 0 0", "100000000000000 vertices declared, but only 4 lines follow"),
+        (
+            "vertices.poly",
+            "1000000000 2 0 0",
+            "1000000000 vertices declared, but only 4 lines follow",
+        ),
+        (
+            "huge.poly",
+            "100000000000000 2 0 0",
+            "100000000000000 vertices declared, but only 4 lines follow",
+        ),
     ] {
         let text = format!("{header}\n1 0 0\n2 1 0\n3 0 1\n3 0\n");
         std::fs::write(dir.join(name), text).expect("writes");
@@ -518,11 +526,31 @@ fn poly_counts_beyond_the_file_are_refused_without_allocating() {
 fn huge_radii_are_refused_before_flattening() {
     let dir = scratch("huge-circle");
     for (name, svg, what) in [
-        ("circle.svg", "<svg><circle cx=\"0\" cy=\"0\" r=\"1e154\"/></svg>", "circle.svg:1: <circle> r is 1.00000e154, outside the supported range"),
-        ("arc.svg", "<svg>\n<path d=\"M0 0 A1e300 1e300 0 1 1 1 1 Z\"/></svg>", "arc.svg:2: <path> d: a number is 1.00000e300"),
-        ("scaled.svg", "<svg><g transform=\"scale(1e300)\"><circle r=\"1e10\"/></g></svg>", "scaled.svg:1: <circle> r is 1.00000e10"),
-        ("transformed.svg", "<svg><g transform=\"scale(1e200)\">\n<circle r=\"1e200\"/></g></svg>", "transformed.svg:2: <circle> r is 1.00000e200"),
-        ("overflow.svg", "<svg><g transform=\"scale(1e300)\">\n<rect width=\"1e5\" height=\"1e5\"/></g></svg>", "overflow.svg:2: <rect> a point's coordinate after the transforms is"),
+        (
+            "circle.svg",
+            "<svg><circle cx=\"0\" cy=\"0\" r=\"1e154\"/></svg>",
+            "circle.svg:1: <circle> r is 1.00000e154, outside the supported range",
+        ),
+        (
+            "arc.svg",
+            "<svg>\n<path d=\"M0 0 A1e300 1e300 0 1 1 1 1 Z\"/></svg>",
+            "arc.svg:2: <path> d: a number is 1.00000e300",
+        ),
+        (
+            "scaled.svg",
+            "<svg><g transform=\"scale(1e300)\"><circle r=\"1e10\"/></g></svg>",
+            "scaled.svg:1: <circle> r is 1.00000e10",
+        ),
+        (
+            "transformed.svg",
+            "<svg><g transform=\"scale(1e200)\">\n<circle r=\"1e200\"/></g></svg>",
+            "transformed.svg:2: <circle> r is 1.00000e200",
+        ),
+        (
+            "overflow.svg",
+            "<svg><g transform=\"scale(1e300)\">\n<rect width=\"1e5\" height=\"1e5\"/></g></svg>",
+            "overflow.svg:2: <rect> a point's coordinate after the transforms is",
+        ),
     ] {
         std::fs::write(dir.join(name), svg).expect("writes");
         let err = refused_within_1_gib(&dir, name);

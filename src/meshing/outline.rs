@@ -423,8 +423,7 @@ pub(crate) fn crossings(p: &[[f64; 2]], segments: &[[u32; 2]]) -> Vec<Crossing> 
                 if bi[0].max(bj[0]) > bi[2].min(bj[2]) || bi[1].max(bj[1]) > bi[3].min(bj[3]) {
                     continue;
                 }
-                if let Some((contact, at)) =
-                    contact(p, segments[i as usize], segments[j as usize])
+                if let Some((contact, at)) = contact(p, segments[i as usize], segments[j as usize])
                 {
                     found.push(Crossing {
                         first: i.min(j) as usize,

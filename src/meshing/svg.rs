@@ -375,8 +375,9 @@ fn collect(
         }
         let line = lines.of(child.range().start);
         let own = match child.attribute("transform") {
-            Some(t) => transform(t)
-                .map_err(|m| error(Some(line), format!("<{}> {m}", excerpt(tag))))?,
+            Some(t) => {
+                transform(t).map_err(|m| error(Some(line), format!("<{}> {m}", excerpt(tag))))?
+            }
             None => Affine::IDENTITY,
         };
         let total = parent * own;
@@ -526,15 +527,17 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
             });
         }
     }
-    let doc = roxmltree::Document::parse(text)
-        .map_err(|e| {
-            let message = e.to_string();
-            let shown = match message.char_indices().nth(160) {
-                Some((i, _)) => format!("{}...", &message[..i]),
-                None => message,
-            };
-            error(Some(e.pos().row as usize), format!("not valid XML: {shown}"))
-        })?;
+    let doc = roxmltree::Document::parse(text).map_err(|e| {
+        let message = e.to_string();
+        let shown = match message.char_indices().nth(160) {
+            Some((i, _)) => format!("{}...", &message[..i]),
+            None => message,
+        };
+        error(
+            Some(e.pos().row as usize),
+            format!("not valid XML: {shown}"),
+        )
+    })?;
     let root = doc.root_element();
     let root_line = doc.text_pos_at(root.range().start).row as usize;
     if root.tag_name().name() != "svg" {

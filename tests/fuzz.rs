@@ -1,4 +1,5 @@
-//! Fuzzing on stable with proptest: the OBJ and OFF readers, the compiler on arbitrary small
+//! Fuzzing on stable with proptest: the OBJ and OFF readers, the SVG and `.poly` outline
+//! readers (with the mesher on small outlines), the compiler on arbitrary small
 //! connectivity, and the program verifier on mutated and random programs. Every input must
 //! give a result or a typed, one-line error: no panic, no out-of-bounds access, no hang, no
 //! huge allocation (see `fuzz_checks` for the properties, shared with the cargo-fuzz targets
@@ -413,6 +414,139 @@ proptest! {
         read_bytes(&corrupt(&obj, &edits), Format::Obj);
         read_bytes(&corrupt(&off, &edits), Format::Off);
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Outline readers: `parse_svg` and `parse_poly` (and, for small outlines, the mesher).
+
+fn outline(bytes: &[u8], format: check::OutlineFormat) {
+    bounded_allocation(bytes.len(), || check::outline_reader(bytes, format));
+}
+
+/// A number as SVG or `.poly` text: small, huge, tiny, or not quite a number.
+fn outline_number() -> impl Strategy<Value = String> {
+    prop_oneof![
+        4 => (-50i32..50).prop_map(|x| x.to_string()),
+        2 => (-100.0f64..100.0).prop_map(|x| format!("{x:.3}")),
+        1 => words(&["1e154", "-1e300", "1e-40", "1e308", "1e9", "nan", "inf", ".5.5", "1e", "-", "0"]),
+    ]
+}
+
+/// An SVG element: a shape with random numbers, a group opening or closing, or noise.
+fn svg_element() -> impl Strategy<Value = String> {
+    let n = outline_number;
+    prop_oneof![
+        (n(), n(), n()).prop_map(|(x, y, r)| format!("<circle cx=\"{x}\" cy=\"{y}\" r=\"{r}\"/>")),
+        (n(), n(), n(), n()).prop_map(|(x, y, w, h)| format!(
+            "<rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\" rx=\"2\"/>"
+        )),
+        vec(n(), 0..10).prop_map(|v| format!("<polygon points=\"{}\"/>", v.join(","))),
+        vec(
+            (
+                select(vec!["M", "L", "C", "Q", "A", "Z", "H", "V", "a", "l"]),
+                vec(n(), 0..8)
+            ),
+            1..8
+        )
+        .prop_map(|cmds| format!(
+            "<path d=\"{}\"/>",
+            cmds.iter()
+                .map(|(c, v)| format!("{c}{}", v.join(" ")))
+                .collect::<Vec<_>>()
+                .join(" ")
+        )),
+        (
+            select(vec!["translate", "scale", "rotate", "matrix", "skewX"]),
+            vec(n(), 0..7)
+        )
+            .prop_map(|(t, v)| format!("<g transform=\"{t}({})\">", v.join(" "))),
+        Just("<g>".to_string()),
+        Just("</g>".to_string()),
+        Just("<defs>".to_string()),
+        Just("</defs>".to_string()),
+    ]
+}
+
+fn svg_text() -> impl Strategy<Value = String> {
+    (any::<bool>(), vec(svg_element(), 0..8)).prop_map(|(view_box, elements)| {
+        let open = if view_box {
+            "<svg viewBox=\"0 0 100 100\">"
+        } else {
+            "<svg>"
+        };
+        format!("{open}\n{}\n</svg>\n", elements.join("\n"))
+    })
+}
+
+fn poly_text() -> impl Strategy<Value = String> {
+    let n = outline_number;
+    (
+        prop_oneof![3 => (0usize..8).prop_map(|k| k.to_string()), 1 => words(&["1000000000", "100000000000000", "-1", "x"])],
+        vec((n(), n()), 0..8),
+        prop_oneof![3 => (0usize..8).prop_map(|k| k.to_string()), 1 => words(&["1000000000", "99999999999999", "-3"])],
+        vec((0u32..9, 0u32..9), 0..8),
+        vec((n(), n()), 0..3),
+    )
+        .prop_map(|(nv, vertices, ns, segments, holes)| {
+            let mut t = format!("{nv} 2 0 0\n");
+            for (k, (x, y)) in vertices.iter().enumerate() {
+                t += &format!("{} {x} {y}\n", k + 1);
+            }
+            t += &format!("{ns} 0\n");
+            for (k, (a, b)) in segments.iter().enumerate() {
+                t += &format!("{} {a} {b}\n", k + 1);
+            }
+            t += &format!("{}\n", holes.len());
+            for (k, (x, y)) in holes.iter().enumerate() {
+                t += &format!("{} {x} {y}\n", k + 1);
+            }
+            t
+        })
+}
+
+const VALID_SVG: &str = "<svg viewBox=\"0 0 100 100\">\n<g transform=\"translate(5 5)\">\n<rect x=\"10\" y=\"10\" width=\"60\" height=\"60\" rx=\"8\"/>\n<circle cx=\"40\" cy=\"40\" r=\"10\"/>\n</g>\n<path d=\"M80 80 C90 80 95 90 90 95 Q85 99 80 95 Z\"/>\n</svg>\n";
+const VALID_POLY: &str = "8 2 0 0\n1 0 0\n2 4 0\n3 4 4\n4 0 4\n5 1 1\n6 3 1\n7 3 3\n8 1 3\n8 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n5 5 6\n6 6 7\n7 7 8\n8 8 5\n1\n1 2 2\n";
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    #[test]
+    fn fuzz_svg_reader_arbitrary_bytes(bytes in vec(any::<u8>(), 0..300)) {
+        outline(&bytes, check::OutlineFormat::Svg);
+    }
+
+    #[test]
+    fn fuzz_poly_reader_arbitrary_bytes(bytes in vec(any::<u8>(), 0..300)) {
+        outline(&bytes, check::OutlineFormat::Poly);
+    }
+
+    #[test]
+    fn fuzz_svg_reader_structured(text in svg_text()) {
+        outline(text.as_bytes(), check::OutlineFormat::Svg);
+    }
+
+    #[test]
+    fn fuzz_poly_reader_structured(text in poly_text()) {
+        outline(text.as_bytes(), check::OutlineFormat::Poly);
+    }
+
+    #[test]
+    fn fuzz_outline_readers_corrupted_valid_files(edits in byte_edits()) {
+        outline(&corrupt(VALID_SVG, &edits), check::OutlineFormat::Svg);
+        outline(&corrupt(VALID_POLY, &edits), check::OutlineFormat::Poly);
+    }
+}
+
+#[test]
+fn valid_outlines_mesh() {
+    for (text, format) in [
+        (VALID_SVG, check::OutlineFormat::Svg),
+        (VALID_POLY, check::OutlineFormat::Poly),
+    ] {
+        outline(text.as_bytes(), format);
+    }
+    assert!(bdmorph::meshing::parse_svg(VALID_SVG, None).is_ok());
+    assert!(bdmorph::meshing::parse_poly(VALID_POLY).is_ok());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -930,3 +930,87 @@ fn hand_drawn_loops_are_fitted_to_a_vertex_count() {
     let few = meshing::fit_loops_to_vertices(&traced, 1_000_000);
     assert_eq!((few.loops, few.tolerance), (traced, None));
 }
+
+#[test]
+fn a_hundred_thousand_nested_groups_read_on_a_2_mib_stack() {
+    let depth = 100_000;
+    let mut text = String::from("<svg>\n");
+    text.push_str(&"<g>".repeat(depth));
+    text.push_str("\n<rect width=\"10\" height=\"5\"/>\n");
+    text.push_str(&"</g>".repeat(depth));
+    text.push_str("</svg>");
+    // The stack of a tokio worker thread (the studio's).
+    let outline = std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(move || meshing::parse_svg(&text, None))
+        .expect("spawns")
+        .join()
+        .expect("no stack overflow")
+        .expect("reads");
+    assert_eq!(outline.elements.len(), 1);
+    assert_eq!(outline.elements[0].line, Some(3));
+}
+
+#[test]
+fn a_bow_tie_polygon_is_said_to_cross_itself() {
+    let text = "<svg>\n<polygon points=\"0,0 10,10 10,0 0,10\"/>\n</svg>";
+    let o = meshing::parse_svg(text, None).expect("parses");
+    let e = meshing::mesh_outline(&o, &MeshOptions::default()).unwrap_err();
+    assert_eq!(
+        e.in_file("bow.svg").to_string(),
+        "bow.svg:2: <polygon> segment 0 crosses <polygon> segment 2 near (5, 5)"
+    );
+}
+
+#[test]
+fn coordinates_out_of_range_are_named_with_their_line() {
+    let overflow =
+        "<svg>\n<polygon points=\"0,0 1e308,0 0,1e308\" transform=\"scale(10)\"/>\n</svg>";
+    let e = meshing::parse_svg(overflow, None).unwrap_err();
+    assert!(matches!(e, MeshingError::OutOfRange { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("line 2: <polygon> points: a number is 1.00000e308, outside the supported range (0, or magnitudes from 1e-30 to 1e9)"),
+        "{e}"
+    );
+    let huge = "3 2 0 0\n1 0 0\n2 1e12 0\n3 0 1\n3 0\n1 1 2\n2 2 3\n3 3 1\n";
+    assert_eq!(
+        meshing::parse_poly(huge).unwrap_err().in_file("h.poly").to_string(),
+        "h.poly:3: the vertex's x is 1.00000e12, outside the supported range (0, or magnitudes from 1e-30 to 1e9)"
+    );
+    let tiny = huge.replace("1e12", "1e-40");
+    assert!(meshing::parse_poly(&tiny)
+        .unwrap_err()
+        .to_string()
+        .starts_with("line 3: the vertex's x is 1.00000e-40, outside"));
+    // Outlines made in code (the studio's) go through the same check.
+    let o = meshing::Outline::from_loops(&[vec![[0.0, 0.0], [1e12, 0.0], [0.0, 1.0]]]);
+    let e = meshing::mesh_outline(&o, &MeshOptions::default()).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("outline 0 segment 0: a coordinate is 1.00000e12, outside"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_mesh_the_readers_would_refuse_is_not_made() {
+    // A spike 1e-16 wide at its base: meshed, it needs a triangle of area about 1e-32,
+    // which the mesh readers (and `bdmorph info`) refuse as degenerate.
+    let spike = "6 2 0 0\n1 0 0\n2 1 0\n3 1 1\n4 0.5 1e-16\n5 0.49 1\n6 0 1\n\
+                 6 0\n1 1 2\n2 2 3\n3 3 4\n4 4 5\n5 5 6\n6 6 1\n0\n";
+    let o = meshing::parse_poly(spike).expect("parses");
+    let e = meshing::mesh_outline(&o, &MeshOptions::default().with_vertices(200)).unwrap_err();
+    assert!(matches!(e, MeshingError::Degenerate { .. }), "{e}");
+    assert!(
+        e.in_file("spike.poly").to_string().starts_with(
+            "spike.poly: the mesh would have a degenerate triangle (area 9.09949e-33) near (0.5, 5.46406e-17)"
+        ),
+        "{e}"
+    );
+    // A dip of 1e-17 in an edge meshes into triangles the readers accept.
+    let dip = "5 2 0 0\n1 0 0\n2 0.5 -1e-17\n3 1 0\n4 1 1\n5 0 1\n5 0\n1 1 2\n2 2 3\n3 3 4\n4 4 5\n5 5 1\n0\n";
+    let o = meshing::parse_poly(dip).expect("parses");
+    let m = meshing::mesh_outline(&o, &MeshOptions::default().with_vertices(200)).expect("meshes");
+    m.mesh.validate().expect("a mesh the readers accept");
+}

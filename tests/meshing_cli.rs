@@ -461,3 +461,126 @@ fn the_vertex_count_is_met_or_explained() {
         "{out}"
     );
 }
+
+/// Runs `bdmorph mesh FILE -o out.obj` in `dir` with its address space limited to 1 GiB:
+/// it must fail cleanly (exit code 1, one line on stderr, nothing written); returns the line.
+fn refused_within_1_gib(dir: &Path, file: &str) -> String {
+    let mut cmd = Command::new("prlimit");
+    cmd.arg("--as=1073741824")
+        .arg(env!("CARGO_BIN_EXE_bdmorph"))
+        .args(["mesh", file, "-o", "out.obj"]);
+    fails_writing_nothing(&mut cmd, dir)
+}
+
+#[test]
+fn deeply_nested_groups_are_read() {
+    let dir = scratch("nested");
+    let depth = 20_000;
+    let mut text = String::from("<svg xmlns=\"http://www.w3.org/2000/svg\">\n");
+    text.push_str(&"<g>".repeat(depth));
+    text.push_str("\n<rect x=\"0\" y=\"0\" width=\"10\" height=\"5\"/>\n");
+    text.push_str(&"</g>".repeat(depth));
+    text.push_str("\n</svg>\n");
+    std::fs::write(dir.join("nested.svg"), text).expect("writes");
+    let out = succeeds(
+        bin().args(["mesh", "nested.svg", "--vertices", "100", "-o", "out.obj"]),
+        &dir,
+    );
+    assert!(out.is_empty(), "{out}");
+    assert!(dir.join("out.obj").exists());
+}
+
+#[test]
+fn poly_counts_beyond_the_file_are_refused_without_allocating() {
+    let dir = scratch("poly-counts");
+    for (name, header, what) in [
+        (
+            "vertices.poly",
+            "1000000000 2 0 0",
+            "1000000000 vertices declared, but only 4 lines follow",
+        ),
+        (
+            "huge.poly",
+            "100000000000000 2 0 0",
+            "100000000000000 vertices declared, but only 4 lines follow",
+        ),
+    ] {
+        let text = format!("{header}\n1 0 0\n2 1 0\n3 0 1\n3 0\n");
+        std::fs::write(dir.join(name), text).expect("writes");
+        let err = refused_within_1_gib(&dir, name);
+        assert!(err.contains(&format!("{name}:1: {what}")), "{err}");
+    }
+    std::fs::write(
+        dir.join("segments.poly"),
+        "3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4000000000000 0\n1 1 2\n",
+    )
+    .expect("writes");
+    let err = refused_within_1_gib(&dir, "segments.poly");
+    assert!(
+        err.contains("segments.poly:5: 4000000000000 segments declared, but only 1 lines follow"),
+        "{err}"
+    );
+}
+
+#[test]
+fn huge_radii_are_refused_before_flattening() {
+    let dir = scratch("huge-circle");
+    for (name, svg, what) in [
+        (
+            "circle.svg",
+            "<svg><circle cx=\"0\" cy=\"0\" r=\"1e154\"/></svg>",
+            "circle.svg:1: <circle> r is 1.00000e154, outside the supported range",
+        ),
+        (
+            "arc.svg",
+            "<svg>\n<path d=\"M0 0 A1e300 1e300 0 1 1 1 1 Z\"/></svg>",
+            "arc.svg:2: <path> d: a number is 1.00000e300",
+        ),
+        (
+            "scaled.svg",
+            "<svg><g transform=\"scale(1e300)\"><circle r=\"1e10\"/></g></svg>",
+            "scaled.svg:1: <circle> r is 1.00000e10",
+        ),
+        (
+            "transformed.svg",
+            "<svg><g transform=\"scale(1e200)\">\n<circle r=\"1e200\"/></g></svg>",
+            "transformed.svg:2: <circle> r is 1.00000e200",
+        ),
+        (
+            "overflow.svg",
+            "<svg><g transform=\"scale(1e300)\">\n<rect width=\"1e5\" height=\"1e5\"/></g></svg>",
+            "overflow.svg:2: <rect> a point's coordinate after the transforms is",
+        ),
+    ] {
+        std::fs::write(dir.join(name), svg).expect("writes");
+        let err = refused_within_1_gib(&dir, name);
+        assert!(err.contains(what), "{err}");
+    }
+}
+
+/// A star-shaped polygon of `n` points as one SVG `<path>` (no two segments cross).
+fn star_path(n: usize) -> String {
+    let mut d = String::with_capacity(n * 24);
+    for k in 0..n {
+        let a = std::f64::consts::TAU * k as f64 / n as f64;
+        // A wave, and a zigzag about as deep as the points are apart.
+        let r = 1000.0 + 30.0 * (a * 7.0).sin() + 3000.0 / n as f64 * ((k % 2) as f64);
+        let (x, y) = (1200.0 + r * a.cos(), 1200.0 + r * a.sin());
+        d.push_str(&format!("{}{x:.4} {y:.4} ", if k == 0 { 'M' } else { 'L' }));
+    }
+    format!("<svg xmlns=\"http://www.w3.org/2000/svg\">\n<path d=\"{d}Z\"/>\n</svg>\n")
+}
+
+#[test]
+fn a_path_of_200k_segments_meshes_in_seconds() {
+    let dir = scratch("large-path");
+    std::fs::write(dir.join("star.svg"), star_path(200_000)).expect("writes");
+    let start = std::time::Instant::now();
+    let out = succeeds(
+        bin().args(["mesh", "star.svg", "--stats", "-o", "out.obj"]),
+        &dir,
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    assert!(out.contains("\"vertices\""), "{out}");
+    assert!(seconds < 30.0, "{seconds} s");
+}

@@ -221,6 +221,44 @@ pub enum MeshingError {
         /// Whether hole points removed regions.
         hole_points: bool,
     },
+    /// A number of the input (a coordinate, a radius, a point after its transforms) is
+    /// outside the range meshing supports: magnitudes up to [`super::MAX_COORDINATE`], and
+    /// either 0 or at least [`super::MIN_COORDINATE`].
+    #[error("{place}{what} is {}, outside the supported range (0, or magnitudes from {:e} to {:e})", Num(*.value), super::MIN_COORDINATE, super::MAX_COORDINATE)]
+    OutOfRange {
+        /// The file and the line.
+        place: Place,
+        /// What the number is (`<circle> r`, `vertex 3's x`, `<path> point (after transforms)`).
+        what: String,
+        /// The number.
+        value: f64,
+    },
+    /// An outline would have more points than [`super::MAX_OUTLINE_POINTS`] (curves flattened
+    /// to the tolerance, or a `.poly` file's vertices).
+    #[error("{place}{what} would have about {points} points, more than the limit of {limit}{}", if *.tolerance_helps { "; raise --tolerance for fewer" } else { "" })]
+    TooManyPoints {
+        /// The file and the line.
+        place: Place,
+        /// What (`<path>`, `the outline`).
+        what: String,
+        /// About how many points.
+        points: u64,
+        /// The limit.
+        limit: usize,
+        /// Whether a larger tolerance gives fewer points (curves), or not (straight segments).
+        tolerance_helps: bool,
+    },
+    /// The triangulation gave a triangle of (numerically) zero area, which the mesh readers
+    /// refuse: the outline has a feature too thin for the precision of its coordinates.
+    #[error("{place}the mesh would have a degenerate triangle (area {}) near ({}, {}): a feature of the outline is too thin there; widen it or remove it", Num(*.area), Num(.at[0]), Num(.at[1]))]
+    Degenerate {
+        /// The file.
+        place: Place,
+        /// The triangle's centroid, in the input's coordinates.
+        at: [f64; 2],
+        /// Its area.
+        area: f64,
+    },
     /// A meshing option is out of range.
     #[error("{option} {value}: {expected}")]
     BadOption {
@@ -257,6 +295,9 @@ impl MeshingError {
             | MeshingError::Svg { place, .. }
             | MeshingError::NoOutline { place, .. }
             | MeshingError::NothingInside { place, .. }
+            | MeshingError::OutOfRange { place, .. }
+            | MeshingError::TooManyPoints { place, .. }
+            | MeshingError::Degenerate { place, .. }
             | MeshingError::Internal { place, .. } => {
                 if place.path.is_none() {
                     place.path = Some(path);
@@ -277,6 +318,8 @@ impl MeshingError {
             | MeshingError::SelfIntersection { place, .. }
             | MeshingError::ZeroLength { place, .. }
             | MeshingError::Poly { place, .. }
+            | MeshingError::OutOfRange { place, .. }
+            | MeshingError::TooManyPoints { place, .. }
             | MeshingError::Svg { place, .. } => place.line,
             _ => None,
         }

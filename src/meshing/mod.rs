@@ -85,6 +85,24 @@ pub const DEFAULT_OUTLINE_TOLERANCE: f64 = 1e-3;
 pub const MAX_MIN_ANGLE: f64 = 33.0;
 /// The most vertices accepted.
 pub const MAX_VERTICES: usize = 20_000_000;
+/// The largest magnitude of a coordinate meshing accepts (SVG numbers, radii and points after
+/// their transforms, `.poly` vertices, outlines): 1e9. Checked before any curve is flattened,
+/// so that a huge radius or transform is refused at once rather than flattened into
+/// unbounded memory; squared, it stays far from overflow and from the triangulator's limits.
+pub const MAX_COORDINATE: f64 = 1e9;
+/// The smallest magnitude of a non-zero coordinate meshing accepts: 1e-30 (the triangulator
+/// refuses numbers below about 1e-43).
+pub const MIN_COORDINATE: f64 = 1e-30;
+/// The most points an outline may have: 4,000,000 (curves flattened to the tolerance, or a
+/// `.poly` file's vertices). An SVG's curves are estimated before they are flattened, and the
+/// flattening stops at the limit.
+pub const MAX_OUTLINE_POINTS: usize = 4_000_000;
+
+/// Whether `x` is within the coordinate range ([`MIN_COORDINATE`], [`MAX_COORDINATE`]).
+pub(crate) fn in_range(x: f64) -> bool {
+    x == 0.0 || (MIN_COORDINATE..=MAX_COORDINATE).contains(&x.abs())
+}
+
 /// How far from the requested count a mesh's vertices may be before [`MeshStats::off_target`]
 /// says why: 10%.
 pub const VERTEX_COUNT_SLACK: f64 = 0.1;
@@ -572,6 +590,7 @@ pub fn mesh_outline(outline: &Outline, options: &MeshOptions) -> Result<Meshed, 
     let outline_vertices = checked.vertices.len();
     let t = triangulate::triangulate(&checked, options.vertices, options.min_angle)?;
     let mesh = t.mesh;
+    check_output(outline, &mesh)?;
     let frame = outline.texture_frame.unwrap_or_else(|| {
         let b = outline::bounds(&mesh.positions);
         let side = (b[2] - b[0]).max(b[3] - b[1]);
@@ -630,6 +649,33 @@ pub fn mesh_outline(outline: &Outline, options: &MeshOptions) -> Result<Meshed, 
         texcoords,
         stats,
     })
+}
+
+/// Refuses a mesh that the mesh readers (and `bdmorph info`, `bdmorph morph`) would refuse:
+/// [`PlanarMesh::validate`]'s checks (a triangle of area at most 1e-14 times the squared
+/// diameter is degenerate), naming where the first bad triangle is in the input's
+/// coordinates.
+fn check_output(outline: &Outline, mesh: &PlanarMesh) -> Result<(), MeshingError> {
+    use crate::mesh::MeshError;
+    let centroid = |face: usize| {
+        let p = mesh.faces[face].map(|v| mesh.positions[v as usize]);
+        outline.in_input([
+            (p[0][0] + p[1][0] + p[2][0]) / 3.0,
+            (p[0][1] + p[1][1] + p[2][1]) / 3.0,
+        ])
+    };
+    match mesh.validate() {
+        Ok(()) => Ok(()),
+        Err(MeshError::Degenerate { face, area }) => Err(MeshingError::Degenerate {
+            place: Place::default(),
+            at: centroid(face),
+            area,
+        }),
+        Err(e) => Err(MeshingError::Internal {
+            place: Place::default(),
+            message: format!("the mesh made fails its checks: {e}"),
+        }),
+    }
 }
 
 /// The smallest corner angle of any triangle, in degrees (180 for a mesh without triangles).

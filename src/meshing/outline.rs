@@ -113,7 +113,7 @@ impl Outline {
     }
 
     /// A point of the outline in the input's coordinates.
-    fn in_input(&self, p: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn in_input(&self, p: [f64; 2]) -> [f64; 2] {
         match self.flip_y {
             Some(h) => [p[0], h - p[1]],
             None => p,
@@ -145,11 +145,22 @@ pub(crate) fn check(outline: &Outline) -> Result<Checked, MeshingError> {
     if let Some(v) = outline
         .vertices
         .iter()
-        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        .position(|p| !(super::in_range(p[0]) && super::in_range(p[1])))
     {
-        return Err(MeshingError::Internal {
-            place: Place::default(),
-            message: format!("vertex {v} has a non-finite coordinate"),
+        let p = outline.vertices[v];
+        let value = if super::in_range(p[0]) { p[1] } else { p[0] };
+        let (name, line) = match outline
+            .segments
+            .iter()
+            .position(|s| s.contains(&(v as u32)))
+        {
+            Some(s) => outline.describe(s),
+            None => (format!("vertex {v}"), None),
+        };
+        return Err(MeshingError::OutOfRange {
+            place: Place::line(line),
+            what: format!("{name}: a coordinate"),
+            value,
         });
     }
     if let Some(s) = outline
@@ -325,15 +336,24 @@ fn contact(p: &[[f64; 2]], s: [u32; 2], t: [u32; 2]) -> Option<(Contact, [f64; 2
     ))
 }
 
-/// Every pair of segments that cross, touch away from a shared vertex, or overlap, found with
-/// a uniform grid over the segments' bounding boxes (each pair is tested in one cell only).
+/// Every pair of segments that cross, touch away from a shared vertex, or overlap, each pair
+/// once (in order), found with a hashed uniform grid.
+///
+/// The cells are about as large as the mean segment, and a segment is entered in the cells
+/// along it (the cells of the boxes of pieces of it no longer than a cell), not in every cell
+/// of its bounding box: an outline is a set of curves, whose segments then meet a few cells
+/// each, and a cell holds a few segments, so that the work grows as `n log n` (the sort of the
+/// cell entries) with the number of segments `n`. (Cells as large as `extent / sqrt(n)`, one
+/// segment per cell on average over the bounding box, hold `sqrt(n)` segments each along a
+/// curve: `n^1.5` pairs.)
 pub(crate) fn crossings(p: &[[f64; 2]], segments: &[[u32; 2]]) -> Vec<Crossing> {
     let n = segments.len();
     if n < 2 {
         return Vec::new();
     }
+    let ends = |s: &[u32; 2]| s.map(|v| p[v as usize]);
     let bbox = |s: &[u32; 2]| {
-        let [a, b] = s.map(|v| p[v as usize]);
+        let [a, b] = ends(s);
         [
             a[0].min(b[0]),
             a[1].min(b[1]),
@@ -349,74 +369,76 @@ pub(crate) fn crossings(p: &[[f64; 2]], segments: &[[u32; 2]]) -> Vec<Crossing> 
         hi = [hi[0].max(b[2]), hi[1].max(b[3])];
         total += (b[2] - b[0]).max(b[3] - b[1]);
     }
-    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
-    // About one segment per cell, cells no smaller than the mean segment.
-    let mut cell = (extent / (n as f64).sqrt()).max(total / n as f64);
-    if cell.is_nan() || cell <= 0.0 {
-        cell = extent;
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    // At most 2^30 cells a side, so that a cell is a (row, column) pair of u32s.
+    let mut cell = (total / n as f64).max(extent / f64::from(1u32 << 30));
+    if !(cell.is_finite() && cell > 0.0) {
+        cell = if extent.is_finite() && extent > 0.0 {
+            extent
+        } else {
+            1.0
+        };
     }
-    let cols = (((hi[0] - lo[0]) / cell) as usize + 1).min(4096);
-    let rows = (((hi[1] - lo[1]) / cell) as usize + 1).min(4096);
-    let cell_x = ((hi[0] - lo[0]) / cols as f64).max(f64::MIN_POSITIVE);
-    let cell_y = ((hi[1] - lo[1]) / rows as f64).max(f64::MIN_POSITIVE);
-    let col = |x: f64| (((x - lo[0]) / cell_x) as usize).min(cols - 1);
-    let row = |y: f64| (((y - lo[1]) / cell_y) as usize).min(rows - 1);
-    // Bucket the segments by cell (counting sort).
-    let mut count = vec![0u32; cols * rows + 1];
-    for s in segments {
-        let b = bbox(s);
-        for r in row(b[1])..=row(b[3]) {
-            for c in col(b[0])..=col(b[2]) {
-                count[r * cols + c + 1] += 1;
-            }
-        }
-    }
-    for i in 1..count.len() {
-        count[i] += count[i - 1];
-    }
-    let mut fill = count.clone();
-    let mut items = vec![0u32; count[cols * rows] as usize];
+    let limit = f64::from(1u32 << 30);
+    let col = |x: f64| ((x - lo[0]) / cell).clamp(0.0, limit) as u64;
+    let row = |y: f64| ((y - lo[1]) / cell).clamp(0.0, limit) as u64;
+    // (cell, segment) entries, a segment once per cell.
+    let mut entries: Vec<(u64, u32)> = Vec::with_capacity(2 * n);
+    let mut keys: Vec<u64> = Vec::new();
+    let margin = cell * 1e-9;
     for (i, s) in segments.iter().enumerate() {
-        let b = bbox(s);
-        for r in row(b[1])..=row(b[3]) {
-            for c in col(b[0])..=col(b[2]) {
-                let k = r * cols + c;
-                items[fill[k] as usize] = i as u32;
-                fill[k] += 1;
-            }
-        }
-    }
-    let mut found = Vec::new();
-    for r in 0..rows {
-        for c in 0..cols {
-            let k = r * cols + c;
-            let here = &items[count[k] as usize..count[k + 1] as usize];
-            for (x, &i) in here.iter().enumerate() {
-                let bi = bbox(&segments[i as usize]);
-                for &j in &here[x + 1..] {
-                    let bj = bbox(&segments[j as usize]);
-                    let (ox, oy) = (bi[0].max(bj[0]), bi[1].max(bj[1]));
-                    if ox > bi[2].min(bj[2]) || oy > bi[3].min(bj[3]) {
-                        continue;
-                    }
-                    // Test the pair only in the cell holding its boxes' overlap's corner.
-                    if col(ox) != c || row(oy) != r {
-                        continue;
-                    }
-                    if let Some((contact, at)) =
-                        contact(p, segments[i as usize], segments[j as usize])
-                    {
-                        found.push(Crossing {
-                            first: i.min(j) as usize,
-                            second: i.max(j) as usize,
-                            contact,
-                            at,
-                        });
-                    }
+        let [a, b] = ends(s);
+        let length = (b[0] - a[0]).abs().max((b[1] - a[1]).abs());
+        let pieces = (length / cell).ceil().clamp(1.0, limit) as u64;
+        keys.clear();
+        for k in 0..pieces {
+            let (t0, t1) = (k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64);
+            let q0 = [a[0] + t0 * (b[0] - a[0]), a[1] + t0 * (b[1] - a[1])];
+            let q1 = if k + 1 == pieces {
+                b
+            } else {
+                [a[0] + t1 * (b[0] - a[0]), a[1] + t1 * (b[1] - a[1])]
+            };
+            for r in row(q0[1].min(q1[1]) - margin)..=row(q0[1].max(q1[1]) + margin) {
+                for c in col(q0[0].min(q1[0]) - margin)..=col(q0[0].max(q1[0]) + margin) {
+                    keys.push(r << 32 | c);
                 }
             }
         }
+        keys.sort_unstable();
+        keys.dedup();
+        entries.extend(keys.iter().map(|&k| (k, i as u32)));
     }
+    entries.sort_unstable();
+    let mut found = Vec::new();
+    let mut start = 0;
+    while start < entries.len() {
+        let key = entries[start].0;
+        let end = start + entries[start..].partition_point(|e| e.0 == key);
+        let here = &entries[start..end];
+        for (x, &(_, i)) in here.iter().enumerate() {
+            let bi = bbox(&segments[i as usize]);
+            for &(_, j) in &here[x + 1..] {
+                let bj = bbox(&segments[j as usize]);
+                if bi[0].max(bj[0]) > bi[2].min(bj[2]) || bi[1].max(bj[1]) > bi[3].min(bj[3]) {
+                    continue;
+                }
+                if let Some((contact, at)) = contact(p, segments[i as usize], segments[j as usize])
+                {
+                    found.push(Crossing {
+                        first: i.min(j) as usize,
+                        second: i.max(j) as usize,
+                        contact,
+                        at,
+                    });
+                }
+            }
+        }
+        start = end;
+    }
+    // A pair that shares several cells is found in each.
+    found.sort_by_key(|c| (c.first, c.second));
+    found.dedup_by_key(|c| (c.first, c.second));
     found
 }
 

@@ -18,6 +18,7 @@
 
 use super::error::{MeshingError, Place};
 use super::outline::{Element, Inside, Outline};
+use super::{in_range, MAX_OUTLINE_POINTS};
 
 /// The non-empty lines of a `.poly` file, as (1-based line, fields).
 struct Records<'a> {
@@ -71,12 +72,30 @@ fn number(line: usize, field: Option<&&str>, what: &str) -> Result<f64, MeshingE
     let text =
         field.ok_or_else(|| error(line, format!("expected {what}, found the end of the line")))?;
     match text.parse::<f64>() {
-        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) if x.is_finite() && in_range(x) => Ok(x),
+        Ok(x) if x.is_finite() => Err(MeshingError::OutOfRange {
+            place: Place::line(Some(line)),
+            what: what.to_string(),
+            value: x,
+        }),
         _ => Err(error(
             line,
             format!("expected {what} (a finite number), found '{text}'"),
         )),
     }
+}
+
+/// Refuses a count of records (`what`, declared on `line`) larger than the lines left after
+/// it can hold (one record a line): nothing is reserved for records the file does not have.
+fn fits(line: usize, n: usize, total_lines: usize, what: &str) -> Result<(), MeshingError> {
+    let left = total_lines.saturating_sub(line);
+    if n > left {
+        return Err(error(
+            line,
+            format!("{n} {what} declared, but only {left} lines follow"),
+        ));
+    }
+    Ok(())
 }
 
 fn count(line: usize, field: Option<&&str>, what: &str) -> Result<usize, MeshingError> {
@@ -109,6 +128,7 @@ pub fn parse_poly(text: &str) -> Result<Outline, MeshingError> {
         lines: text.lines().enumerate(),
         last: 0,
     };
+    let total_lines = text.lines().count();
     let Some((line, header)) = records.next() else {
         return Err(MeshingError::NoOutline {
             place: Place::default(),
@@ -127,6 +147,16 @@ pub fn parse_poly(text: &str) -> Result<Outline, MeshingError> {
         if dim != 2 {
             return Err(error(line, format!("dimension {dim}: only 2 is supported")));
         }
+    }
+    fits(line, nv, total_lines, "vertices")?;
+    if nv > MAX_OUTLINE_POINTS {
+        return Err(MeshingError::TooManyPoints {
+            place: Place::line(Some(line)),
+            what: "the outline".into(),
+            points: nv as u64,
+            limit: MAX_OUTLINE_POINTS,
+            tolerance_helps: false,
+        });
     }
     let mut vertices = Vec::with_capacity(nv);
     let mut base = 0;
@@ -161,6 +191,7 @@ pub fn parse_poly(text: &str) -> Result<Outline, MeshingError> {
             what: "0 segments (a .poly outline needs segments around the shape)",
         });
     }
+    fits(line, ns, total_lines, "segments")?;
     let last = base + nv as i64 - 1;
     let mut segments = Vec::with_capacity(ns);
     let mut labels = Vec::with_capacity(ns);
@@ -189,6 +220,7 @@ pub fn parse_poly(text: &str) -> Result<Outline, MeshingError> {
     let mut holes = Vec::new();
     if let Some((line, f)) = records.next() {
         let nh = count(line, f.first(), "the number of holes")?;
+        fits(line, nh, total_lines, "holes")?;
         for k in 0..nh {
             let (line, f) = records.expect(&format!("hole {} of {nh}", k + 1))?;
             integer(line, f.first(), "a hole number")?;

@@ -19,8 +19,15 @@
 use kurbo::{Affine, BezPath, PathEl, Shape};
 
 use super::error::{MeshingError, Place};
-use super::outline::{bounds, twice_area, Element, Outline};
-use super::DEFAULT_OUTLINE_TOLERANCE;
+use super::outline::{bounds, crossings, twice_area, Element, Outline};
+use super::{in_range, DEFAULT_OUTLINE_TOLERANCE, MAX_OUTLINE_POINTS};
+
+/// Whether a closed loop's segments cross, touch or overlap one another.
+fn crosses_itself(part: &[[f64; 2]]) -> bool {
+    let n = part.len() as u32;
+    let segments: Vec<[u32; 2]> = (0..n).map(|k| [k, (k + 1) % n]).collect();
+    !crossings(part, &segments).is_empty()
+}
 
 fn error(line: Option<usize>, message: String) -> MeshingError {
     MeshingError::Svg {
@@ -52,10 +59,12 @@ fn length(text: &str) -> Option<f64> {
     t.parse::<f64>().ok().filter(|x| x.is_finite())
 }
 
-/// The numbers of a list separated by commas and/or white space (`points`, `viewBox`,
-/// transform arguments); also splits `1-2` and `.5.5` as SVG allows.
-fn numbers(text: &str) -> Option<Vec<f64>> {
-    let mut out = Vec::new();
+/// Scans the numbers of `text`, calling `f` on each. Strict (`lenient == false`): the text
+/// is numbers separated by commas and/or white space (also `1-2` and `.5.5`, as SVG allows),
+/// and anything else, or a number that is not finite, makes it `None`. Lenient: other
+/// characters (path commands) are skipped, and a number too large for `f64` is passed on as
+/// an infinity.
+fn scan(text: &str, lenient: bool, mut f: impl FnMut(f64)) -> Option<()> {
     let b = text.as_bytes();
     let mut i = 0;
     while i < b.len() {
@@ -68,8 +77,10 @@ fn numbers(text: &str) -> Option<Vec<f64>> {
             i += 1;
         }
         let mut dot = false;
+        let mut digits = false;
         while i < b.len() && (b[i].is_ascii_digit() || (b[i] == b'.' && !dot)) {
             dot |= b[i] == b'.';
+            digits |= b[i].is_ascii_digit();
             i += 1;
         }
         if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
@@ -84,19 +95,40 @@ fn numbers(text: &str) -> Option<Vec<f64>> {
                 }
             }
         }
-        let x: f64 = text[start..i].parse().ok()?;
-        if !x.is_finite() {
+        if lenient && !digits {
+            i = start + 1;
+            continue;
+        }
+        let x: f64 = text.get(start..i)?.parse().ok()?;
+        if !x.is_finite() && !lenient {
             return None;
         }
-        out.push(x);
+        f(x);
     }
+    Some(())
+}
+
+/// The numbers of a list separated by commas and/or white space (`points`, `viewBox`,
+/// transform arguments); also splits `1-2` and `.5.5` as SVG allows.
+fn numbers(text: &str) -> Option<Vec<f64>> {
+    let mut out = Vec::new();
+    scan(text, false, |x| out.push(x))?;
     Some(out)
 }
 
+/// `text` as quoted in a message: at most 40 characters, the rest elided.
+fn excerpt(text: &str) -> String {
+    match text.char_indices().nth(40) {
+        Some((i, _)) => format!("{}...", &text[..i]),
+        None => text.to_string(),
+    }
+}
+
 /// Parses a `transform` attribute.
-fn transform(text: &str) -> Result<Affine, String> {
+fn transform(full: &str) -> Result<Affine, String> {
     let mut total = Affine::IDENTITY;
-    let mut rest = text.trim();
+    let mut rest = full.trim();
+    let text = excerpt(full);
     while !rest.is_empty() {
         let open = rest
             .find('(')
@@ -129,7 +161,12 @@ fn transform(text: &str) -> Result<Affine, String> {
             ("matrix" | "translate" | "scale" | "rotate" | "skewX" | "skewY", _) => {
                 return Err(bad())
             }
-            _ => return Err(format!("transform '{text}': unknown transform '{name}'")),
+            _ => {
+                return Err(format!(
+                    "transform '{text}': unknown transform '{}'",
+                    excerpt(name)
+                ))
+            }
         };
         total *= t;
         rest = rest[close + 1..].trim_start();
@@ -148,16 +185,66 @@ struct Drawn {
 fn attr_length(node: roxmltree::Node, name: &str, line: usize) -> Result<f64, MeshingError> {
     match node.attribute(name) {
         None => Ok(0.0),
-        Some(text) => length(text).ok_or_else(|| {
-            error(
-                Some(line),
-                format!(
-                    "<{}> {name}=\"{text}\" is not a number in user units (other units are not supported)",
-                    node.tag_name().name()
-                ),
-            )
-        }),
+        Some(text) => {
+            let x = length(text).ok_or_else(|| {
+                error(
+                    Some(line),
+                    format!(
+                        "<{}> {name}=\"{}\" is not a number in user units (other units are not supported)",
+                        node.tag_name().name(),
+                        excerpt(text)
+                    ),
+                )
+            })?;
+            if !in_range(x) {
+                return Err(MeshingError::OutOfRange {
+                    place: Place::line(Some(line)),
+                    what: format!("<{}> {name}", node.tag_name().name()),
+                    value: x,
+                });
+            }
+            Ok(x)
+        }
     }
+}
+
+/// Refuses path data or a points list with a number outside the coordinate range, or with
+/// arcs that would turn into more cubic curves than [`MAX_OUTLINE_POINTS`] allows (kurbo
+/// turns an arc into cubics at an absolute tolerance of 0.1, more of them the larger its
+/// radius), before it is parsed.
+fn check_numbers(text: &str, tag: &str, what: &str, line: usize) -> Result<(), MeshingError> {
+    let (mut count, mut largest, mut bad) = (0u64, 0.0f64, None);
+    let _ = scan(text, true, |x| {
+        count += 1;
+        largest = largest.max(x.abs());
+        if bad.is_none() && !in_range(x) {
+            bad = Some(x);
+        }
+    });
+    if let Some(value) = bad {
+        return Err(MeshingError::OutOfRange {
+            place: Place::line(Some(line)),
+            what: format!("<{tag}> {what}: a number"),
+            value,
+        });
+    }
+    if tag == "path" && text.contains(['a', 'A']) {
+        // At least 3 numbers per arc (flags and coordinates may run together); kurbo's
+        // cubics per full turn of an arc of radius r.
+        let arcs = count / 3 + 1;
+        let per_arc = (1.1163 * largest / 0.1).powf(1.0 / 6.0).max(4.0).ceil() as u64;
+        let cubics = arcs.saturating_mul(per_arc);
+        if cubics > 2 * MAX_OUTLINE_POINTS as u64 {
+            return Err(MeshingError::TooManyPoints {
+                place: Place::line(Some(line)),
+                what: format!("<{tag}>'s arcs"),
+                points: cubics,
+                limit: MAX_OUTLINE_POINTS,
+                tolerance_helps: false,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The path of a shape element in its own coordinates, `None` for elements that are not
@@ -171,10 +258,12 @@ fn shape_path(node: roxmltree::Node, line: usize) -> Result<Option<BezPath>, Mes
             if d.trim().is_empty() {
                 return Ok(None);
             }
+            check_numbers(d, tag, "d", line)?;
             Some(BezPath::from_svg(d).map_err(|e| error(Some(line), format!("<path> d: {e}")))?)
         }
         "polygon" | "polyline" => {
             let text = node.attribute("points").unwrap_or("");
+            check_numbers(text, tag, "points", line)?;
             let v = numbers(text).ok_or_else(|| {
                 error(Some(line), format!("<{tag}> points: not a list of numbers"))
             })?;
@@ -236,14 +325,46 @@ fn shape_path(node: roxmltree::Node, line: usize) -> Result<Option<BezPath>, Mes
     })
 }
 
-/// Collects the shapes under `node`, with the transform of its ancestors.
+/// The 1-based line of a byte offset, from the offsets of the text's line feeds (roxmltree's
+/// `text_pos_at` scans the text from its start on every call).
+struct Lines(Vec<usize>);
+
+impl Lines {
+    fn new(text: &str) -> Lines {
+        Lines(
+            text.bytes()
+                .enumerate()
+                .filter(|&(_, b)| b == b'\n')
+                .map(|(i, _)| i)
+                .collect(),
+        )
+    }
+
+    fn of(&self, offset: usize) -> usize {
+        self.0.partition_point(|&i| i < offset) + 1
+    }
+}
+
+/// Collects the shapes under `root`, with its transform `own`, in document order. The tree is
+/// walked with a stack of its own, not by recursion: any depth of nesting is read (roxmltree
+/// builds its tree without recursion too) on any thread's stack.
 fn collect(
-    doc: &roxmltree::Document,
-    node: roxmltree::Node,
-    parent: Affine,
+    lines: &Lines,
+    root: roxmltree::Node,
+    own: Affine,
     out: &mut Vec<Drawn>,
 ) -> Result<(), MeshingError> {
-    for child in node.children().filter(|n| n.is_element()) {
+    // Per level, the element's children still to visit and the element's total transform.
+    let mut stack = vec![(root.children(), own)];
+    while let Some((children, parent)) = stack.last_mut() {
+        let parent = *parent;
+        let Some(child) = children.next() else {
+            stack.pop();
+            continue;
+        };
+        if !child.is_element() {
+            continue;
+        }
         let tag = child.tag_name().name();
         if NOT_DRAWN.contains(&tag)
             || child
@@ -252,30 +373,91 @@ fn collect(
         {
             continue;
         }
-        let line = doc.text_pos_at(child.range().start).row as usize;
+        let line = lines.of(child.range().start);
         let own = match child.attribute("transform") {
-            Some(t) => transform(t).map_err(|m| error(Some(line), format!("<{tag}> {m}")))?,
+            Some(t) => {
+                transform(t).map_err(|m| error(Some(line), format!("<{}> {m}", excerpt(tag))))?
+            }
             None => Affine::IDENTITY,
         };
         let total = parent * own;
         if let Some(path) = shape_path(child, line)? {
+            let path = total * path;
+            check_points(&path, tag, line)?;
             out.push(Drawn {
                 name: format!("<{tag}>"),
                 line,
-                path: total * path,
+                path,
             });
         }
-        collect(doc, child, total, out)?;
+        stack.push((child.children(), total));
     }
     Ok(())
+}
+
+/// Refuses a shape with a point (after its transforms) outside the coordinate range.
+fn check_points(path: &BezPath, tag: &str, line: usize) -> Result<(), MeshingError> {
+    for el in path.elements() {
+        let points: &[kurbo::Point] = match el {
+            PathEl::MoveTo(p) | PathEl::LineTo(p) => std::slice::from_ref(p),
+            PathEl::QuadTo(a, b) => &[*a, *b],
+            PathEl::CurveTo(a, b, c) => &[*a, *b, *c],
+            PathEl::ClosePath => &[],
+        };
+        for p in points {
+            for x in [p.x, p.y] {
+                if !in_range(x) {
+                    return Err(MeshingError::OutOfRange {
+                        place: Place::line(Some(line)),
+                        what: format!("<{tag}> a point's coordinate after the transforms"),
+                        value: x,
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// About how many points (at most) flattening `path` to `tolerance` gives, and whether it
+/// has curves: a line is one point, a curve about the square root of its control polygon's
+/// length over the tolerance (kurbo flattens near-optimally).
+fn estimate_points(path: &BezPath, tolerance: f64) -> (u64, bool) {
+    let mut last = kurbo::Point::ZERO;
+    let mut total = 0u64;
+    let mut curves = false;
+    let pieces = |length: f64| (length / tolerance).sqrt().ceil().min(1e18) as u64;
+    for el in path.elements() {
+        total = total.saturating_add(match *el {
+            PathEl::MoveTo(p) | PathEl::LineTo(p) => {
+                last = p;
+                1
+            }
+            PathEl::QuadTo(a, b) => {
+                curves = true;
+                let n = pieces(last.distance(a) + a.distance(b));
+                last = b;
+                n.saturating_add(1)
+            }
+            PathEl::CurveTo(a, b, c) => {
+                curves = true;
+                let n = pieces(last.distance(a) + a.distance(b) + b.distance(c));
+                last = c;
+                n.saturating_mul(2).saturating_add(2)
+            }
+            PathEl::ClosePath => 1,
+        });
+    }
+    (total, curves)
 }
 
 /// Points closer than this fraction of the tolerance are one point (a curve that closes
 /// on its start up to round-off, for instance).
 const SAME_POINT: f64 = 1e-3;
 
-/// The closed parts of a flattened path, without repeated points.
-fn flatten(path: &BezPath, tolerance: f64) -> Vec<Vec<[f64; 2]>> {
+/// The closed parts of a flattened path, without repeated points; `None` past `limit` points.
+fn flatten(path: &BezPath, tolerance: f64, limit: usize) -> Option<Vec<Vec<[f64; 2]>>> {
+    let mut points = 0usize;
     let mut parts: Vec<Vec<[f64; 2]>> = Vec::new();
     let mut current: Vec<[f64; 2]> = Vec::new();
     let close =
@@ -290,17 +472,23 @@ fn flatten(path: &BezPath, tolerance: f64) -> Vec<Vec<[f64; 2]>> {
             parts.push(part);
         }
     };
-    kurbo::flatten(path, tolerance, |el| match el {
-        PathEl::MoveTo(p) => {
-            finish(&mut current);
-            current.push([p.x, p.y]);
+    kurbo::flatten(path, tolerance, |el| {
+        points += 1;
+        if points > limit {
+            return;
         }
-        PathEl::LineTo(p) => current.push([p.x, p.y]),
-        PathEl::ClosePath => finish(&mut current),
-        PathEl::QuadTo(..) | PathEl::CurveTo(..) => {}
+        match el {
+            PathEl::MoveTo(p) => {
+                finish(&mut current);
+                current.push([p.x, p.y]);
+            }
+            PathEl::LineTo(p) => current.push([p.x, p.y]),
+            PathEl::ClosePath => finish(&mut current),
+            PathEl::QuadTo(..) | PathEl::CurveTo(..) => {}
+        }
     });
     finish(&mut current);
-    parts
+    (points <= limit).then_some(parts)
 }
 
 /// Parses an SVG document's shapes into an outline with [`super::Inside::Parity`], curves
@@ -339,8 +527,17 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
             });
         }
     }
-    let doc = roxmltree::Document::parse(text)
-        .map_err(|e| error(Some(e.pos().row as usize), format!("not valid XML: {e}")))?;
+    let doc = roxmltree::Document::parse(text).map_err(|e| {
+        let message = e.to_string();
+        let shown = match message.char_indices().nth(160) {
+            Some((i, _)) => format!("{}...", &message[..i]),
+            None => message,
+        };
+        error(
+            Some(e.pos().row as usize),
+            format!("not valid XML: {shown}"),
+        )
+    })?;
     let root = doc.root_element();
     let root_line = doc.text_pos_at(root.range().start).row as usize;
     if root.tag_name().name() != "svg" {
@@ -348,7 +545,7 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
             Some(root_line),
             format!(
                 "the root element is <{}>, not <svg>",
-                root.tag_name().name()
+                excerpt(root.tag_name().name())
             ),
         ));
     }
@@ -358,7 +555,10 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
             _ => {
                 return Err(error(
                     Some(root_line),
-                    format!("viewBox=\"{v}\" is not four numbers with a positive width and height"),
+                    format!(
+                        "viewBox=\"{}\" is not four numbers with a positive width and height",
+                        excerpt(v)
+                    ),
                 ))
             }
         },
@@ -370,8 +570,9 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
         Some(t) => transform(t).map_err(|m| error(Some(root_line), format!("<svg> {m}")))?,
         None => Affine::IDENTITY,
     };
+    let lines = Lines::new(text);
     let mut shapes = Vec::new();
-    collect(&doc, root, own, &mut shapes)?;
+    collect(&lines, root, own, &mut shapes)?;
     if shapes.is_empty() {
         return Err(MeshingError::NoOutline {
             place: Place::default(),
@@ -396,9 +597,32 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
             DEFAULT_OUTLINE_TOLERANCE * diagonal
         }
     };
-    let mut loops: Vec<(Vec<[f64; 2]>, Element)> = Vec::new();
+    let mut estimate = 0u64;
     for s in &shapes {
-        let parts = flatten(&s.path, tolerance);
+        let (points, curves) = estimate_points(&s.path, tolerance);
+        estimate = estimate.saturating_add(points);
+        if estimate > MAX_OUTLINE_POINTS as u64 {
+            return Err(MeshingError::TooManyPoints {
+                place: Place::line(Some(s.line)),
+                what: format!("the outline (up to {})", s.name),
+                points: estimate,
+                limit: MAX_OUTLINE_POINTS,
+                tolerance_helps: curves,
+            });
+        }
+    }
+    let mut loops: Vec<(Vec<[f64; 2]>, Element)> = Vec::new();
+    let mut left = MAX_OUTLINE_POINTS;
+    for s in &shapes {
+        let parts =
+            flatten(&s.path, tolerance, left).ok_or_else(|| MeshingError::TooManyPoints {
+                place: Place::line(Some(s.line)),
+                what: format!("the outline (up to {})", s.name),
+                points: (MAX_OUTLINE_POINTS + 1) as u64,
+                limit: MAX_OUTLINE_POINTS,
+                tolerance_helps: true,
+            })?;
+        left -= parts.iter().map(Vec::len).sum::<usize>().min(left);
         let many = parts.len() > 1;
         for (k, part) in parts.into_iter().enumerate() {
             let name = if many {
@@ -407,7 +631,9 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
                 s.name.clone()
             };
             let area = twice_area(&part).abs() / 2.0;
-            if part.len() < 3 || area < tolerance * tolerance {
+            // A loop that crosses itself (a bow tie) may enclose no area in sum: the check
+            // of the outline names the crossing.
+            if part.len() < 3 || (area < tolerance * tolerance && !crosses_itself(&part)) {
                 return Err(MeshingError::LoopTooSmall {
                     place: Place::line(Some(s.line)),
                     what: name,

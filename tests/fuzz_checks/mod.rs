@@ -739,3 +739,76 @@ pub fn mesh_from_bytes(bytes: &[u8]) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
         .collect();
     (positions, faces)
 }
+
+// ---------------------------------------------------------------------------------------------
+// Outline readers and the mesher.
+
+/// Which outline reader.
+#[derive(Clone, Copy, Debug)]
+pub enum OutlineFormat {
+    /// `parse_svg`.
+    Svg,
+    /// `parse_poly`.
+    Poly,
+}
+
+/// Parses `bytes` (lossy UTF-8, as a file is read) as an outline: an outline whose segments
+/// name existing vertices and whose coordinates are in the supported range, or a one-line
+/// error. A small outline goes on through the mesher, which gives a mesh the mesh checks
+/// accept, or a one-line error that is not an internal one.
+pub fn outline_reader(bytes: &[u8], format: OutlineFormat) {
+    use bdmorph::meshing::{self, MeshOptions, MeshingError};
+    let text = String::from_utf8_lossy(bytes);
+    let parsed = match format {
+        OutlineFormat::Svg => meshing::parse_svg(&text, None),
+        OutlineFormat::Poly => meshing::parse_poly(&text),
+    };
+    let outline = match parsed {
+        Ok(o) => o,
+        Err(e) => return one_line(&e.to_string()),
+    };
+    let n = outline.vertices.len();
+    assert!(outline.segments.iter().flatten().all(|&v| (v as usize) < n));
+    let in_range =
+        |x: f64| x == 0.0 || (meshing::MIN_COORDINATE..=meshing::MAX_COORDINATE).contains(&x.abs());
+    assert!(outline.vertices.iter().flatten().all(|&x| in_range(x)));
+    if n > 2000 {
+        return;
+    }
+    match meshing::mesh_outline(&outline, &MeshOptions::default().with_vertices(100)) {
+        Ok(m) => {
+            if let Err(e) = m.mesh.validate() {
+                panic!("the mesher made a mesh the checks refuse: {e}");
+            }
+        }
+        Err(e) => {
+            one_line(&e.to_string());
+            assert!(!matches!(e, MeshingError::Internal { .. }), "{e}");
+        }
+    }
+}
+
+/// Decodes `bytes` as a picture and, when it is small, meshes its subject: a mesh the mesh
+/// checks accept, or a one-line error that is not an internal one.
+pub fn picture_mesher(bytes: &[u8]) {
+    use bdmorph::meshing::{self, MeshOptions, MeshingError, PictureOptions};
+    let image = match bdmorph::render::raster::decode_image(bytes) {
+        Ok(image) => image,
+        Err(e) => return one_line(&e.to_string()),
+    };
+    if u64::from(image.width) * u64::from(image.height) > 64 * 64 {
+        return;
+    }
+    let options = MeshOptions::default().with_vertices(100);
+    match meshing::mesh_picture(&image, &PictureOptions::default(), &options) {
+        Ok(m) => {
+            if let Err(e) = m.mesh.validate() {
+                panic!("the mesher made a mesh the checks refuse: {e}");
+            }
+        }
+        Err(e) => {
+            one_line(&e.to_string());
+            assert!(!matches!(e, MeshingError::Internal { .. }), "{e}");
+        }
+    }
+}

@@ -856,3 +856,22 @@ fn fuzz_compiler_regression_layout_overflow() {
     let (positions, faces) = check::mesh_from_bytes(&data);
     check::compile_and_run(&positions, &faces);
 }
+
+/// From `fuzz_svg_reader_structured` (proptest, minimised): an empty `points` list made a
+/// path without a start, on which kurbo panicked ("uninitialized subpath").
+#[test]
+fn fuzz_svg_reader_regression_empty_points() {
+    let text = "<svg>\n<polygon points=\"\"/>\n</svg>\n";
+    outline(text.as_bytes(), check::OutlineFormat::Svg);
+}
+
+/// From `fuzz_svg_reader_arbitrary_bytes` and `fuzz_poly_reader_arbitrary_bytes` (proptest):
+/// roxmltree's message quoted a line feed, and a `.poly` field was quoted whole (hundreds of
+/// bytes of control characters): messages of several lines or far too long.
+#[test]
+fn fuzz_outline_readers_regression_quoted_text() {
+    let svg = "<svg>\n<g>\n<rect width=\"1\" height=\"1\"\n</svg>";
+    outline(svg.as_bytes(), check::OutlineFormat::Svg);
+    let poly = format!("{}\u{e}\n", "x".repeat(400));
+    outline(poly.as_bytes(), check::OutlineFormat::Poly);
+}

@@ -57,13 +57,24 @@ fn error(line: usize, message: String) -> MeshingError {
     }
 }
 
+/// A field as quoted in a message: at most 40 characters, control characters escaped.
+fn shown(text: &str) -> String {
+    let head: String = text.chars().take(40).collect();
+    let more = if text.chars().nth(40).is_some() {
+        "..."
+    } else {
+        ""
+    };
+    format!("{}{more}", head.escape_debug())
+}
+
 fn integer(line: usize, field: Option<&&str>, what: &str) -> Result<i64, MeshingError> {
     let text =
         field.ok_or_else(|| error(line, format!("expected {what}, found the end of the line")))?;
     text.parse().map_err(|_| {
         error(
             line,
-            format!("expected {what} (an integer), found '{text}'"),
+            format!("expected {what} (an integer), found '{}'", shown(text)),
         )
     })
 }
@@ -80,7 +91,7 @@ fn number(line: usize, field: Option<&&str>, what: &str) -> Result<f64, MeshingE
         }),
         _ => Err(error(
             line,
-            format!("expected {what} (a finite number), found '{text}'"),
+            format!("expected {what} (a finite number), found '{}'", shown(text)),
         )),
     }
 }

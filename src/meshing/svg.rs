@@ -267,6 +267,9 @@ fn shape_path(node: roxmltree::Node, line: usize) -> Result<Option<BezPath>, Mes
             let v = numbers(text).ok_or_else(|| {
                 error(Some(line), format!("<{tag}> points: not a list of numbers"))
             })?;
+            if v.is_empty() {
+                return Ok(None);
+            }
             if v.len() % 2 == 1 {
                 return Err(error(
                     Some(line),

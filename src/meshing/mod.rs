@@ -98,6 +98,11 @@ pub const MIN_COORDINATE: f64 = 1e-30;
 /// flattening stops at the limit.
 pub const MAX_OUTLINE_POINTS: usize = 4_000_000;
 
+/// The most outline vertices meshed: 100,000. The refinement to a minimum angle around many
+/// short boundary segments grows faster than their count (about 3 s for 100,000 on one core,
+/// 17 s for 300,000), so longer outlines are refused before triangulating, with the count.
+pub const MAX_MESHED_OUTLINE_POINTS: usize = 100_000;
+
 /// Whether `x` is within the coordinate range ([`MIN_COORDINATE`], [`MAX_COORDINATE`]).
 pub(crate) fn in_range(x: f64) -> bool {
     x == 0.0 || (MIN_COORDINATE..=MAX_COORDINATE).contains(&x.abs())
@@ -588,6 +593,15 @@ pub fn mesh_outline(outline: &Outline, options: &MeshOptions) -> Result<Meshed, 
     options.validate()?;
     let checked = outline::check(outline)?;
     let outline_vertices = checked.vertices.len();
+    if outline_vertices > MAX_MESHED_OUTLINE_POINTS {
+        return Err(MeshingError::TooManyPoints {
+            place: Place::default(),
+            what: "the outline (as meshed)".into(),
+            points: outline_vertices as u64,
+            limit: MAX_MESHED_OUTLINE_POINTS,
+            tolerance_helps: false,
+        });
+    }
     let t = triangulate::triangulate(&checked, options.vertices, options.min_angle)?;
     let mesh = t.mesh;
     check_output(outline, &mesh)?;

@@ -531,7 +531,18 @@ pub fn parse_svg(text: &str, tolerance: Option<f64>) -> Result<Outline, MeshingE
         }
     }
     let doc = roxmltree::Document::parse(text).map_err(|e| {
-        let message = e.to_string();
+        // roxmltree quotes the character it met, a line feed included: escaped, one line.
+        let message: String = e
+            .to_string()
+            .chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect();
         let shown = match message.char_indices().nth(160) {
             Some((i, _)) => format!("{}...", &message[..i]),
             None => message,

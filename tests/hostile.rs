@@ -199,16 +199,6 @@ fn grid(n: usize, hole: bool) -> String {
     s
 }
 
-/// An SVG of `depth` nested groups around one square.
-fn nested_svg(depth: usize) -> String {
-    let mut s = String::from("<svg xmlns=\"http://www.w3.org/2000/svg\">");
-    s += &"<g>".repeat(depth);
-    s += "<rect x=\"0\" y=\"0\" width=\"10\" height=\"10\"/>";
-    s += &"</g>".repeat(depth);
-    s += "</svg>";
-    s
-}
-
 /// An SVG holding one `<path>` of `d`.
 fn svg_path(d: &str) -> String {
     format!("<svg xmlns=\"http://www.w3.org/2000/svg\"><path d=\"{d}\"/></svg>")

@@ -286,7 +286,7 @@ mod tests {
             (SQUARE.replace("2 1 1 1", "5 1 1 1"), "line 5: vertex numbered 5, expected 2"),
             (SQUARE.replace("4 2 0 1", "4 3 0 1"), "line 2: dimension 3: only 2 is supported"),
             (SQUARE.replace("4 2 0 1", "0 2 0 1"), "line 2: 0 vertices: the vertices are in a separate .node file, which is not supported; put them in the .poly file"),
-            ("4 2 0 0\n1 0 0\n2 1 0\n".to_owned(), "line 3: the file ends where vertex 3 of 4 was expected"),
+            ("4 2 0 0\n1 0 0\n2 1 0\n".to_owned(), "line 1: 4 vertices declared, but only 2 lines follow"),
         ];
         for (text, message) in cases {
             assert_eq!(parse_poly(&text).unwrap_err().to_string(), message);

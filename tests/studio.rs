@@ -253,6 +253,28 @@ fn every_page_sees_every_edit() {
     assert_eq!(b.outline[0].as_array().map(Vec::len), Some(3));
 }
 
+/// A page's answer never arrives before the edits other pages made earlier: after any edit by
+/// one tab, the other tab's next answer comes after the change, whichever task runs first.
+#[test]
+fn answers_follow_the_edits_of_other_pages() {
+    let dir = scratch("order");
+    let studio = Studio::start(&dir, None);
+    let mut a = studio.client();
+    let mut b = studio.client();
+    let n = a.state["vertices"].as_u64().expect("n") as u32;
+    for round in 0..60 {
+        let v = (round / 2) % n;
+        let op = if round % 2 == 0 {
+            "pin_add"
+        } else {
+            "pin_remove"
+        };
+        assert_eq!(a.request(&format!(r#"{{"op":"{op}","vertex":{v}}}"#)), None);
+        b.sync();
+        assert_eq!(b.pins, a.pins, "round {round}: the other tab is up to date");
+    }
+}
+
 /// Requests that arrive together with the socket's Close are carried out (a Save sent as the
 /// tab closes is not lost).
 #[test]

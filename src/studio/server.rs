@@ -333,12 +333,17 @@ async fn serve_socket(app: Arc<App>, mut socket: WebSocket) {
                 }
                 let items = latest_only(items);
                 let worker = app.clone();
-                // Each request's answers, then what it changed, in order.
+                // For each request: what others changed, its answers, then what it changed.
                 let done = tokio::task::spawn_blocking(move || {
                     let mut session = worker.session();
                     let mut out = Vec::new();
                     let mut works = Vec::new();
                     for item in items {
+                        // What other pages changed comes first, so that an answer is never
+                        // read before the state it was given in (a hello is sent it all after).
+                        if !matches!(item, Item::Request(Request::Hello)) {
+                            out.extend(session.updates(&mut seen, 0));
+                        }
                         let mut seq = 0;
                         let reply = match item {
                             Item::Request(request) => {

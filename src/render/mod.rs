@@ -9,6 +9,7 @@ pub mod html;
 pub mod raster;
 pub mod surface;
 pub mod svg;
+#[cfg(feature = "video")]
 pub mod video;
 
 /// What to draw besides the positions: the triangles and, optionally, a texture mapped through

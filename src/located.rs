@@ -27,7 +27,7 @@
 //!     err.to_string(),
 //!     "square.obj:8: face 2 (0-based) is clockwise (signed area -2.5e-1); \
 //!      triangles must be counter-clockwise, consistently (a keyframe with a few inverted \
-//!      triangles morphs with --allow-inverted)"
+//!      triangles morphs with MorphOptions::allow_inverted)"
 //! );
 //!
 //! // Errors found later, here by the compiler, are located the same way.
@@ -193,7 +193,8 @@ pub struct MeshFile {
 
 impl MeshFile {
     /// Reads an `.obj` or `.off` file as [`io::read_mesh`] does, keeping the lines.
-    pub fn read(path: &Path) -> Result<MeshFile, ReadError> {
+    pub fn read(path: impl AsRef<Path>) -> Result<MeshFile, ReadError> {
+        let path = path.as_ref();
         let (mesh, lines) = io::read_mesh_with_lines(path)?;
         Ok(MeshFile {
             path: path.into(),
@@ -289,7 +290,9 @@ impl Locate for CompileError {
 impl Locate for MeshError {
     fn elements(&self, faces: &[[u32; 3]]) -> Vec<Element> {
         match self {
-            MeshError::Read(_) | MeshError::CountMismatch { .. } => Vec::new(),
+            MeshError::Read(_) | MeshError::CountMismatch { .. } | MeshError::NoTriangles => {
+                Vec::new()
+            }
             MeshError::NotPlanar { vertex, .. } | MeshError::NonFinite { vertex } => {
                 vec![Element::Vertex(*vertex)]
             }

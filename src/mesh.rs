@@ -25,6 +25,9 @@ pub enum MeshError {
     /// The file could not be read.
     #[error(transparent)]
     Read(#[from] ReadError),
+    /// The mesh has no triangles (for what needs some: posing, morphing).
+    #[error("the mesh has no triangles")]
+    NoTriangles,
     /// A 3D mesh where a planar one is needed.
     #[error("{path}: {}", NotPlanarText(*.vertex, *.z))]
     NotPlanar {
@@ -63,7 +66,7 @@ pub enum MeshError {
     },
     /// A triangle is clockwise, and no more triangles are clockwise than counter-clockwise
     /// (otherwise the mesh is [`MeshError::Mirrored`]).
-    #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently (a keyframe with a few inverted triangles morphs with --allow-inverted)")]
+    #[error("face {face} (0-based) is clockwise (signed area {area:e}); triangles must be counter-clockwise, consistently (a keyframe with a few inverted triangles morphs with MorphOptions::allow_inverted)")]
     Clockwise {
         /// The face.
         face: usize,
@@ -185,7 +188,7 @@ impl std::fmt::Display for InvertedText<'_> {
         write!(
             f,
             " (0-based); triangles must be counter-clockwise (a keyframe with a few inverted \
-             triangles morphs with --allow-inverted)"
+             triangles morphs with MorphOptions::allow_inverted)"
         )
     }
 }
@@ -248,15 +251,68 @@ impl std::fmt::Display for Short {
     }
 }
 
+impl From<&PlanarMesh> for SurfaceMesh {
+    /// The planar mesh in 3D, at z = 0, for the systems that take surfaces (geodesics,
+    /// parameterisation).
+    ///
+    /// ```
+    /// use bdmorph::{generate, geodesic::{HeatGeodesics, HeatOptions}, SurfaceMesh};
+    /// let disk = generate::disk(6, 0.2);
+    /// let mut g = HeatGeodesics::new(&SurfaceMesh::from(&disk), HeatOptions::default())?;
+    /// assert_eq!(g.distance(&[0])?.len(), disk.positions.len());
+    /// # Ok::<(), bdmorph::geodesic::GeodesicError>(())
+    /// ```
+    fn from(mesh: &PlanarMesh) -> SurfaceMesh {
+        SurfaceMesh {
+            positions: mesh.positions.iter().map(|&[x, y]| [x, y, 0.0]).collect(),
+            faces: mesh.faces.clone(),
+            texcoords: None,
+        }
+    }
+}
+
+impl From<PlanarMesh> for SurfaceMesh {
+    /// As `SurfaceMesh::from(&mesh)`.
+    fn from(mesh: PlanarMesh) -> SurfaceMesh {
+        SurfaceMesh::from(&mesh)
+    }
+}
+
 impl PlanarMesh {
+    /// The vertex nearest `point` (the first of equally near ones), as the command line's
+    /// `--drag X,Y:TX,TY` and `--fix X,Y` pick their handles; `None` for a mesh without
+    /// vertices or a point that is not finite.
+    ///
+    /// ```
+    /// let disk = bdmorph::generate::disk(6, 0.2);
+    /// let v = disk.nearest_vertex([0.01, 0.0]).expect("a vertex");
+    /// assert_eq!(disk.positions[v as usize], [0.0, 0.0]);
+    /// ```
+    pub fn nearest_vertex(&self, point: [f64; 2]) -> Option<u32> {
+        if !(point[0].is_finite() && point[1].is_finite()) {
+            return None;
+        }
+        let d = |q: &[f64; 2]| (q[0] - point[0]).powi(2) + (q[1] - point[1]).powi(2);
+        self.positions
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| d(q).is_finite())
+            .min_by(|(_, a), (_, b)| d(a).total_cmp(&d(b)))
+            .map(|(v, _)| v as u32)
+    }
+
     /// Reads a planar mesh from an OBJ or OFF file (z must be 0 when present).
-    pub fn read(path: &Path) -> Result<PlanarMesh, MeshError> {
+    pub fn read(path: impl AsRef<Path>) -> Result<PlanarMesh, MeshError> {
+        let path = path.as_ref();
         PlanarMesh::from_surface(io::read_mesh(path)?, path)
     }
 
     /// Reads a planar mesh and its texture coordinates (when the file has them for every
     /// corner).
-    pub fn read_textured(path: &Path) -> Result<(PlanarMesh, Option<TexCoords>), MeshError> {
+    pub fn read_textured(
+        path: impl AsRef<Path>,
+    ) -> Result<(PlanarMesh, Option<TexCoords>), MeshError> {
+        let path = path.as_ref();
         let mut surface = io::read_mesh(path)?;
         let texcoords = surface.texcoords.take();
         Ok((PlanarMesh::from_surface(surface, path)?, texcoords))
@@ -279,7 +335,11 @@ impl PlanarMesh {
     }
 
     /// Drops z from a mesh that lies in the plane z = 0.
-    pub fn from_surface(mesh: SurfaceMesh, path: &Path) -> Result<PlanarMesh, MeshError> {
+    pub fn from_surface(
+        mesh: SurfaceMesh,
+        path: impl AsRef<Path>,
+    ) -> Result<PlanarMesh, MeshError> {
+        let path = path.as_ref();
         if let Some((vertex, p)) = mesh.positions.iter().enumerate().find(|(_, p)| p[2] != 0.0) {
             return Err(MeshError::NotPlanar {
                 path: path.display().to_string(),
@@ -532,7 +592,7 @@ mod tests {
             err.to_string(),
             "2 of 4 triangles are clockwise (inverted): face 0, 2 (0-based); triangles must be \
              counter-clockwise (a keyframe with a few inverted triangles morphs with \
-             --allow-inverted)"
+             MorphOptions::allow_inverted)"
         );
         assert_eq!(mesh.validate_allowing_inverted().unwrap(), [0, 2]);
         // Three of four: mirrored, and the counter-clockwise one would be wrong after the fix.

@@ -2,15 +2,15 @@
 //! the set of handles changes (the only time anything is factored), and a cheap, warm-started,
 //! allocation-free drag per mouse move.
 //!
-//! Methods ([`Method`]):
+//! Methods ([`PoseMethod`]):
 //!
-//! - [`Method::Kvf`], as-Killing-as-possible vector fields (Solomon et al. 2011), the
+//! - [`PoseMethod::Kvf`], as-Killing-as-possible vector fields (Solomon et al. 2011), the
 //!   original BDMORPH editor's: soft handles with a weight, each step a Killing field moved
 //!   along by log spirals, with a strain term so that poses do not drift ([`KvfOptions`]).
-//! - [`Method::Arap`], as-rigid-as-possible with hard pins (2D local/global, Sorkine and
+//! - [`PoseMethod::Arap`], as-rigid-as-possible with hard pins (2D local/global, Sorkine and
 //!   Alexa 2007, in the planar form of Liu et al. 2008): a few iterations per drag from the
 //!   previous pose with one prefactored cotangent Laplacian ([`ArapOptions`]).
-//! - [`Method::Bounded`], bounded distortion (Kovalsky et al. 2015) with hard pins: every
+//! - [`PoseMethod::Bounded`], bounded distortion (Kovalsky et al. 2015) with hard pins: every
 //!   triangle's conformal distortion at most `K` and none flipped, met or reported per drag
 //!   ([`BoundedPoseOptions`]).
 //!
@@ -22,10 +22,10 @@
 //! [`untangle`]: the bounded-distortion projections on the region around the flips only.
 //!
 //! ```
-//! use bdmorph::deform::{Deformer, Method};
+//! use bdmorph::deform::{Deformer, PoseMethod};
 //! use bdmorph::generate;
 //! let rest = generate::grid(10, 4, 0.0);                // 10 x 4 vertices, 9 x 3 units
-//! let mut pose = Deformer::new(&rest, Method::arap())?;
+//! let mut pose = Deformer::new(&rest, PoseMethod::arap())?;
 //! // Pin the bottom-left corner where it is and drag the bottom-right one up.
 //! let (left, right) = (0u32, 9u32);
 //! pose.set_pins(&[left, right])?;
@@ -51,7 +51,7 @@ pub use untangle::{untangle, UntangleOptions, UntangleReport, Untangled};
 /// How the mesh follows its handles.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
-pub enum Method {
+pub enum PoseMethod {
     /// As-Killing-as-possible vector fields with soft handles (the original editor's).
     Kvf(KvfOptions),
     /// As-rigid-as-possible with hard pins.
@@ -60,25 +60,30 @@ pub enum Method {
     Bounded(BoundedPoseOptions),
 }
 
-impl Method {
+/// The former name of [`PoseMethod`], which clashed with [`crate::param::ParamMethod`]'s when both were
+/// imported.
+#[deprecated(since = "0.2.0", note = "renamed `PoseMethod`")]
+pub type Method = PoseMethod;
+
+impl PoseMethod {
     /// KVF with the default options.
-    pub fn kvf() -> Method {
-        Method::Kvf(KvfOptions::default())
+    pub fn kvf() -> PoseMethod {
+        PoseMethod::Kvf(KvfOptions::default())
     }
     /// ARAP with the default options.
-    pub fn arap() -> Method {
-        Method::Arap(ArapOptions::default())
+    pub fn arap() -> PoseMethod {
+        PoseMethod::Arap(ArapOptions::default())
     }
     /// Bounded distortion with the bound `K` and the default options.
-    pub fn bounded(max_distortion: f64) -> Method {
-        Method::Bounded(BoundedPoseOptions::new(max_distortion))
+    pub fn bounded(max_distortion: f64) -> PoseMethod {
+        PoseMethod::Bounded(BoundedPoseOptions::new(max_distortion))
     }
     /// The method's name on the command line: `kvf`, `arap` or `bounded`.
     pub fn name(&self) -> &'static str {
         match self {
-            Method::Kvf(_) => "kvf",
-            Method::Arap(_) => "arap",
-            Method::Bounded(_) => "bounded",
+            PoseMethod::Kvf(_) => "kvf",
+            PoseMethod::Arap(_) => "arap",
+            PoseMethod::Bounded(_) => "bounded",
         }
     }
 }
@@ -88,6 +93,13 @@ enum Solver {
     Kvf(kvf::Kvf),
     Arap(arap::Arap),
     Bounded(Box<bounded::Bounded>),
+}
+
+impl From<crate::io::ReadError> for DeformError {
+    /// A mesh file that could not be read, as [`MeshError::Read`] (so `?` chains a read).
+    fn from(e: crate::io::ReadError) -> DeformError {
+        DeformError::Mesh(MeshError::Read(e))
+    }
 }
 
 /// Why posing failed.
@@ -175,7 +187,7 @@ pub struct DragReport {
     pub pin_residual: f64,
     /// The largest conformal distortion `σ₁ / σ₂` of an unflipped triangle.
     pub max_distortion: f64,
-    /// For [`Method::Bounded`], whether every triangle is within the bound and none is
+    /// For [`PoseMethod::Bounded`], whether every triangle is within the bound and none is
     /// flipped; `None` for methods without a bound.
     pub bound_met: Option<bool>,
 }
@@ -205,13 +217,16 @@ impl Deformer {
     /// Checks the mesh (a valid planar mesh: counter-clockwise, no degenerate triangle; any
     /// number of pieces and holes) and prepares the method's constants. Nothing is factored
     /// until [`Deformer::set_pins`].
-    pub fn new(mesh: &PlanarMesh, method: Method) -> Result<Deformer, DeformError> {
+    pub fn new(mesh: &PlanarMesh, method: PoseMethod) -> Result<Deformer, DeformError> {
+        if mesh.faces.is_empty() {
+            return Err(MeshError::NoTriangles.into());
+        }
         let frames = planar_frames(mesh)?;
         let n = mesh.positions.len();
         let solver = match method {
-            Method::Kvf(options) => Solver::Kvf(kvf::Kvf::new(&frames, n, options)),
-            Method::Arap(options) => Solver::Arap(arap::Arap::new(&frames, n, options)),
-            Method::Bounded(options) => {
+            PoseMethod::Kvf(options) => Solver::Kvf(kvf::Kvf::new(&frames, n, options)),
+            PoseMethod::Arap(options) => Solver::Arap(arap::Arap::new(&frames, n, options)),
+            PoseMethod::Bounded(options) => {
                 Solver::Bounded(Box::new(bounded::Bounded::new(&frames, n, options)?))
             }
         };
@@ -226,11 +241,11 @@ impl Deformer {
     }
 
     /// The method and its options.
-    pub fn method(&self) -> Method {
+    pub fn method(&self) -> PoseMethod {
         match &self.solver {
-            Solver::Kvf(s) => Method::Kvf(s.options()),
-            Solver::Arap(s) => Method::Arap(s.options()),
-            Solver::Bounded(s) => Method::Bounded(s.options()),
+            Solver::Kvf(s) => PoseMethod::Kvf(s.options()),
+            Solver::Arap(s) => PoseMethod::Arap(s.options()),
+            Solver::Bounded(s) => PoseMethod::Bounded(s.options()),
         }
     }
 
@@ -251,7 +266,7 @@ impl Deformer {
         Ok(())
     }
 
-    /// Sets [`Method::Kvf`]'s handle weight and refactors; the pins stay.
+    /// Sets [`PoseMethod::Kvf`]'s handle weight and refactors; the pins stay.
     pub fn set_weight(&mut self, weight: f64) -> Result<(), DeformError> {
         match &mut self.solver {
             Solver::Kvf(s) => s.set_weight(&self.frames, weight),
@@ -456,7 +471,7 @@ mod tests {
             .into_iter()
             .map(nearest)
             .collect();
-        let mut pose = Deformer::new(&rest, Method::kvf()).expect("set up");
+        let mut pose = Deformer::new(&rest, PoseMethod::kvf()).expect("set up");
         if let Solver::Kvf(kvf) = &mut pose.solver {
             kvf.strain_feedback = strain_feedback;
         }

@@ -236,6 +236,17 @@ pub enum GeodesicError {
     /// A query without sources.
     #[error("no source vertex given")]
     NoSources,
+    /// The output buffer of [`HeatGeodesics::distance_into`] has the wrong length.
+    #[error("output buffer holds {got} distances, the mesh has {expected} vertices")]
+    OutputLength {
+        /// Vertices.
+        expected: usize,
+        /// Buffer length.
+        got: usize,
+    },
+    /// The mesh file could not be read (for callers that read and measure with one `?`).
+    #[error(transparent)]
+    Read(#[from] crate::io::ReadError),
     /// A factorisation failed (a matrix that is not numerically positive definite).
     #[error("{system}: {source}")]
     Factorization {
@@ -434,6 +445,14 @@ impl HeatGeodesics {
             }
         }
         let n = mesh.positions.len();
+        if let Some((face, &vertices)) = mesh
+            .faces
+            .iter()
+            .enumerate()
+            .find(|(_, f)| f.iter().any(|&v| v as usize >= n))
+        {
+            return Err(TriangulationError::BadFace { face, vertices }.into());
+        }
         let mean_edge = mean_edge_length(mesh);
         let (mut tri, mollified) = Intrinsic::from_mesh_mollified(
             &mesh.positions,
@@ -621,13 +640,15 @@ impl HeatGeodesics {
         Ok(out)
     }
 
-    /// As [`HeatGeodesics::distance`], into `out` (one value per vertex). Allocates nothing
-    /// after the first query.
-    ///
-    /// # Panics
-    /// When `out` does not have one entry per vertex.
+    /// As [`HeatGeodesics::distance`], into `out` (one value per vertex, else
+    /// [`GeodesicError::OutputLength`]). Allocates nothing after the first query.
     pub fn distance_into(&mut self, sources: &[u32], out: &mut [f64]) -> Result<(), GeodesicError> {
-        assert_eq!(out.len(), self.n_vertices, "one output per vertex");
+        if out.len() != self.n_vertices {
+            return Err(GeodesicError::OutputLength {
+                expected: self.n_vertices,
+                got: out.len(),
+            });
+        }
         self.check_sources(sources)?;
         self.query(&[sources], out)
     }

@@ -30,7 +30,7 @@ use bdmorph_cholesky::Cholesky;
 use super::energy::{svd2, Energy};
 use super::frames::Frames;
 use super::newton::Newton;
-use super::{Method, ParamError, ParamOptions, Parameterization};
+use super::{ParamError, ParamMethod, ParamOptions, Parameterization};
 use crate::io::SurfaceMesh;
 
 const NONE: u32 = u32::MAX;
@@ -234,6 +234,7 @@ impl BoundedDistortion {
                 return Err(ParamError::PinnedTwice { vertex: v });
             }
         }
+        super::check_indices(mesh)?;
         let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
         BoundedDistortion::with_frames(frames, n, pins, 0, options)
     }
@@ -594,8 +595,11 @@ pub fn angle_lower_bound(mesh: &SurfaceMesh) -> AngleBound {
     let mut free = vec![false; n];
     for (&(a, b), &count) in &edges {
         if count == 1 {
-            free[a as usize] = true;
-            free[b as usize] = true;
+            for v in [a, b] {
+                if let Some(free) = free.get_mut(v as usize) {
+                    *free = true;
+                }
+            }
         }
     }
     let mut corners: Vec<Vec<f64>> = vec![Vec::new(); n];
@@ -666,7 +670,7 @@ pub fn angle_lower_bound(mesh: &SurfaceMesh) -> AngleBound {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attempt {
     /// The method of the starting map.
-    pub start: Method,
+    pub start: ParamMethod,
     /// The bounded-distortion iterations from it.
     pub report: BoundedReport,
 }
@@ -719,7 +723,7 @@ pub fn flatten(
     mesh: &SurfaceMesh,
     pins: &[(u32, [f64; 2])],
     options: BoundedOptions,
-    starts: &[Method],
+    starts: &[ParamMethod],
     mut progress: impl FnMut(usize, u32, f64),
 ) -> Result<Flattening, ParamError> {
     let started = std::time::Instant::now();
@@ -727,7 +731,7 @@ pub fn flatten(
     let lower_bound = angle_lower_bound(mesh);
     let infeasible = options.max_distortion < lower_bound.bound;
     let starts = if starts.is_empty() {
-        &[Method::Tutte][..]
+        &[ParamMethod::Tutte][..]
     } else {
         starts
     };

@@ -31,7 +31,13 @@ impl Frames {
             total_area: 0.0,
         };
         for (f, &[a, b, c]) in mesh.faces.iter().enumerate() {
-            let p = |v: u32| mesh.positions[v as usize];
+            // A vertex out of range makes the triangle degenerate (NaN), never a panic.
+            let p = |v: u32| {
+                mesh.positions
+                    .get(v as usize)
+                    .copied()
+                    .unwrap_or([f64::NAN; 3])
+            };
             let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
             let (e1, e2) = (sub(p(b), p(a)), sub(p(c), p(a)));
             let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];

@@ -4,7 +4,7 @@
 //! at set-up with their symbolic factorisation reused (through the sparse Cholesky engine, [`bdmorph_cholesky`]), then
 //! cheap iterations.
 //!
-//! Methods ([`Method`]):
+//! Methods ([`ParamMethod`]):
 //! - `tutte`: uniform weights, boundary on a circle by arc length; never flips;
 //! - `lscm`: least-squares conformal map, free boundary, two pinned vertices;
 //! - `asap`, `arap`: local/global iterations (Liu et al. 2008) from the Tutte map, the global
@@ -17,9 +17,9 @@
 //!
 //! ```
 //! use bdmorph::generate;
-//! use bdmorph::param::{Method, ParamOptions, Parameterization};
+//! use bdmorph::param::{ParamMethod, ParamOptions, Parameterization};
 //! let cap = generate::sphere_cap(3, 0.3);
-//! let mut p = Parameterization::new(&cap, Method::SymmetricDirichlet, ParamOptions::default())?;
+//! let mut p = Parameterization::new(&cap, ParamMethod::SymmetricDirichlet, ParamOptions::default())?;
 //! let start = p.energies().symmetric_dirichlet;
 //! let report = p.solve()?;
 //! let end = p.energies();
@@ -51,7 +51,7 @@ pub use newton::StepReport;
 
 /// A parameterisation method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
+pub enum ParamMethod {
     /// Tutte's embedding (uniform weights, circular boundary).
     Tutte,
     /// Least-squares conformal map (free boundary).
@@ -68,33 +68,38 @@ pub enum Method {
     ArapNewton,
 }
 
-impl Method {
+/// The former name of [`ParamMethod`], which clashed with [`crate::deform::PoseMethod`]'s when both were
+/// imported.
+#[deprecated(since = "0.2.0", note = "renamed `ParamMethod`")]
+pub type Method = ParamMethod;
+
+impl ParamMethod {
     /// The method's name on the command line (what [`str::parse`] reads back).
     pub fn name(self) -> &'static str {
         match self {
-            Method::Tutte => "tutte",
-            Method::Lscm => "lscm",
-            Method::Asap => "asap",
-            Method::Arap => "arap",
-            Method::SymmetricDirichlet => "sd",
-            Method::Mips => "mips",
-            Method::ArapNewton => "arap-newton",
+            ParamMethod::Tutte => "tutte",
+            ParamMethod::Lscm => "lscm",
+            ParamMethod::Asap => "asap",
+            ParamMethod::Arap => "arap",
+            ParamMethod::SymmetricDirichlet => "sd",
+            ParamMethod::Mips => "mips",
+            ParamMethod::ArapNewton => "arap-newton",
         }
     }
 }
 
-impl std::str::FromStr for Method {
+impl std::str::FromStr for ParamMethod {
     type Err = String;
     /// `tutte`, `lscm`, `asap`, `arap`, `sd`, `mips` or `arap-newton`.
-    fn from_str(s: &str) -> Result<Method, String> {
+    fn from_str(s: &str) -> Result<ParamMethod, String> {
         Ok(match s {
-            "tutte" => Method::Tutte,
-            "lscm" => Method::Lscm,
-            "asap" => Method::Asap,
-            "arap" => Method::Arap,
-            "sd" => Method::SymmetricDirichlet,
-            "mips" => Method::Mips,
-            "arap-newton" => Method::ArapNewton,
+            "tutte" => ParamMethod::Tutte,
+            "lscm" => ParamMethod::Lscm,
+            "asap" => ParamMethod::Asap,
+            "arap" => ParamMethod::Arap,
+            "sd" => ParamMethod::SymmetricDirichlet,
+            "mips" => ParamMethod::Mips,
+            "arap-newton" => ParamMethod::ArapNewton,
             other => {
                 return Err(format!(
                 "unknown method '{other}' (use tutte, lscm, asap, arap, sd, mips or arap-newton)"
@@ -230,10 +235,28 @@ impl ParamOptions {
     }
 }
 
+/// The first face that names a vertex out of range, as an error.
+pub(crate) fn check_indices(mesh: &SurfaceMesh) -> Result<(), ParamError> {
+    let n_vertices = mesh.positions.len();
+    for (face, f) in mesh.faces.iter().enumerate() {
+        if let Some(&vertex) = f.iter().find(|&&v| v as usize >= n_vertices) {
+            return Err(ParamError::IndexOutOfRange {
+                face,
+                vertex,
+                n_vertices,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Why a mesh could not be parameterised.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ParamError {
+    /// The mesh file could not be read (for callers that read and parameterise with one `?`).
+    #[error(transparent)]
+    Read(#[from] crate::io::ReadError),
     /// The mesh is not a disk: closed, with several boundaries, non-manifold, disconnected...
     #[error("not a disk: {}", disk_problem(.0))]
     NotADisk(#[from] CompileError),
@@ -242,6 +265,16 @@ pub enum ParamError {
     NonFinite {
         /// The vertex.
         vertex: usize,
+    },
+    /// A face names a vertex that does not exist.
+    #[error("face {face} (0-based) names vertex {vertex}, but the mesh has {n_vertices} vertices (numbered from 0)")]
+    IndexOutOfRange {
+        /// The face.
+        face: usize,
+        /// The vertex it names.
+        vertex: u32,
+        /// Vertex count.
+        n_vertices: usize,
     },
     /// A triangle of zero area.
     #[error("face {face} (0-based) is degenerate (zero area)")]
@@ -360,6 +393,7 @@ impl SolveReport {
 
 /// The distortion of the map `uv` (one point per vertex) of `mesh`.
 pub fn energies(mesh: &SurfaceMesh, uv: &[[f64; 2]]) -> Result<Energies, ParamError> {
+    check_indices(mesh)?;
     let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
     Ok(energies_of(&frames, uv))
 }
@@ -412,7 +446,7 @@ enum Solver {
 
 /// A parameterisation in progress: the current map and the prepared solver.
 pub struct Parameterization {
-    method: Method,
+    method: ParamMethod,
     options: ParamOptions,
     frames: Frames,
     uv: Vec<[f64; 2]>,
@@ -438,7 +472,7 @@ impl Parameterization {
     /// `lscm`, the Tutte map for the iterative methods), and prepares the iterations.
     pub fn new(
         mesh: &SurfaceMesh,
-        method: Method,
+        method: ParamMethod,
         options: ParamOptions,
     ) -> Result<Parameterization, ParamError> {
         let started = Instant::now();
@@ -454,41 +488,44 @@ impl Parameterization {
             return Err(ParamError::BadBarrier(barrier));
         }
         let objective = match method {
-            Method::Arap => Energy::Arap,
-            Method::ArapNewton if barrier > 0.0 => Energy::ArapBarrier { weight: barrier },
-            Method::ArapNewton => Energy::Arap,
-            Method::Asap => Energy::Asap,
-            Method::Mips | Method::Lscm => Energy::Mips,
-            Method::Tutte | Method::SymmetricDirichlet => Energy::SymmetricDirichlet,
+            ParamMethod::Arap => Energy::Arap,
+            ParamMethod::ArapNewton if barrier > 0.0 => Energy::ArapBarrier { weight: barrier },
+            ParamMethod::ArapNewton => Energy::Arap,
+            ParamMethod::Asap => Energy::Asap,
+            ParamMethod::Mips | ParamMethod::Lscm => Energy::Mips,
+            ParamMethod::Tutte | ParamMethod::SymmetricDirichlet => Energy::SymmetricDirichlet,
         };
         let boundary = bdmorph_compiler::disk_boundary(mesh.positions.len(), &mesh.faces)?;
+        check_indices(mesh)?;
         let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
         let n = mesh.positions.len();
         let uv = match method {
-            Method::Lscm => linear::lscm(&frames, &mesh.positions, &boundary)?,
+            ParamMethod::Lscm => linear::lscm(&frames, &mesh.positions, &boundary)?,
             _ => linear::tutte(&frames, &mesh.positions, &boundary)?,
         };
         let solver = match method {
-            Method::Tutte | Method::Lscm => Solver::Direct,
-            Method::Arap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
+            ParamMethod::Tutte | ParamMethod::Lscm => Solver::Direct,
+            ParamMethod::Arap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
                 &frames,
                 n,
                 boundary[0],
                 Fit::Rotation,
             )?)),
-            Method::Asap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
+            ParamMethod::Asap => Solver::LocalGlobal(Box::new(LocalGlobal::new(
                 &frames,
                 n,
                 boundary[0],
                 Fit::Similarity,
             )?)),
-            Method::SymmetricDirichlet => Solver::Newton(Box::new(Newton::new(
+            ParamMethod::SymmetricDirichlet => Solver::Newton(Box::new(Newton::new(
                 &frames,
                 n,
                 Energy::SymmetricDirichlet,
             )?)),
-            Method::Mips => Solver::Newton(Box::new(Newton::new(&frames, n, Energy::Mips)?)),
-            Method::ArapNewton => Solver::Newton(Box::new(Newton::new(&frames, n, objective)?)),
+            ParamMethod::Mips => Solver::Newton(Box::new(Newton::new(&frames, n, Energy::Mips)?)),
+            ParamMethod::ArapNewton => {
+                Solver::Newton(Box::new(Newton::new(&frames, n, objective)?))
+            }
         };
         Ok(Parameterization {
             method,
@@ -508,7 +545,7 @@ impl Parameterization {
     }
 
     /// The method.
-    pub fn method(&self) -> Method {
+    pub fn method(&self) -> ParamMethod {
         self.method
     }
 

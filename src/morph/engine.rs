@@ -1,5 +1,5 @@
 //! The solver shared by [`Morph`](crate::Morph), [`Blend`](crate::Blend) and
-//! [`Path`](crate::Path): the keyframes' squared edge lengths, one VM, warm starts, the rigid
+//! [`KeyframePath`](crate::KeyframePath): the keyframes' squared edge lengths, one VM, warm starts, the rigid
 //! motion, and the frame's distortion.
 //!
 //! A frame is an affine combination of the keyframes with weights summing to 1: its metric
@@ -473,8 +473,14 @@ impl Engine {
             }
             let start = slots.map(|s| blend(&self.base, s));
             let at = |lambda: f64| [0, 1, 2].map(|k| start[k] + lambda * (end[k] - start[k]));
-            // Bisection on the validity of the blended lengths: valid at 0, invalid at 1.
-            let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+            // Valid at 0, invalid at 1. Far extrapolations (t = 1e20) break at a tiny fraction
+            // of the way: the break is first bracketed by halving, so that the bisection
+            // below finds it to 60 bits relative to where it is, not to the whole way.
+            let mut hi = 1.0_f64;
+            while hi > f64::MIN_POSITIVE && !euclidean(at(0.5 * hi)) {
+                hi *= 0.5;
+            }
+            let mut lo = 0.5 * hi;
             for _ in 0..60 {
                 let mid = 0.5 * (lo + hi);
                 if euclidean(at(mid)) {

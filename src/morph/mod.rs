@@ -185,20 +185,45 @@ pub enum FrameAt {
     Weights(Vec<f64>),
 }
 
+/// A time or weight as people read it: to 9 decimals (short enough to read, precise enough
+/// to reproduce a limit), and in exponent notation far from 1 (`1e20`, not 21 digits).
+struct Readable(f64);
+
+impl std::fmt::Display for Readable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() || (1e-4..1e7).contains(&x.abs()) {
+            write!(f, "{}", (x * 1e9).round() / 1e9)
+        } else {
+            // Nine significant digits, without trailing zeros.
+            let s = format!("{x:.8e}");
+            let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            write!(f, "{mantissa}e{exponent}")
+        }
+    }
+}
+
 impl std::fmt::Display for FrameAt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            FrameAt::Time(t) => write!(f, "t = {t}"),
+            FrameAt::Time(t) => write!(f, "t = {}", Readable(*t)),
             FrameAt::Weights(w) => {
                 write!(f, "weights (")?;
                 for (i, x) in w.iter().enumerate() {
                     let sep = if i == 0 { "" } else { ", " };
-                    // Short enough to read, precise enough to reproduce the limit.
-                    write!(f, "{sep}{}", (x * 1e9).round() / 1e9)?;
+                    write!(f, "{sep}{}", Readable(*x))?;
                 }
                 write!(f, ")")
             }
         }
+    }
+}
+
+impl From<crate::io::ReadError> for MorphError {
+    /// A mesh file that could not be read, as [`MeshError::Read`] (so `?` chains a read).
+    fn from(e: crate::io::ReadError) -> MorphError {
+        MorphError::Mesh(MeshError::Read(e))
     }
 }
 

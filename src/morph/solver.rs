@@ -1,5 +1,5 @@
 //! The solver behind [`Morph`](crate::Morph), [`Blend`](crate::Blend) and
-//! [`Path`](crate::Path) for any planar mesh: keyframes that list the same triangles
+//! [`KeyframePath`](crate::KeyframePath) for any planar mesh: keyframes that list the same triangles
 //! differently, several pieces, holes, and keyframes with a few inverted triangles.
 //!
 //! - **Listings.** Every keyframe after the first may list the first one's triangles in any
@@ -481,10 +481,13 @@ impl Solver {
         let n_faces = self.faces.len();
         let mut hidden_before = 0;
         let mut earliest: Option<(f64, MorphError)> = None;
+        // The pieces share their base weights (the nearest inside the simplex): the nearer a
+        // limit is to them, the earlier the break. Measured from the base, not from the asked
+        // weights, which may be 1e20 away.
+        let positive: f64 = weights.iter().filter(|&&w| w > 0.0).sum();
+        let base = |w: f64| if w > 0.0 { w / positive } else { 0.0 };
         for p in &mut self.pieces {
             if let Err(e) = p.engine.check_extrapolation(weights, time) {
-                // The pieces share their base weights: the nearer the limit is to them, the
-                // earlier the break.
                 let reach = match &e {
                     MorphError::MetricBreaks {
                         limit: FrameAt::Weights(l),
@@ -492,13 +495,12 @@ impl Solver {
                     } => l
                         .iter()
                         .zip(weights)
-                        .map(|(a, w)| (a - w).abs())
+                        .map(|(a, &w)| (a - base(w)).abs())
                         .sum::<f64>(),
-                    _ => 0.0,
+                    _ => f64::INFINITY,
                 };
                 let e = to_mesh(e, p, n_faces + hidden_before);
-                // Farther from the asked weights means nearer the base: earlier.
-                if earliest.as_ref().is_none_or(|(r, _)| reach > *r) {
+                if earliest.as_ref().is_none_or(|(r, _)| reach < *r) {
                     earliest = Some((reach, e));
                 }
             }

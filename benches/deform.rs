@@ -14,7 +14,7 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
-use bdmorph::deform::{Deformer, Method};
+use bdmorph::deform::{Deformer, PoseMethod};
 use bdmorph::{generate, PlanarMesh};
 
 /// Four handles: the first vertex, and three on the far side, spread out.
@@ -24,8 +24,12 @@ fn handles(mesh: &PlanarMesh) -> Vec<u32> {
 }
 
 /// The methods, as named in the benchmark ids.
-fn methods() -> [Method; 3] {
-    [Method::kvf(), Method::arap(), Method::bounded(2.5)]
+fn methods() -> [PoseMethod; 3] {
+    [
+        PoseMethod::kvf(),
+        PoseMethod::arap(),
+        PoseMethod::bounded(2.5),
+    ]
 }
 
 /// A mouse moving handle 1 back and forth by a tenth of the mesh's size, a new target per
@@ -61,7 +65,7 @@ fn meshes() -> Vec<(String, PlanarMesh)> {
         ("woody", "woody/woody.obj"),
         ("leaf", "ustc-hw8-leaf/0.000000.obj"),
     ] {
-        match PlanarMesh::read(&shared.join(file)) {
+        match PlanarMesh::read(shared.join(file)) {
             Ok(mesh) => out.push((format!("{name}-{}", mesh.positions.len()), mesh)),
             Err(e) => eprintln!("deform bench: skipping {name}: {e} (is ../shared/data there?)"),
         }
@@ -106,7 +110,7 @@ fn bench(c: &mut Criterion) {
     let mut baseline = c.benchmark_group("deform_drag_refactoring/kvf");
     for (name, mesh) in &meshes {
         let pins = handles(mesh);
-        let mut pose = Deformer::new(mesh, Method::kvf()).expect("set up");
+        let mut pose = Deformer::new(mesh, PoseMethod::kvf()).expect("set up");
         let mut targets: Vec<[f64; 2]> = pins.iter().map(|&v| mesh.positions[v as usize]).collect();
         let mut mouse = Mouse {
             from: targets[1],

@@ -33,7 +33,7 @@ fn meshes() -> Vec<(String, SurfaceMesh)> {
         ("sphere642", "closed3d/odedstein/sphere.obj"),
         ("camelhead", "disk3d/libigl/camelhead.off"),
     ] {
-        match bdmorph::io::read_mesh(&dir.join(rel)) {
+        match bdmorph::io::read_mesh(dir.join(rel)) {
             Ok(mesh) => out.push((name.to_string(), mesh)),
             Err(e) => eprintln!("SKIPPED: {rel}: {e}"),
         }

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use bdmorph::generate;
-use bdmorph::param::{Method, ParamOptions, Parameterization};
+use bdmorph::param::{ParamMethod, ParamOptions, Parameterization};
 use bdmorph::SurfaceMesh;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
@@ -29,14 +29,14 @@ fn meshes() -> Vec<(&'static str, SurfaceMesh)> {
     out
 }
 
-const METHODS: [(&str, Method); 7] = [
-    ("tutte", Method::Tutte),
-    ("lscm", Method::Lscm),
-    ("asap", Method::Asap),
-    ("arap", Method::Arap),
-    ("sd", Method::SymmetricDirichlet),
-    ("mips", Method::Mips),
-    ("arap-newton", Method::ArapNewton),
+const METHODS: [(&str, ParamMethod); 7] = [
+    ("tutte", ParamMethod::Tutte),
+    ("lscm", ParamMethod::Lscm),
+    ("asap", ParamMethod::Asap),
+    ("arap", ParamMethod::Arap),
+    ("sd", ParamMethod::SymmetricDirichlet),
+    ("mips", ParamMethod::Mips),
+    ("arap-newton", ParamMethod::ArapNewton),
 ];
 
 fn benches(c: &mut Criterion) {

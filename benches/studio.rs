@@ -3,7 +3,7 @@
 //! distortions for the page that asked): a drag at about 5K vertices (KVF, four handles) and a
 //! scrub at about 10K (two keyframes, a new time per call).
 //!
-//! Baselines in the same run: the engine call alone (`Deformer::drag`, `Path::frame_into`),
+//! Baselines in the same run: the engine call alone (`Deformer::drag`, `KeyframePath::frame_into`),
 //! so the ratio is what the session layer costs. The browser's share (transfer and drawing) is
 //! measured in `tests/studio_browser.rs`.
 //!
@@ -11,12 +11,12 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 
-use bdmorph::deform::{Deformer, Method};
+use bdmorph::deform::{Deformer, PoseMethod};
 use bdmorph::studio::project::Keyframe;
 use bdmorph::studio::protocol::Request;
 use bdmorph::studio::session::{Answer, Revs};
 use bdmorph::studio::{Project, Session};
-use bdmorph::{generate, Path, PlanarMesh};
+use bdmorph::{generate, KeyframePath, PlanarMesh};
 
 fn disk(n: usize) -> PlanarMesh {
     generate::disk(generate::rings_for(n), 0.2)
@@ -86,7 +86,7 @@ fn drag(c: &mut Criterion) {
             bytes_of(&reply.answers) + bytes_of(&session.updates(&mut seen, seq))
         })
     });
-    let mut pose = Deformer::new(&mesh, Method::kvf()).expect("deformer");
+    let mut pose = Deformer::new(&mesh, PoseMethod::kvf()).expect("deformer");
     pose.set_pins(&pins).expect("pins");
     let mut sweep = Sweep(0);
     group.bench_function("engine_only", |b| {
@@ -122,7 +122,7 @@ fn scrub(c: &mut Criterion) {
             bytes_of(&reply.answers) + bytes_of(&session.updates(&mut seen, seq))
         })
     });
-    let mut path = Path::new(&[mesh.clone(), bent]).expect("path");
+    let mut path = KeyframePath::new(&[mesh.clone(), bent]).expect("path");
     let mut out = mesh.positions.clone();
     let mut sweep = Sweep(0);
     group.bench_function("engine_only", |b| {

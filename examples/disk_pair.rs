@@ -18,8 +18,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&dir)?;
     let a = generate::disk(generate::rings_for(n), 0.25);
     let b = generate::twist(&generate::bend(&a, 0.6), 1.2);
-    bdmorph::io::write_obj_2d(&dir.join("source.obj"), &a.positions, &a.faces, &[])?;
-    bdmorph::io::write_obj_2d(&dir.join("target.obj"), &b.positions, &b.faces, &[])?;
+    bdmorph::io::write_obj_2d(dir.join("source.obj"), &a.positions, &a.faces, &[])?;
+    bdmorph::io::write_obj_2d(dir.join("target.obj"), &b.positions, &b.faces, &[])?;
     println!(
         "{} vertices, {} triangles: {}",
         a.positions.len(),

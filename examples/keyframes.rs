@@ -13,7 +13,7 @@
 //! the picture (yellow).
 
 use bdmorph::render::{colour, raster, Drawing, ImageSize, Viewport};
-use bdmorph::{generate, Blend, Easing, Path, PathOptions};
+use bdmorph::{generate, Blend, Easing, KeyframePath, PathOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()
@@ -27,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     let mut frames: Vec<(Vec<[f64; 2]>, Vec<f64>)> = Vec::new();
     let mut path =
-        Path::with_options(&keys, PathOptions::default().with_easing(Easing::EaseInOut))?;
+        KeyframePath::with_options(&keys, PathOptions::default().with_easing(Easing::EaseInOut))?;
     for i in 0..5 {
         let f = path.frame(f64::from(i) / 4.0)?;
         eprintln!(

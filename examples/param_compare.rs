@@ -6,7 +6,7 @@
 //! cargo run --release --example param_compare -- ../shared/data/disk3d/libigl/camelhead.off
 //! ```
 
-use bdmorph::param::{Method, ParamOptions, Parameterization};
+use bdmorph::param::{ParamMethod, ParamOptions, Parameterization};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
@@ -49,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mesh.faces.len()
     );
     for name in methods {
-        let method: Method = name.parse()?;
+        let method: ParamMethod = name.parse()?;
         let started = std::time::Instant::now();
         let mut p = Parameterization::new(&mesh, method, ParamOptions::default())?;
         let mut trace = Vec::new();

@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release --example pose_compare [MOVES]`
 
-use bdmorph::deform::{Deformer, Method};
+use bdmorph::deform::{Deformer, PoseMethod};
 use bdmorph::generate;
 
 fn nearest(p: &[[f64; 2]], q: [f64; 2]) -> u32 {
@@ -40,7 +40,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .with_iterations(env("KVF_IT", 4.0) as u32)
         .with_alternations(env("KVF_ALT", 3.0) as u32)
         .with_weight(env("KVF_W", 100.0));
-    for method in [Method::Kvf(kvf), Method::arap(), Method::bounded(4.0)] {
+    for method in [
+        PoseMethod::Kvf(kvf),
+        PoseMethod::arap(),
+        PoseMethod::bounded(4.0),
+    ] {
         let mut pose = Deformer::new(&rest, method)?;
         pose.set_pins(&pins)?;
         let mut targets = start.clone();

@@ -14,9 +14,9 @@
 //! scale, one scale for the whole picture); the handles' triangles black. Prints each pose's
 //! largest distortion, flips, pin residual and the time per drag.
 
-use bdmorph::deform::{Deformer, Method};
+use bdmorph::deform::{Deformer, PoseMethod};
 use bdmorph::render::{colour, raster, Drawing, ImageSize, Viewport};
-use bdmorph::{generate, Path, PathOptions, PlanarMesh};
+use bdmorph::{generate, KeyframePath, PathOptions, PlanarMesh};
 
 /// How far the hand goes up, in degrees about the shoulder.
 const RAISE: f64 = 65.0;
@@ -57,7 +57,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a0 = (hand[1] - shoulder[1]).atan2(hand[0] - shoulder[0]);
     let mut frames: Vec<(Vec<[f64; 2]>, Vec<f64>)> = vec![(p.clone(), vec![1.0; rest.faces.len()])];
     let mut kvf_pose = None;
-    for method in [Method::kvf(), Method::arap(), Method::bounded(BOUND)] {
+    for method in [
+        PoseMethod::kvf(),
+        PoseMethod::arap(),
+        PoseMethod::bounded(BOUND),
+    ] {
         let mut pose = Deformer::new(&rest, method)?;
         pose.set_pins(&pins)?;
         let mut targets = start.clone();
@@ -90,7 +94,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     // A harder drag, not drawn: the hand pulled into the chest in 20 moves (the test
     // `bounded_flips_nothing_on_a_drag_that_folds_the_others`), bounded with K = 3.
-    for method in [Method::kvf(), Method::arap(), Method::bounded(3.0)] {
+    for method in [
+        PoseMethod::kvf(),
+        PoseMethod::arap(),
+        PoseMethod::bounded(3.0),
+    ] {
         let mut pose = Deformer::new(&rest, method)?;
         pose.set_pins(&pins)?;
         let mut targets = start.clone();
@@ -115,7 +123,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         positions: kvf_pose.expect("kvf ran"),
         faces: rest.faces.clone(),
     };
-    let mut path = Path::with_options(&[rest.clone(), posed], PathOptions::default())?;
+    let mut path = KeyframePath::with_options(&[rest.clone(), posed], PathOptions::default())?;
     for t in [0.25, 0.5, 0.75, 1.0] {
         let f = path.frame(t)?;
         eprintln!(

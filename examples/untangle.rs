@@ -7,7 +7,7 @@
 //! Without pulls given, 12 pulls of 40 to 140 pixels (the arm is 36 pixels thick and 230
 //! long on a 512-pixel picture).
 
-use bdmorph::deform::{untangle, Deformer, Method, UntangleOptions};
+use bdmorph::deform::{untangle, Deformer, PoseMethod, UntangleOptions};
 use bdmorph::meshing::{mesh_picture, MeshOptions, PictureOptions};
 use bdmorph::{generate, PlanarMesh};
 
@@ -97,7 +97,7 @@ fn main() {
         "median"
     );
     for pull in pulls {
-        let mut pose = Deformer::new(&rest, Method::kvf()).expect("set up");
+        let mut pose = Deformer::new(&rest, PoseMethod::kvf()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut targets = start.clone();
         targets[3] = [start[3][0] + pull[0], start[3][1] + pull[1]];

@@ -281,7 +281,8 @@ impl fmt::Display for Shown<'_> {
 /// matter where numbers are expected, and there they give a parse error with a line. Control
 /// characters that text does not hold (NUL, for instance) are refused as binary data
 /// ([`ReadError::Binary`]), whichever the parser.
-pub fn read_mesh(path: &Path) -> Result<SurfaceMesh, ReadError> {
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh, ReadError> {
+    let path = path.as_ref();
     read_mesh_with_lines(path).map(|(mesh, _)| mesh)
 }
 
@@ -295,7 +296,8 @@ pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 ///
 /// # Errors
 /// The I/O error, or one of kind `InvalidInput` saying what the path is or how large.
-pub fn read_input(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+pub fn read_input(path: impl AsRef<Path>, limit: u64) -> io::Result<Vec<u8>> {
+    let path = path.as_ref();
     use std::io::Read;
     let meta = fs::metadata(path)?;
     if !meta.is_file() {
@@ -330,7 +332,8 @@ pub fn read_input(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
 }
 
 /// As [`read_mesh`], also returning the line each vertex and face was read from.
-pub fn read_mesh_with_lines(path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
+pub fn read_mesh_with_lines(path: impl AsRef<Path>) -> Result<(SurfaceMesh, LineMap), ReadError> {
+    let path = path.as_ref();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     let parse = match ext.to_ascii_lowercase().as_str() {
         "obj" => parse_obj_with_lines,
@@ -471,13 +474,18 @@ fn words(line: &str) -> SplitAsciiWhitespace<'_> {
 /// `vt` per corner, [`SurfaceMesh::texcoords`] keeps them. Every other keyword (`vn`, `g`,
 /// `o`, `s`, `usemtl`, `mtllib`, `l`, ...) is ignored. Polygons with more than three corners
 /// are refused ([`ReadError::NotATriangle`]), not triangulated.
-pub fn parse_obj(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
+pub fn parse_obj(text: &str, path: impl AsRef<Path>) -> Result<SurfaceMesh, ReadError> {
+    let path = path.as_ref();
     parse_obj_with_lines(text, path).map(|(mesh, _)| mesh)
 }
 
 /// As [`parse_obj`], also returning the line of each `v` and `f` line (after a byte-order
 /// mark, if any; lines end at `\n`, so CRLF files count as they look).
-pub fn parse_obj_with_lines(text: &str, path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
+pub fn parse_obj_with_lines(
+    text: &str,
+    path: impl AsRef<Path>,
+) -> Result<(SurfaceMesh, LineMap), ReadError> {
+    let path = path.as_ref();
     check_text(text, path)?;
     let mut positions: Vec<[f64; 3]> = Vec::new();
     let mut faces: Vec<[u32; 3]> = Vec::new();
@@ -723,12 +731,17 @@ impl<'t, 'p> Tokens<'t, 'p> {
 /// faces `3 i j k` with 0-based indices. A record may continue over several lines; whatever
 /// follows its last value on the same line (edge count, colours, normals) is ignored, so one
 /// line must not hold several records.
-pub fn parse_off(text: &str, path: &Path) -> Result<SurfaceMesh, ReadError> {
+pub fn parse_off(text: &str, path: impl AsRef<Path>) -> Result<SurfaceMesh, ReadError> {
+    let path = path.as_ref();
     parse_off_with_lines(text, path).map(|(mesh, _)| mesh)
 }
 
 /// As [`parse_off`], also returning the line each vertex and face record starts on.
-pub fn parse_off_with_lines(text: &str, path: &Path) -> Result<(SurfaceMesh, LineMap), ReadError> {
+pub fn parse_off_with_lines(
+    text: &str,
+    path: impl AsRef<Path>,
+) -> Result<(SurfaceMesh, LineMap), ReadError> {
+    let path = path.as_ref();
     check_text(text, path)?;
     let (lines, words) = (lines(text), "".split_ascii_whitespace());
     let mut t = Tokens {
@@ -815,23 +828,25 @@ pub fn parse_off_with_lines(text: &str, path: &Path) -> Result<(SurfaceMesh, Lin
 /// destination is untouched. The new file gets default permissions, not those of a file it
 /// replaces. Data that [`format_obj_2d`] refuses is an error too.
 pub fn write_obj_2d(
-    path: &Path,
+    path: impl AsRef<Path>,
     positions: &[[f64; 2]],
     faces: &[[u32; 3]],
     header: &[&str],
 ) -> Result<(), WriteError> {
+    let path = path.as_ref();
     write_obj_2d_textured(path, positions, faces, None, header)
 }
 
 /// As [`write_obj_2d`], with texture coordinates: the `vt` lines, and faces as
 /// `f a/ta b/tb c/tc` with the corners' texture indices (see [`format_obj_2d_textured`]).
 pub fn write_obj_2d_textured(
-    path: &Path,
+    path: impl AsRef<Path>,
     positions: &[[f64; 2]],
     faces: &[[u32; 3]],
     texcoords: Option<&TexCoords>,
     header: &[&str],
 ) -> Result<(), WriteError> {
+    let path = path.as_ref();
     write_atomic(path, |file| {
         format_obj_2d_textured(file, positions, faces, texcoords, header)
     })
@@ -853,10 +868,11 @@ pub fn write_obj_2d_textured(
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn write_obj_3d(
-    path: &Path,
+    path: impl AsRef<Path>,
     positions: &[[f64; 3]],
     faces: &[[u32; 3]],
 ) -> Result<(), WriteError> {
+    let path = path.as_ref();
     write_atomic(path, |file| format_obj_3d(file, positions, faces))
 }
 
@@ -898,7 +914,8 @@ pub fn format_obj_3d<W: Write>(
 
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, sync, rename):
 /// on any error the destination is untouched and the temporary file removed.
-pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+pub fn write_bytes_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteError> {
+    let path = path.as_ref();
     write_atomic(path, |file| file.write_all(bytes))
 }
 
@@ -1278,7 +1295,7 @@ mod tests {
         for name in ["tri.stl", "noext", "obj"] {
             let message = format!("{}: unknown mesh format (expected .obj or .off)", name);
             assert!(
-                fails(read_mesh(&dir.join(name))).ends_with(&message),
+                fails(read_mesh(dir.join(name))).ends_with(&message),
                 "{name}"
             );
         }
@@ -1411,7 +1428,7 @@ mod tests {
         write_bytes_atomic(&path, b"two").unwrap();
         assert_eq!(fs::read(&path).unwrap(), b"two");
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
-        assert!(write_bytes_atomic(&dir.join("missing/x.bin"), b"x").is_err());
+        assert!(write_bytes_atomic(dir.join("missing/x.bin"), b"x").is_err());
         let _ = fs::remove_dir_all(&dir);
     }
 

@@ -10,7 +10,7 @@
 //! streams that a VM ([`bdmorph_vm`]) executes every Newton iteration, with the Hessian's
 //! symbolic Cholesky factorisation computed once per mesh.
 //!
-//! Beyond two poses, [`Blend`] mixes any number of keyframes by weights and [`Path`] walks
+//! Beyond two poses, [`Blend`] mixes any number of keyframes by weights and [`KeyframePath`] walks
 //! through them in order (with durations and [`Easing`] curves); all three extrapolate
 //! slightly outside their range while the metric stays Euclidean, and report every frame's
 //! conformal distortion from the first keyframe ([`distortion`]).
@@ -35,6 +35,19 @@
 //! assert!(err < 1e-9 * target.diameter());
 //! # Ok::<(), bdmorph::MorphError>(())
 //! ```
+//!
+//! ## Features
+//!
+//! The engine (meshes, the compiler, the VM, Cholesky, morphs, blends and keyframe paths,
+//! geodesics, parameterisation, posing, meshing and pictures) is always built. The
+//! application's parts are features, all on by default:
+//!
+//! - `cli`: the `bdmorph` command line (clap, indicatif); it needs `studio` and `video`.
+//! - `studio`: the local web editor's server and document model (`bdmorph::studio`; axum, tokio).
+//! - `video`: H.264 MP4 output (`render::video`; OpenH264, built from C++).
+//!
+//! A program that embeds the engine alone depends on
+//! `bdmorph = { version = "0.1", default-features = false }`.
 #![warn(missing_docs)]
 
 pub mod deform;
@@ -51,6 +64,7 @@ pub use morph::{blend, path};
 pub mod param;
 pub mod reference;
 pub mod render;
+#[cfg(feature = "studio")]
 pub mod studio;
 
 /// The sparse Cholesky engine every system factors and solves with.
@@ -66,7 +80,10 @@ pub use io::SurfaceMesh;
 pub use located::{Located, MeshFile};
 pub use mesh::{MeshError, PlanarMesh};
 pub use morph::{Frame, FrameAt, FrameStats, Morph, MorphError, MorphOptions};
-pub use path::{Easing, Path, PathOptions};
+pub use param::messages::Spelling;
+#[allow(deprecated)]
+pub use path::Path;
+pub use path::{Easing, KeyframePath, PathOptions};
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -38,7 +38,10 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("bdmorph: error: {e}");
+            eprintln!(
+                "bdmorph: error: {}",
+                bdmorph::Spelling::CLI.respell(&e.to_string())
+            );
             ExitCode::FAILURE
         }
     }

@@ -321,7 +321,7 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "face 2 (0-based) is clockwise (signed area -2.5e-1); triangles must be \
                       counter-clockwise, consistently (a keyframe with a few inverted triangles \
-                      morphs with --allow-inverted)",
+                      morphs with MorphOptions::allow_inverted)",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::Clockwise { face: 2, .. })),
             line: Some(8),
             cli: "{source}:8: face 2 (0-based) is clockwise (signed area -2.5e-1); triangles \
@@ -339,7 +339,7 @@ fn cases() -> Vec<Case> {
             target: None,
             message: "face 3 (0-based) is clockwise (signed area -2.5e-1); triangles must be \
                       counter-clockwise, consistently (a keyframe with a few inverted triangles \
-                      morphs with --allow-inverted)",
+                      morphs with MorphOptions::allow_inverted)",
             is: |f| mesh_error(f, |e| matches!(e, MeshError::Clockwise { face: 3, .. })),
             line: Some(12),
             cli: "{source}:12: face 3 (0-based) is clockwise (signed area -2.5e-1); triangles \

@@ -7,7 +7,7 @@ use bdmorph::generate;
 use bdmorph::param::bounded::{
     angle_lower_bound, distortion, flatten, BoundedDistortion, BoundedOptions,
 };
-use bdmorph::param::{Method, ParamError, ParamOptions, Parameterization};
+use bdmorph::param::{ParamError, ParamMethod, ParamOptions, Parameterization};
 use bdmorph::SurfaceMesh;
 
 /// The largest distortion of a map.
@@ -46,9 +46,9 @@ fn shared_disks_are_pushed_under_the_bound() {
         return;
     };
     for rel in common::SHARED_DISKS {
-        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let mesh = bdmorph::io::read_mesh(dir.join(rel)).expect(rel);
         let tutte =
-            Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect(rel);
+            Parameterization::new(&mesh, ParamMethod::Tutte, ParamOptions::default()).expect(rel);
         let start = largest(&mesh, tutte.uv());
         for k in [5.0, 3.0, 2.0] {
             // Known gap: on the hand, K = 2 is not met. Alternating projections stall at
@@ -89,7 +89,8 @@ fn shared_disks_are_pushed_under_the_bound() {
 #[test]
 fn generated_disks_are_pushed_under_the_bound() {
     let cap = generate::sphere_cap(4, 0.0);
-    let tutte = Parameterization::new(&cap, Method::Tutte, ParamOptions::default()).expect("tutte");
+    let tutte =
+        Parameterization::new(&cap, ParamMethod::Tutte, ParamOptions::default()).expect("tutte");
     for k in [1.2, 2.0] {
         let mut uv = tutte.uv().to_vec();
         let mut bd = BoundedDistortion::new(&cap, &[], BoundedOptions::new(k)).expect("set up");
@@ -109,7 +110,7 @@ fn generated_disks_are_pushed_under_the_bound() {
 fn the_newton_finish_lowers_what_projections_alone_leave() {
     let mesh = generate::finger(6, 8, 0.6);
     let tutte =
-        Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect("tutte");
+        Parameterization::new(&mesh, ParamMethod::Tutte, ParamOptions::default()).expect("tutte");
     let run = |finish: bool| {
         let mut uv = tutte.uv().to_vec();
         let options = BoundedOptions::new(1.5)
@@ -323,7 +324,7 @@ fn issue_23_infeasibility_needs_evidence_the_angle_bound_of_a_cone() {
         &mesh,
         &[],
         below,
-        &[Method::Lscm, Method::Tutte],
+        &[ParamMethod::Lscm, ParamMethod::Tutte],
         |_, _, _| {},
     )
     .expect("flatten");
@@ -337,7 +338,7 @@ fn issue_23_infeasibility_needs_evidence_the_angle_bound_of_a_cone() {
     assert!(flat.report().max_distortion >= expected * (1.0 - 1e-9));
 
     let above = BoundedOptions::new(1.05 * expected);
-    let flat = flatten(&mesh, &[], above, &[Method::Tutte], |_, _, _| {}).expect("flatten");
+    let flat = flatten(&mesh, &[], above, &[ParamMethod::Tutte], |_, _, _| {}).expect("flatten");
     assert!(flat.converged() && !flat.infeasible(), "{flat:?}");
     assert!(largest(&mesh, &flat.uv) <= 1.05 * expected * (1.0 + 1e-3));
 }
@@ -355,7 +356,7 @@ fn issue_23_a_stalled_start_is_followed_by_the_other() {
         &mesh,
         &[],
         options,
-        &[Method::Lscm, Method::Tutte],
+        &[ParamMethod::Lscm, ParamMethod::Tutte],
         |i, _, _| {
             if seen.last() != Some(&i) {
                 seen.push(i);
@@ -365,8 +366,8 @@ fn issue_23_a_stalled_start_is_followed_by_the_other() {
     .expect("flatten");
     eprintln!("{flat:#?}");
     assert_eq!(seen, [0, 1]);
-    let starts: Vec<Method> = flat.attempts.iter().map(|a| a.start).collect();
-    assert_eq!(starts, [Method::Lscm, Method::Tutte]);
+    let starts: Vec<ParamMethod> = flat.attempts.iter().map(|a| a.start).collect();
+    assert_eq!(starts, [ParamMethod::Lscm, ParamMethod::Tutte]);
     assert!(flat
         .attempts
         .iter()
@@ -387,7 +388,7 @@ fn issue_23_a_stalled_start_is_followed_by_the_other() {
         &mesh,
         &[],
         BoundedOptions::new(2.5),
-        &[Method::Lscm, Method::Tutte],
+        &[ParamMethod::Lscm, ParamMethod::Tutte],
         |_, _, _| {},
     )
     .expect("flatten");
@@ -401,7 +402,7 @@ fn issue_23_shared_disks_angle_bounds() {
         return;
     };
     for rel in common::SHARED_DISKS {
-        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let mesh = bdmorph::io::read_mesh(dir.join(rel)).expect(rel);
         let lb = angle_lower_bound(&mesh);
         eprintln!("{rel}: {lb:?}");
         // Every bound met in `shared_disks_are_pushed_under_the_bound` is above it.

@@ -86,7 +86,7 @@ fn morph_frames_writes_numbered_files() {
         assert!(out.join(format!("frame_{i:04}.obj")).is_file(), "frame {i}");
     }
     assert!(!out.join("frame_0004.obj").exists());
-    let last = PlanarMesh::read(&out.join("frame_0003.obj")).expect("readable");
+    let last = PlanarMesh::read(out.join("frame_0003.obj")).expect("readable");
     let err = last
         .positions
         .iter()
@@ -226,7 +226,7 @@ fn demo_writes_frames() {
     let stdout = String::from_utf8(r.stdout).expect("utf8");
     assert!(stdout.contains("0 flipped triangles"), "{stdout}");
     assert!(stdout.contains("viewer.html"), "{stdout}");
-    let strip = bdmorph::render::raster::read_image(&out.join("frames.png")).expect("png");
+    let strip = bdmorph::render::raster::read_image(out.join("frames.png")).expect("png");
     assert!(
         strip.width > 4 * 80 && strip.height >= 80,
         "five pictures side by side"
@@ -250,7 +250,7 @@ fn the_readme_path_from_a_picture_to_an_animation_works() {
         )
     };
     run(&["demo", "--frames", "3", "--size", "80x80", "-q"]);
-    let picture = bdmorph::render::raster::read_image(&dir.join("bdmorph-demo/figure.png"))
+    let picture = bdmorph::render::raster::read_image(dir.join("bdmorph-demo/figure.png"))
         .expect("figure.png");
     let transparent = picture.rgba.chunks(4).filter(|p| p[3] == 0).count();
     let opaque = picture.rgba.chunks(4).filter(|p| p[3] == 255).count();
@@ -318,8 +318,8 @@ fn the_readme_path_from_a_picture_to_an_animation_works() {
     let video = std::fs::read(dir.join("wave.mp4")).expect("wave.mp4");
     assert_eq!(&video[4..8], b"ftyp");
     // The dragged vertex is where the drag put it; the mesh kept its texture coordinates.
-    let rest = bdmorph::io::read_mesh(&dir.join("figure.obj")).expect("figure.obj");
-    let posed = bdmorph::io::read_mesh(&dir.join("wave.obj")).expect("wave.obj");
+    let rest = bdmorph::io::read_mesh(dir.join("figure.obj")).expect("figure.obj");
+    let posed = bdmorph::io::read_mesh(dir.join("wave.obj")).expect("wave.obj");
     assert!(rest.texcoords.is_some());
     let v = err
         .split("--drag 405,345 is vertex ")
@@ -543,7 +543,7 @@ fn textures_change_the_picture_and_texture_coordinates_ride_along() {
         text.contains("\nvt ") && text.contains('/'),
         "vt lines and f a/ta corners"
     );
-    let back = io::read_mesh(&frames.join("frame_0001.obj")).expect("parses");
+    let back = io::read_mesh(frames.join("frame_0001.obj")).expect("parses");
     assert_eq!(back.texcoords, Some(tex));
 }
 

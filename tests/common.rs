@@ -55,5 +55,5 @@ pub fn shared_data() -> Option<PathBuf> {
 
 /// Reads a planar mesh from the shared data folder.
 pub fn read(dir: &std::path::Path, rel: &str) -> PlanarMesh {
-    PlanarMesh::read(&dir.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+    PlanarMesh::read(dir.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }

@@ -3,7 +3,9 @@
 
 mod common;
 
-use bdmorph::deform::{ArapOptions, BoundedPoseOptions, DeformError, Deformer, KvfOptions, Method};
+use bdmorph::deform::{
+    ArapOptions, BoundedPoseOptions, DeformError, Deformer, KvfOptions, PoseMethod,
+};
 use bdmorph::{generate, PlanarMesh};
 use common::max_distance;
 
@@ -13,8 +15,8 @@ fn handles(mesh: &PlanarMesh) -> Vec<u32> {
     vec![0, n - 1, n - 1 - n / 10, n - 1 - n / 5]
 }
 
-fn converging() -> Method {
-    Method::Arap(
+fn converging() -> PoseMethod {
+    PoseMethod::Arap(
         ArapOptions::default()
             .with_iterations(2000)
             .with_tolerance(1e-14),
@@ -45,7 +47,7 @@ fn a_rigid_motion_of_every_pin_moves_the_whole_mesh_rigidly() {
 fn hard_pins_are_met_exactly_and_away_and_back_returns_the_rest_shape() {
     let rest = generate::disk(10, 0.2);
     let pins = handles(&rest);
-    let mut pose = Deformer::new(&rest, Method::arap()).expect("set up");
+    let mut pose = Deformer::new(&rest, PoseMethod::arap()).expect("set up");
     pose.set_pins(&pins).expect("pins");
     let at_rest: Vec<[f64; 2]> = pins.iter().map(|&v| rest.positions[v as usize]).collect();
     // Drag the second handle out and back in small steps, a few iterations each, as a mouse
@@ -119,7 +121,7 @@ fn flips_are_reported_as_they_are_and_bad_handles_are_refused() {
     two.positions
         .extend([[50.0, 0.0], [51.0, 0.0], [50.0, 1.0]]);
     two.faces.push([n, n + 1, n + 2]);
-    let mut pose = Deformer::new(&two, Method::arap()).expect("set up");
+    let mut pose = Deformer::new(&two, PoseMethod::arap()).expect("set up");
     assert!(matches!(
         pose.set_pins(&[0]),
         Err(DeformError::PieceWithoutPin { vertex }) if vertex == n
@@ -128,8 +130,8 @@ fn flips_are_reported_as_they_are_and_bad_handles_are_refused() {
 }
 
 /// KVF run to convergence in one drag.
-fn kvf_converging() -> Method {
-    Method::Kvf(
+fn kvf_converging() -> PoseMethod {
+    PoseMethod::Kvf(
         KvfOptions::default()
             .with_iterations(5000)
             .with_tolerance(1e-14),
@@ -238,7 +240,7 @@ fn soft_handles_tighten_as_their_weight_grows() {
         Err(DeformError::BadWeight(_))
     ));
     // ARAP and bounded pins are hard: met exactly.
-    for method in [Method::arap(), Method::bounded(3.0)] {
+    for method in [PoseMethod::arap(), PoseMethod::bounded(3.0)] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let report = settle(&mut pose, &targets);
@@ -259,7 +261,11 @@ fn every_method_returns_the_rest_shape_when_the_hand_comes_back() {
         (hand[0] - shoulder[0]).hypot(hand[1] - shoulder[1]),
         (hand[1] - shoulder[1]).atan2(hand[0] - shoulder[0]),
     );
-    for method in [Method::kvf(), Method::arap(), Method::bounded(2.0)] {
+    for method in [
+        PoseMethod::kvf(),
+        PoseMethod::arap(),
+        PoseMethod::bounded(2.0),
+    ] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut targets = start.clone();
@@ -299,7 +305,11 @@ fn bounded_flips_nothing_on_a_drag_that_folds_the_others() {
     let chest = [0.0, 1.3];
     let k = 3.0;
     let mut arap_flips = 0;
-    for method in [Method::kvf(), Method::arap(), Method::bounded(k)] {
+    for method in [
+        PoseMethod::kvf(),
+        PoseMethod::arap(),
+        PoseMethod::bounded(k),
+    ] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut targets = start.clone();
@@ -313,7 +323,7 @@ fn bounded_flips_nothing_on_a_drag_that_folds_the_others() {
             let counted = flipped(&rest, pose.positions());
             assert_eq!(report.flipped_triangles, counted, "{}", method.name());
             match method {
-                Method::Bounded(_) => {
+                PoseMethod::Bounded(_) => {
                     assert_eq!(counted, 0, "bounded flipped at move {step}");
                     let mut each = vec![0.0; rest.faces.len()];
                     let worst = bdmorph::distortion::RestShape::new(&rest.positions, &rest.faces)
@@ -322,7 +332,7 @@ fn bounded_flips_nothing_on_a_drag_that_folds_the_others() {
                     assert_eq!(report.bound_met, Some(met), "move {step}: {worst}");
                     assert!((report.max_distortion - worst).abs() < 1e-9 * worst);
                 }
-                Method::Arap(_) => arap_flips += counted,
+                PoseMethod::Arap(_) => arap_flips += counted,
                 _ => assert_eq!(report.bound_met, None),
             }
         }
@@ -366,7 +376,7 @@ fn pieces_and_holes_pose_with_every_method() {
     for method in [
         kvf_converging(),
         converging(),
-        Method::Bounded(BoundedPoseOptions::new(2.0).with_arap_iterations(50)),
+        PoseMethod::Bounded(BoundedPoseOptions::new(2.0).with_arap_iterations(50)),
     ] {
         let mut pose = Deformer::new(&mesh, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
@@ -380,7 +390,7 @@ fn pieces_and_holes_pose_with_every_method() {
         assert_eq!(report.flipped_triangles, 0);
     }
     // A piece without a handle is refused, for every method.
-    let mut pose = Deformer::new(&mesh, Method::kvf()).expect("set up");
+    let mut pose = Deformer::new(&mesh, PoseMethod::kvf()).expect("set up");
     assert!(matches!(
         pose.set_pins(&[0, 5]),
         Err(DeformError::PieceWithoutPin { vertex }) if vertex >= offset
@@ -392,17 +402,20 @@ fn bad_options_are_refused() {
     let rest = generate::grid(5, 5, 0.0);
     for k in [0.5, f64::NAN, f64::INFINITY] {
         assert!(matches!(
-            Deformer::new(&rest, Method::bounded(k)),
+            Deformer::new(&rest, PoseMethod::bounded(k)),
             Err(DeformError::BadBound(_))
         ));
     }
-    let mut pose =
-        Deformer::new(&rest, Method::Kvf(KvfOptions::default().with_weight(-1.0))).expect("set up");
+    let mut pose = Deformer::new(
+        &rest,
+        PoseMethod::Kvf(KvfOptions::default().with_weight(-1.0)),
+    )
+    .expect("set up");
     assert!(matches!(
         pose.set_pins(&[0]),
         Err(DeformError::BadWeight(_))
     ));
-    let mut pose = Deformer::new(&rest, Method::kvf()).expect("set up");
+    let mut pose = Deformer::new(&rest, PoseMethod::kvf()).expect("set up");
     assert!(matches!(
         pose.drag(&[[0.0, 0.0]]),
         Err(DeformError::TargetCount { pins: 0, got: 1 })

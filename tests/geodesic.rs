@@ -87,8 +87,7 @@ fn sphere_distances_are_as_accurate_as_the_peers() {
     let Some(dir) = common::shared_data() else {
         return;
     };
-    let shared =
-        bdmorph::io::read_mesh(&dir.join("closed3d/odedstein/sphere.obj")).expect("sphere");
+    let shared = bdmorph::io::read_mesh(dir.join("closed3d/odedstein/sphere.obj")).expect("sphere");
     let mut heat = HeatGeodesics::new(&shared, HeatOptions::default()).expect("set up");
     let d = heat.distance(&[0]).expect("query");
     let err = mean_relative_error(&d, &arccos(&shared, 0));
@@ -284,7 +283,7 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
         ),
     ];
     for (rel, source, text, peer, peer_name, bar) in cases {
-        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect("mesh");
+        let mesh = bdmorph::io::read_mesh(dir.join(rel)).expect("mesh");
         let exact = exact_file(text);
         assert_eq!(exact.len(), mesh.positions.len(), "{rel}");
         let err = error_with(&mesh, HeatOptions::default(), source, &exact);

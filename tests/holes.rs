@@ -4,7 +4,7 @@
 mod common;
 
 use bdmorph::distortion::RestShape;
-use bdmorph::{generate, MeshError, Morph, MorphError, MorphOptions, Path, PlanarMesh};
+use bdmorph::{generate, KeyframePath, MeshError, Morph, MorphError, MorphOptions, PlanarMesh};
 use common::max_distance;
 
 /// Whether segments `a-b` and `c-d` intersect or touch.
@@ -202,8 +202,8 @@ fn shuffled_and_rotated_face_lists_give_the_same_frames() {
         key.faces = faces;
     }
     assert_ne!(shuffled[1].faces, keys[1].faces);
-    let mut plain = Path::new(&keys).expect("plain");
-    let mut other = Path::new(&shuffled).expect("shuffled");
+    let mut plain = KeyframePath::new(&keys).expect("plain");
+    let mut other = KeyframePath::new(&shuffled).expect("shuffled");
     assert_eq!(
         other.faces(),
         &keys[0].faces[..],
@@ -303,7 +303,10 @@ fn a_keyframe_with_inverted_triangles_is_refused_by_default_and_morphs_when_allo
         }
         other => panic!("{other}"),
     }
-    assert!(err.to_string().contains("--allow-inverted"), "{err}");
+    assert!(
+        err.to_string().contains("MorphOptions::allow_inverted"),
+        "{err}"
+    );
     let allowed = MorphOptions::default().with_allow_inverted(true);
     let mut m = Morph::new(&a, &b, allowed).expect("allowed");
     assert_eq!(m.structure().inverted, [vec![], folded_faces.clone()]);
@@ -363,8 +366,8 @@ fn the_command_line_morphs_holes_and_pieces_and_says_what_it_found() {
     let ring = shifted(&generate::annulus(0.01), 4.0);
     let a = side_by_side(&plate, &ring);
     let b = side_by_side(&generate::bend(&plate, 0.8), &generate::twist(&ring, 1.0));
-    bdmorph::io::write_obj_2d(&dir.join("a.obj"), &a.positions, &a.faces, &[]).unwrap();
-    bdmorph::io::write_obj_2d(&dir.join("b.obj"), &b.positions, &b.faces, &[]).unwrap();
+    bdmorph::io::write_obj_2d(dir.join("a.obj"), &a.positions, &a.faces, &[]).unwrap();
+    bdmorph::io::write_obj_2d(dir.join("b.obj"), &b.positions, &b.faces, &[]).unwrap();
     let (ok, out, err) = run(&dir, &["info", "a.obj"]);
     assert!(ok, "{err}");
     assert!(
@@ -406,8 +409,8 @@ fn the_command_line_lists_inverted_triangles_and_reports_the_folded_keyframe() {
     let dir = scratch("inverted");
     let a = generate::grid(8, 8, 0.0);
     let (b, _, faces) = folded(&a);
-    bdmorph::io::write_obj_2d(&dir.join("a.obj"), &a.positions, &a.faces, &[]).unwrap();
-    bdmorph::io::write_obj_2d(&dir.join("b.obj"), &b.positions, &b.faces, &[]).unwrap();
+    bdmorph::io::write_obj_2d(dir.join("a.obj"), &a.positions, &a.faces, &[]).unwrap();
+    bdmorph::io::write_obj_2d(dir.join("b.obj"), &b.positions, &b.faces, &[]).unwrap();
     let (ok, _, err) = run(
         &dir,
         &["morph", "a.obj", "b.obj", "--frames", "3", "-o", "out"],

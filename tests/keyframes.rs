@@ -3,7 +3,7 @@
 mod common;
 
 use bdmorph::{
-    generate, Blend, Easing, FrameAt, MeshError, Morph, MorphError, MorphOptions, Path,
+    generate, Blend, Easing, FrameAt, KeyframePath, MeshError, Morph, MorphError, MorphOptions,
     PathOptions, PlanarMesh,
 };
 use common::max_distance;
@@ -154,7 +154,7 @@ fn paths_pass_exactly_through_their_keyframes() {
             Easing::EaseInOut,
         ]),
     ] {
-        let mut path = Path::with_options(&keys4, options.clone()).expect("path");
+        let mut path = KeyframePath::with_options(&keys4, options.clone()).expect("path");
         let knots = path.keyframe_times().to_vec();
         assert_eq!(knots.len(), 4);
         assert_eq!((knots[0], knots[3]), (0.0, 1.0));
@@ -200,11 +200,12 @@ fn predicted_starts_do_not_change_path_frames() {
     let hermite = options
         .clone()
         .with_morph(MorphOptions::default().with_tangents(true));
-    let mut warm = Path::with_options(&keys4, hermite).expect("path");
+    let mut warm = KeyframePath::with_options(&keys4, hermite).expect("path");
     let cold_morph = MorphOptions::default()
         .with_warm_start(false)
         .with_reuse_factor(false);
-    let mut cold = Path::with_options(&keys4, options.with_morph(cold_morph)).expect("path");
+    let mut cold =
+        KeyframePath::with_options(&keys4, options.with_morph(cold_morph)).expect("path");
     let mut times: Vec<f64> = (0..=20).map(|i| f64::from(i) / 20.0).collect();
     times.extend((0..20).rev().map(|i| f64::from(i) / 20.0 + 0.013));
     let (mut warm_its, mut cold_its) = (0, 0);
@@ -225,7 +226,7 @@ fn predicted_starts_do_not_change_path_frames() {
 #[test]
 fn a_two_keyframe_linear_path_is_the_morph() {
     let keys = poses();
-    let mut path = Path::new(&keys[..2]).expect("path");
+    let mut path = KeyframePath::new(&keys[..2]).expect("path");
     let mut morph = Morph::new(&keys[0], &keys[1], MorphOptions::default()).expect("morph");
     for i in 0..=8 {
         let t = f64::from(i) / 8.0;
@@ -374,7 +375,7 @@ fn bad_weights_and_keyframes_are_typed_errors() {
         })
     ));
     assert!(matches!(
-        Path::with_options(&keys, PathOptions::default().with_durations(vec![1.0])),
+        KeyframePath::with_options(&keys, PathOptions::default().with_durations(vec![1.0])),
         Err(MorphError::SegmentCount {
             what: "durations",
             expected: 2,
@@ -382,7 +383,7 @@ fn bad_weights_and_keyframes_are_typed_errors() {
         })
     ));
     assert!(matches!(
-        Path::with_options(&keys, PathOptions::default().with_durations(vec![1.0, 0.0])),
+        KeyframePath::with_options(&keys, PathOptions::default().with_durations(vec![1.0, 0.0])),
         Err(MorphError::BadDuration { segment: 1, .. })
     ));
     // A failed frame does not spoil the next.
@@ -394,7 +395,7 @@ fn overshooting_easing_extrapolates_within_the_path() {
     let keys = poses();
     let over = Easing::cubic_bezier(0.3, 1.05, 0.7, 1.05).unwrap();
     let mut path =
-        Path::with_options(&keys, PathOptions::default().with_easing(over)).expect("path");
+        KeyframePath::with_options(&keys, PathOptions::default().with_easing(over)).expect("path");
     let (k, w) = path.segment_at(0.4).unwrap();
     assert_eq!(k, 0);
     assert!(w > 1.0, "{w}");
@@ -459,6 +460,7 @@ fn distortion_never_exceeds_the_targets_on_the_man_poses() {
         return;
     };
     let man = common::read(&dir, "morph2d/isadorable-man/man.obj");
+    let mut said = String::new();
     for other in ["man2.obj", "man3.obj"] {
         let b = common::read(&dir, &format!("morph2d/isadorable-man/{other}"));
         let (worst, target) = distortion_along(&man, &b, 20);
@@ -466,7 +468,22 @@ fn distortion_never_exceeds_the_targets_on_the_man_poses() {
             worst <= target * (1.0 + 1e-9),
             "{other}: {worst} > target's {target}"
         );
+        said.push_str(&format!("{target:.4}/"));
     }
+    // The README quotes these figures: they are checked here, not typed.
+    let readme = include_str!("../README.md")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    let figures = format!(
+        "(man to man2: at most {}, reached at `t = 1`; man to man3: {}).",
+        said.split('/').next().unwrap_or(""),
+        said.split('/').nth(1).unwrap_or("")
+    );
+    assert!(
+        readme.contains(&figures),
+        "README.md should say {figures}"
+    );
 }
 
 mod properties {
@@ -523,6 +540,50 @@ mod properties {
                 }
                 Err(e) => prop_assert!(false, "t = {t}: {e}"),
             }
+        }
+    }
+}
+
+/// However far t is, the limit and the triangle named are those of a near t, for a morph and
+/// for a morph split into pieces; the message prints t and the limit in a few digits.
+#[test]
+fn far_extrapolations_name_the_same_limit_as_near_ones() {
+    let a = generate::disk(8, 0.2);
+    let b = generate::bend(&generate::stretch(&a, 2.0), 0.6);
+    let mut m = Morph::new(&a, &b, MorphOptions::default()).expect("morph");
+    let limit_of = |m: &mut Morph, t: f64| -> (f64, usize, String) {
+        match m.frame(t).map(|_| ()).expect_err("breaks") {
+            e @ MorphError::MetricBreaks { .. } => {
+                let msg = e.to_string();
+                let MorphError::MetricBreaks {
+                    face,
+                    limit: FrameAt::Time(limit),
+                    ..
+                } = e
+                else {
+                    unreachable!()
+                };
+                (limit, face, msg)
+            }
+            e => panic!("t = {t}: {e}"),
+        }
+    };
+    for (near, fars) in [(-3.0, [-1e3, -1e20, -1e300]), (40.0, [1e3, 1e20, 1e300])] {
+        let (limit, face, _) = limit_of(&mut m, near);
+        for far in fars {
+            let (l, f, msg) = limit_of(&mut m, far);
+            assert!(
+                (l - limit).abs() <= 1e-9 * limit.abs().max(1.0),
+                "t = {far}: limit {l}, from t = {near}: {limit}"
+            );
+            assert_eq!(f, face, "t = {far}");
+            assert!(msg.len() < 250, "{msg}");
+            let printed = if far.abs() >= 1e7 {
+                format!("t = {far:e}")
+            } else {
+                format!("t = {far}")
+            };
+            assert!(msg.starts_with(&printed), "{msg}");
         }
     }
 }

@@ -89,7 +89,7 @@ fn a_picture_meshed_deformed_and_morphed_with_its_texture() {
         bin().args(["mesh", "pic.png", "--vertices", "700", "-o", "m.obj"]),
         &dir,
     );
-    let (mesh, texcoords) = PlanarMesh::read_textured(&dir.join("m.obj")).expect("reads");
+    let (mesh, texcoords) = PlanarMesh::read_textured(dir.join("m.obj")).expect("reads");
     let texcoords = texcoords.expect("vt lines");
     assert!(mesh.positions.len().abs_diff(700) < 70);
     assert_eq!(texcoords.uv.len(), mesh.positions.len());
@@ -114,7 +114,7 @@ fn a_picture_meshed_deformed_and_morphed_with_its_texture() {
         deform.args(["--max-distortion", "4", "-o", "posed.obj"]),
         &dir,
     );
-    let posed = PlanarMesh::read(&dir.join("posed.obj")).expect("reads");
+    let posed = PlanarMesh::read(dir.join("posed.obj")).expect("reads");
     assert_eq!(posed.faces, mesh.faces);
     succeeds(
         bin().args([
@@ -219,7 +219,7 @@ fn stats_and_outline_inputs() {
         ]),
         &dir,
     );
-    let (arch, uv) = PlanarMesh::read_textured(&dir.join("arch.obj")).expect("reads");
+    let (arch, uv) = PlanarMesh::read_textured(dir.join("arch.obj")).expect("reads");
     assert!(uv.is_some());
     bdmorph::compile(&arch.positions, &arch.faces).expect("a disk");
     let poly = "4 2 0 0\n1 0 0\n2 3 0\n3 3 2\n4 0 2\n4 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n0\n";
@@ -356,7 +356,7 @@ fn specks_are_noted_and_kept_on_request() {
     );
     assert_eq!(json_field(&out, "pieces"), "1");
     assert_eq!(json_field(&out, "dropped_specks"), "2");
-    let mesh = PlanarMesh::read(&dir.join("m.obj")).expect("reads");
+    let mesh = PlanarMesh::read(dir.join("m.obj")).expect("reads");
     bdmorph::compile(&mesh.positions, &mesh.faces).expect("one piece, a disk");
     let (out, err) = succeeds_saying(
         bin().args([

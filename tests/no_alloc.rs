@@ -6,7 +6,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use bdmorph::{
-    generate, Blend, Easing, FactorPrecision, Morph, MorphOptions, NewtonOptions, Path,
+    generate, Blend, Easing, FactorPrecision, KeyframePath, Morph, MorphOptions, NewtonOptions,
     PathOptions, Vm,
 };
 
@@ -112,8 +112,9 @@ fn frames_do_not_allocate() {
     blend
         .frame_weights_into(&[0.2, 0.3, 0.5], &mut out)
         .expect("warm-up");
-    let mut path = Path::with_options(&keys, PathOptions::default().with_easing(Easing::EaseInOut))
-        .expect("path");
+    let mut path =
+        KeyframePath::with_options(&keys, PathOptions::default().with_easing(Easing::EaseInOut))
+            .expect("path");
     path.frame_into(0.0, &mut out).expect("warm-up");
     let before = allocations();
     for i in 0..=10 {
@@ -151,10 +152,14 @@ fn a_drag_does_not_allocate() {
 }
 
 fn drag_does_not_allocate() {
-    use bdmorph::deform::{Deformer, Method};
+    use bdmorph::deform::{Deformer, PoseMethod};
     let rest = generate::disk(20, 0.2);
     let n = rest.positions.len() as u32;
-    for method in [Method::kvf(), Method::arap(), Method::bounded(1.2)] {
+    for method in [
+        PoseMethod::kvf(),
+        PoseMethod::arap(),
+        PoseMethod::bounded(1.2),
+    ] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&[0, n - 1, n - 7]).expect("pins");
         let mut targets: Vec<[f64; 2]> = [0, n - 1, n - 7]

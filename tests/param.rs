@@ -4,7 +4,9 @@
 mod common;
 
 use bdmorph::generate;
-use bdmorph::param::{Method, ParamError, ParamOptions, Parameterization, Stop, COLLAPSE_RATIO};
+use bdmorph::param::{
+    ParamError, ParamMethod, ParamOptions, Parameterization, Stop, COLLAPSE_RATIO,
+};
 use bdmorph::SurfaceMesh;
 
 /// A disk of `rings` rings lifted to a bumpy height field.
@@ -34,24 +36,24 @@ fn meshes() -> Vec<(&'static str, SurfaceMesh)> {
     ]
 }
 
-const ALL: [Method; 7] = [
-    Method::Tutte,
-    Method::Lscm,
-    Method::Asap,
-    Method::Arap,
-    Method::SymmetricDirichlet,
-    Method::Mips,
-    Method::ArapNewton,
+const ALL: [ParamMethod; 7] = [
+    ParamMethod::Tutte,
+    ParamMethod::Lscm,
+    ParamMethod::Asap,
+    ParamMethod::Arap,
+    ParamMethod::SymmetricDirichlet,
+    ParamMethod::Mips,
+    ParamMethod::ArapNewton,
 ];
 
 #[test]
 fn flip_free_methods_never_flip_and_never_increase_the_energy() {
     for (name, mesh) in meshes() {
         for method in [
-            Method::Tutte,
-            Method::SymmetricDirichlet,
-            Method::Mips,
-            Method::ArapNewton,
+            ParamMethod::Tutte,
+            ParamMethod::SymmetricDirichlet,
+            ParamMethod::Mips,
+            ParamMethod::ArapNewton,
         ] {
             let mut p =
                 Parameterization::new(&mesh, method, ParamOptions::default().with_iterations(40))
@@ -82,7 +84,7 @@ fn flip_free_methods_never_flip_and_never_increase_the_energy() {
 #[test]
 fn every_method_lowers_its_distortion_from_tutte() {
     for (name, mesh) in meshes() {
-        let tutte = Parameterization::new(&mesh, Method::Tutte, ParamOptions::default())
+        let tutte = Parameterization::new(&mesh, ParamMethod::Tutte, ParamOptions::default())
             .expect("tutte")
             .energies();
         for method in ALL {
@@ -95,17 +97,19 @@ fn every_method_lowers_its_distortion_from_tutte() {
                 report.iterations
             );
             match method {
-                Method::SymmetricDirichlet => {
+                ParamMethod::SymmetricDirichlet => {
                     assert!(e.symmetric_dirichlet < tutte.symmetric_dirichlet);
                     assert!(e.symmetric_dirichlet >= 4.0);
                 }
-                Method::Mips | Method::Lscm | Method::Asap => {
+                ParamMethod::Mips | ParamMethod::Lscm | ParamMethod::Asap => {
                     assert!(e.mips < tutte.mips && e.mips >= 2.0, "{method:?}");
                 }
-                Method::Arap | Method::ArapNewton => assert!(e.arap < tutte.arap, "{method:?}"),
-                Method::Tutte => assert_eq!(e, tutte),
+                ParamMethod::Arap | ParamMethod::ArapNewton => {
+                    assert!(e.arap < tutte.arap, "{method:?}")
+                }
+                ParamMethod::Tutte => assert_eq!(e, tutte),
             }
-            if method != Method::Arap {
+            if method != ParamMethod::Arap {
                 assert_eq!(e.flipped, 0, "{name} {method:?}");
             }
         }
@@ -115,7 +119,8 @@ fn every_method_lowers_its_distortion_from_tutte() {
 #[test]
 fn tutte_is_an_embedding_inside_its_circle() {
     let mesh = bumpy_disk(10);
-    let p = Parameterization::new(&mesh, Method::Tutte, ParamOptions::default()).expect("tutte");
+    let p =
+        Parameterization::new(&mesh, ParamMethod::Tutte, ParamOptions::default()).expect("tutte");
     let uv = p.uv();
     // No flipped triangle, and the triangles' areas add up to the disk's polygon: they cover
     // it exactly once.
@@ -158,7 +163,8 @@ fn bdmorph_compiler_disk_boundary(mesh: &SurfaceMesh) -> Vec<u32> {
 #[test]
 fn meshes_that_are_not_disks_are_refused() {
     let sphere = generate::icosphere(2);
-    let err = Parameterization::new(&sphere, Method::Tutte, ParamOptions::default()).unwrap_err();
+    let err =
+        Parameterization::new(&sphere, ParamMethod::Tutte, ParamOptions::default()).unwrap_err();
     assert!(matches!(err, ParamError::NotADisk(_)), "{err}");
     assert!(err.to_string().contains("closed surface"), "{err}");
     // A band around the equator: two boundary loops.
@@ -183,20 +189,20 @@ fn meshes_that_are_not_disks_are_refused() {
         .map(|f| f.map(|v| index[v as usize]))
         .collect();
     band.positions = positions;
-    let err = Parameterization::new(&band, Method::Lscm, ParamOptions::default()).unwrap_err();
+    let err = Parameterization::new(&band, ParamMethod::Lscm, ParamOptions::default()).unwrap_err();
     assert!(matches!(err, ParamError::NotADisk(_)), "{err}");
     // Non-finite and degenerate input.
     let mut bad = bumpy_disk(4);
     bad.positions[2][0] = f64::NAN;
     assert!(matches!(
-        Parameterization::new(&bad, Method::Tutte, ParamOptions::default()),
+        Parameterization::new(&bad, ParamMethod::Tutte, ParamOptions::default()),
         Err(ParamError::NonFinite { vertex: 2 })
     ));
     let mut flat = bumpy_disk(4);
     let f0 = flat.faces[0];
     flat.positions[f0[1] as usize] = flat.positions[f0[0] as usize];
     assert!(matches!(
-        Parameterization::new(&flat, Method::Tutte, ParamOptions::default()),
+        Parameterization::new(&flat, ParamMethod::Tutte, ParamOptions::default()),
         Err(ParamError::Degenerate { .. })
     ));
 }
@@ -207,10 +213,10 @@ fn shared_disk_meshes_flatten_without_flips() {
         return;
     };
     for rel in common::SHARED_DISKS {
-        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let mesh = bdmorph::io::read_mesh(dir.join(rel)).expect(rel);
         let mut p = Parameterization::new(
             &mesh,
-            Method::SymmetricDirichlet,
+            ParamMethod::SymmetricDirichlet,
             ParamOptions::default().with_iterations(30),
         )
         .expect(rel);
@@ -235,9 +241,13 @@ fn camel_head_reaches_the_bar_of_slim() {
     let Some(dir) = common::shared_data() else {
         return;
     };
-    let mesh = bdmorph::io::read_mesh(&dir.join("disk3d/libigl/camelhead.off")).expect("camel");
-    let mut p = Parameterization::new(&mesh, Method::SymmetricDirichlet, ParamOptions::default())
-        .expect("set up");
+    let mesh = bdmorph::io::read_mesh(dir.join("disk3d/libigl/camelhead.off")).expect("camel");
+    let mut p = Parameterization::new(
+        &mesh,
+        ParamMethod::SymmetricDirichlet,
+        ParamOptions::default(),
+    )
+    .expect("set up");
     let report = p.solve().expect("solve");
     let e = p.energies();
     eprintln!(
@@ -247,7 +257,7 @@ fn camel_head_reaches_the_bar_of_slim() {
     assert!(e.symmetric_dirichlet <= 7.4475, "{}", e.symmetric_dirichlet);
     assert_eq!(e.flipped, 0);
     let mut p =
-        Parameterization::new(&mesh, Method::Mips, ParamOptions::default()).expect("set up");
+        Parameterization::new(&mesh, ParamMethod::Mips, ParamOptions::default()).expect("set up");
     p.solve().expect("solve");
     let e = p.energies();
     assert!(e.mips <= 2.0073, "SLIM reaches 2.0073: {}", e.mips);
@@ -263,7 +273,7 @@ fn camel_head_reaches_the_bar_of_slim() {
 fn issue_23_plain_arap_newton_stalls_and_says_so_the_barrier_converges() {
     let mesh = generate::finger(6, 8, 0.6);
     let plain = ParamOptions::default().with_collapse_barrier(0.0);
-    let mut p = Parameterization::new(&mesh, Method::ArapNewton, plain).expect("set up");
+    let mut p = Parameterization::new(&mesh, ParamMethod::ArapNewton, plain).expect("set up");
     let report = p.solve().expect("solve");
     let stalled = p.energies();
     eprintln!("plain ARAP: {report:?} {stalled:?}");
@@ -278,8 +288,8 @@ fn issue_23_plain_arap_newton_stalls_and_says_so_the_barrier_converges() {
     assert_eq!(stalled.flipped, 0);
     let first = report.energies[0];
 
-    let mut p =
-        Parameterization::new(&mesh, Method::ArapNewton, ParamOptions::default()).expect("set up");
+    let mut p = Parameterization::new(&mesh, ParamMethod::ArapNewton, ParamOptions::default())
+        .expect("set up");
     let start_gradient = p.step().expect("step").expect("iterative").gradient_norm;
     let report = p.solve().expect("solve");
     let e = p.energies();
@@ -304,7 +314,7 @@ fn bad_collapse_barrier_weights_are_typed_errors() {
     for w in [-1e-3, f64::NAN, f64::INFINITY] {
         let options = ParamOptions::default().with_collapse_barrier(w);
         assert!(matches!(
-            Parameterization::new(&mesh, Method::ArapNewton, options),
+            Parameterization::new(&mesh, ParamMethod::ArapNewton, options),
             Err(ParamError::BadBarrier(_))
         ));
     }
@@ -320,13 +330,17 @@ fn issue_23_shared_disks_arap_newton_converges_without_collapse() {
         return;
     };
     for rel in common::SHARED_DISKS {
-        let mesh = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let mesh = bdmorph::io::read_mesh(dir.join(rel)).expect(rel);
         let plain = ParamOptions::default().with_collapse_barrier(0.0);
-        let mut p = Parameterization::new(&mesh, Method::ArapNewton, plain).expect(rel);
+        let mut p = Parameterization::new(&mesh, ParamMethod::ArapNewton, plain).expect(rel);
         let report = p.solve().expect(rel);
         eprintln!("{rel}: plain ARAP {report:?} {:?}", p.energies());
         assert!(report.stalled(), "{rel}: {report:?}");
-        for method in [Method::ArapNewton, Method::SymmetricDirichlet, Method::Mips] {
+        for method in [
+            ParamMethod::ArapNewton,
+            ParamMethod::SymmetricDirichlet,
+            ParamMethod::Mips,
+        ] {
             let mut p = Parameterization::new(&mesh, method, ParamOptions::default()).expect(rel);
             let report = p.solve().expect(rel);
             let e = p.energies();
@@ -348,11 +362,11 @@ fn issue_23_local_global_lowers_its_own_energy_and_converges_only_when_it_levels
     let mut meshes = meshes();
     if let Some(dir) = common::shared_data() {
         let rel = "disk3d/ustc-cg/Cow_dABF.obj";
-        let cow = bdmorph::io::read_mesh(&dir.join(rel)).expect(rel);
+        let cow = bdmorph::io::read_mesh(dir.join(rel)).expect(rel);
         meshes.push(("cow", cow));
     }
     for (name, mesh) in &meshes {
-        for method in [Method::Asap, Method::Arap] {
+        for method in [ParamMethod::Asap, ParamMethod::Arap] {
             let mut p = Parameterization::new(mesh, method, ParamOptions::default())
                 .unwrap_or_else(|e| panic!("{name} {method:?}: {e}"));
             let mut last = p.energy();
@@ -378,7 +392,7 @@ fn issue_23_local_global_lowers_its_own_energy_and_converges_only_when_it_levels
                     "{name} {method:?}: {report:?}"
                 );
             }
-            if *name == "cow" && method == Method::Asap {
+            if *name == "cow" && method == ParamMethod::Asap {
                 assert!(report.iterations > 1, "{report:?}");
                 assert_eq!(p.energies().flipped, 0);
             }

@@ -573,7 +573,7 @@ fn ctrl_c_stops_the_studio_cleanly_keeping_unsaved_work() {
 fn a_killed_studio_s_work_is_recovered_by_the_next_start() {
     let dir = scratch("killed");
     let rest = generate::disk(6, 0.1);
-    bdmorph::io::write_obj_2d(&dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
+    bdmorph::io::write_obj_2d(dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
         .expect("write");
     let mut studio = Studio::start(&dir, Some("rest.obj"));
     let (port, token) = (studio.port, studio.token.clone());
@@ -666,7 +666,7 @@ fn uploads_are_stored_and_opened_and_pictures_attach() {
     assert_eq!(c.state["undo"], "open My Pic_.png");
     // A mesh without texture coordinates, and a picture attached to it.
     let rest = generate::grid(5, 5, 0.0);
-    bdmorph::io::write_obj_2d(&dir.join("grid.obj"), &rest.positions, &rest.faces, &[])
+    bdmorph::io::write_obj_2d(dir.join("grid.obj"), &rest.positions, &rest.faces, &[])
         .expect("write");
     assert_eq!(c.request(r#"{"op":"open","name":"grid.obj"}"#), None);
     c.wait_for(60, "the mesh opened", |c| c.state["source"] == "grid.obj");
@@ -757,7 +757,7 @@ fn pictures_without_transparency_open() {
 fn a_keyframe_loads_from_a_mesh_file_with_the_same_triangles() {
     let dir = scratch("load-keyframe");
     let rest = generate::disk(6, 0.1);
-    bdmorph::io::write_obj_2d(&dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
+    bdmorph::io::write_obj_2d(dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
         .expect("write");
     let studio = Studio::start(&dir, Some("rest.obj"));
     let mut c = studio.client();
@@ -963,7 +963,7 @@ fn the_outline_is_traced_drawn_imported_and_meshed_over_the_picture() {
 fn keyframes_reorder_and_move_in_time() {
     let dir = scratch("reorder");
     let rest = generate::disk(5, 0.1);
-    bdmorph::io::write_obj_2d(&dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
+    bdmorph::io::write_obj_2d(dir.join("rest.obj"), &rest.positions, &rest.faces, &[])
         .expect("write");
     let studio = Studio::start(&dir, Some("rest.obj"));
     let mut c = studio.client();

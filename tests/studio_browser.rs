@@ -909,13 +909,13 @@ fn defect_6_any_picture_opens_and_pictures_attach() {
         .iter()
         .map(|p| [p[0] * 60.0 + 50.0, p[1] * 60.0 + 50.0])
         .collect();
-    bdmorph::io::write_obj_2d(&dir.join("sheet.obj"), &scaled, &rest.faces, &[]).expect("write");
+    bdmorph::io::write_obj_2d(dir.join("sheet.obj"), &scaled, &rest.faces, &[]).expect("write");
     write_png(&dir.join("sheet.png"), &character(false, false));
     let obj = Studio::start(&dir, Some("sheet.obj"));
     let page = PageTab::open(&browser, &obj.url, &dir);
     assert_eq!(page.eval("studio.state.textured"), true);
     // A mesh without a picture: one attached from the page's file input.
-    bdmorph::io::write_obj_2d(&dir.join("bare.obj"), &scaled, &rest.faces, &[]).expect("write");
+    bdmorph::io::write_obj_2d(dir.join("bare.obj"), &scaled, &rest.faces, &[]).expect("write");
     let bare = Studio::start(&dir, Some("bare.obj"));
     let page = PageTab::open(&browser, &bare.url, &dir);
     assert_eq!(page.eval("studio.state.textured"), false);
@@ -1191,7 +1191,7 @@ fn defect_11_a_pose_is_never_other_than_finite() {
     let Some(browser) = browser() else { return };
     let dir = scratch("b11-nan");
     let mesh = generate::disk(generate::rings_for(800), 0.1);
-    bdmorph::io::write_obj_2d(&dir.join("disk.obj"), &mesh.positions, &mesh.faces, &[])
+    bdmorph::io::write_obj_2d(dir.join("disk.obj"), &mesh.positions, &mesh.faces, &[])
         .expect("write");
     let studio = Studio::start(&dir, Some("disk.obj"));
     let page = PageTab::open(&browser, &studio.url, &dir);
@@ -1483,7 +1483,7 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
     let Some(browser) = browser() else { return };
     let dir = scratch("latency");
     let small = generate::disk(generate::rings_for(5000), 0.2);
-    bdmorph::io::write_obj_2d(&dir.join("disk5k.obj"), &small.positions, &small.faces, &[])
+    bdmorph::io::write_obj_2d(dir.join("disk5k.obj"), &small.positions, &small.faces, &[])
         .expect("write");
     let large = generate::disk(generate::rings_for(10000), 0.2);
     let mut project = Project::new(&large, None);

@@ -3,7 +3,7 @@
 
 mod common;
 
-use bdmorph::deform::{untangle, DeformError, Deformer, Method, UntangleOptions, Untangled};
+use bdmorph::deform::{untangle, DeformError, Deformer, PoseMethod, UntangleOptions, Untangled};
 use bdmorph::meshing::{mesh_picture, MeshOptions, PictureOptions};
 use bdmorph::{generate, PlanarMesh};
 use common::max_distance;
@@ -61,7 +61,7 @@ fn kvf_pull(vertices: usize, dx: f64, dy: f64) -> (PlanarMesh, Vec<u32>, Vec<[f6
     .iter()
     .map(|&q| nearest(p, q))
     .collect();
-    let mut pose = Deformer::new(&rest, Method::kvf()).expect("set up");
+    let mut pose = Deformer::new(&rest, PoseMethod::kvf()).expect("set up");
     pose.set_pins(&pins).expect("pins");
     let mut targets: Vec<[f64; 2]> = pins.iter().map(|&v| p[v as usize]).collect();
     targets[3] = [targets[3][0] + dx, targets[3][1] + dy];

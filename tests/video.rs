@@ -227,7 +227,7 @@ fn path_matches_png_frames(name: &str, look: &[&str]) {
     assert_eq!(rgb.len(), 9 * frame);
     for i in 0..9 {
         let picture =
-            raster::read_image(&pngs.join(format!("frame_{i:04}.png"))).expect("png frame");
+            raster::read_image(pngs.join(format!("frame_{i:04}.png"))).expect("png frame");
         let db = psnr(&rgb[i * frame..(i + 1) * frame], 162, &picture);
         // About 30 dB: small pictures of saturated stripes and thin edges lose most in 4:2:0
         // chroma; a wrong or misplaced picture is far below.

@@ -5,7 +5,9 @@ use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use bdmorph::deform::{ArapOptions, BoundedPoseOptions, DragReport, KvfOptions, Method};
+use bdmorph::deform::{
+    ArapOptions, BoundedPoseOptions, DragReport, KvfOptions, PoseMethod as Method,
+};
 
 use crate::arrays;
 use crate::errors;

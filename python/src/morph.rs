@@ -295,7 +295,7 @@ impl Blend {
 /// A path through several poses, each segment with its duration and easing.
 #[pyclass(module = "bdmorph._bdmorph")]
 pub struct Path {
-    inner: bdmorph::Path,
+    inner: bdmorph::KeyframePath,
     threads: Threads,
     n: usize,
     buffer: Vec<[f64; 2]>,
@@ -333,7 +333,7 @@ impl Path {
         }
         let threads = Threads::new(threads)?;
         let inner = py
-            .detach(|| threads.run(|| bdmorph::Path::with_options(&keys, options)))
+            .detach(|| threads.run(|| bdmorph::KeyframePath::with_options(&keys, options)))
             .map_err(errors::morph)?;
         Ok(Path {
             inner,

@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 
 use bdmorph::param::bounded::{self, BoundedOptions};
 use bdmorph::param::messages::{self, Spelling};
-use bdmorph::param::{Method, ParamOptions, Parameterization};
+use bdmorph::param::{ParamMethod as Method, ParamOptions, Parameterization};
 
 use crate::arrays;
 use crate::errors;

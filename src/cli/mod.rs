@@ -528,7 +528,7 @@ struct ParamArgs {
 /// distortion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum ParamMethod {
-    Param(bdmorph::param::Method),
+    Param(bdmorph::param::ParamMethod),
     Bounded,
 }
 

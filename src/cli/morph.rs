@@ -7,7 +7,9 @@ use bdmorph::io::{LineMap, TexCoords};
 use bdmorph::located::Locate;
 use bdmorph::render::{raster, Image};
 use bdmorph::PlanarMesh;
-use bdmorph::{Located, MeshError, MeshFile, Morph, MorphError, MorphOptions, Path, PathOptions};
+use bdmorph::{
+    KeyframePath, Located, MeshError, MeshFile, Morph, MorphError, MorphOptions, PathOptions,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
@@ -202,7 +204,7 @@ impl Inputs {
 /// A morph between two meshes, or a path through several.
 enum Animation {
     Morph(Morph),
-    Path(Path),
+    Path(KeyframePath),
 }
 
 impl Animation {
@@ -279,8 +281,8 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let build = |program: Option<bdmorph::Program>| {
         if as_path {
             match program {
-                Some(p) => Path::with_program(p, keys, path_options.clone()),
-                None => Path::with_options(keys, path_options.clone()),
+                Some(p) => KeyframePath::with_program(p, keys, path_options.clone()),
+                None => KeyframePath::with_options(keys, path_options.clone()),
             }
             .map(Animation::Path)
         } else {

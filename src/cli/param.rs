@@ -7,7 +7,7 @@ use bdmorph::param::bounded::{self, BoundedDistortion, BoundedOptions, BoundedRe
 use bdmorph::param::messages::{
     flattening_message, fmt_distortion, param_failure, worst_faces, Spelling,
 };
-use bdmorph::param::{Method, ParamOptions, Parameterization};
+use bdmorph::param::{ParamMethod as Method, ParamOptions, Parameterization};
 use bdmorph::render::{raster, surface, Drawing, Image, Viewport};
 
 use super::morph::progress_bar;
@@ -378,13 +378,9 @@ fn picture(
 
 /// The handles: --pin's vertices, then --drag's and --fix's places turned into their
 /// nearest vertices (said on stderr unless quiet). Two handles on one vertex are refused.
-fn handles(args: &DeformArgs, positions: &[[f64; 2]]) -> Result<Vec<(u32, [f64; 2])>, String> {
-    let nearest = |p: [f64; 2]| -> u32 {
-        let d = |q: &[f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
-        (0..positions.len())
-            .min_by(|&a, &b| d(&positions[a]).total_cmp(&d(&positions[b])))
-            .unwrap_or(0) as u32
-    };
+fn handles(args: &DeformArgs, mesh: &bdmorph::PlanarMesh) -> Result<Vec<(u32, [f64; 2])>, String> {
+    let positions = &mesh.positions;
+    let nearest = |p: [f64; 2]| -> u32 { mesh.nearest_vertex(p).unwrap_or(0) };
     let mut pins = args.pins.clone();
     let mut picked = Vec::new();
     for &(from, to) in &args.drags {
@@ -430,7 +426,7 @@ fn deformer_pose(
     planar: &bdmorph::PlanarMesh,
     pins: &[(u32, [f64; 2])],
 ) -> Result<Posed, String> {
-    use bdmorph::deform::{ArapOptions, Deformer, KvfOptions, Method};
+    use bdmorph::deform::{ArapOptions, Deformer, KvfOptions, PoseMethod as Method};
     let in_file = |e: bdmorph::deform::DeformError| format!("{}: {e}", args.mesh.display());
     let started = std::time::Instant::now();
     let limit = args.iterations.unwrap_or(1000);
@@ -543,7 +539,7 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     if args.method == super::DeformMethod::Bounded && args.max_distortion.is_none() {
         return Err("--method bounded (the default) needs --max-distortion K".into());
     }
-    let pins = handles(&args, &planar.positions)?;
+    let pins = handles(&args, &planar)?;
     let (uv, unmet, summary) = match args.method {
         super::DeformMethod::Arap | super::DeformMethod::Kvf => {
             deformer_pose(&args, &planar, &pins)?

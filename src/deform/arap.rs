@@ -17,7 +17,7 @@ use super::{DeformError, DragReport};
 use crate::param::frames::Frames;
 use crate::param::local_global::{fit_each, free_laplacian, global_rhs, weighted_edges, Fit, NONE};
 
-/// Options of [`super::Method::Arap`].
+/// Options of [`super::PoseMethod::Arap`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct ArapOptions {

@@ -23,7 +23,7 @@ use crate::param::newton::Newton;
 /// before the Newton finish takes over.
 const STALL: u32 = 8;
 
-/// Options of [`super::Method::Bounded`].
+/// Options of [`super::PoseMethod::Bounded`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct BoundedPoseOptions {

@@ -42,7 +42,7 @@ use super::{DeformError, DragReport};
 use crate::param::frames::Frames;
 use crate::param::local_global::{fit_each, free_laplacian_plus, global_rhs, weighted_edges, Fit};
 
-/// Options of [`super::Method::Kvf`].
+/// Options of [`super::PoseMethod::Kvf`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct KvfOptions {

@@ -129,7 +129,7 @@ impl std::str::FromStr for Easing {
     }
 }
 
-/// Options of a [`Path`].
+/// Options of a [`KeyframePath`].
 #[derive(Clone, Debug, PartialEq, Default)]
 #[non_exhaustive]
 pub struct PathOptions {
@@ -173,11 +173,11 @@ impl PathOptions {
 /// boundaries.
 ///
 /// ```
-/// use bdmorph::{generate, path::{Easing, Path, PathOptions}};
+/// use bdmorph::{generate, path::{Easing, KeyframePath, PathOptions}};
 /// let rest = generate::disk(8, 0.2);
 /// let keys = [rest.clone(), generate::bend(&rest, 0.6), generate::twist(&rest, 0.8)];
 /// let options = PathOptions::default().with_easing(Easing::EaseInOut);
-/// let mut path = Path::with_options(&keys, options)?;
+/// let mut path = KeyframePath::with_options(&keys, options)?;
 /// for i in 0..=8 {
 ///     let frame = path.frame(i as f64 / 8.0)?;
 ///     assert_eq!(frame.stats.flipped_triangles, 0);
@@ -185,7 +185,7 @@ impl PathOptions {
 /// assert_eq!(path.keyframe_times(), &[0.0, 0.5, 1.0]);
 /// # Ok::<(), bdmorph::MorphError>(())
 /// ```
-pub struct Path {
+pub struct KeyframePath {
     engine: Solver,
     /// When each keyframe is reached: 0 first, 1 last.
     knots: Vec<f64>,
@@ -193,9 +193,9 @@ pub struct Path {
     weights: Vec<f64>,
 }
 
-impl std::fmt::Debug for Path {
+impl std::fmt::Debug for KeyframePath {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Path")
+        f.debug_struct("KeyframePath")
             .field("knots", &self.knots)
             .field("easings", &self.easings)
             .field("engine", &self.engine)
@@ -203,22 +203,22 @@ impl std::fmt::Debug for Path {
     }
 }
 
-impl Path {
+impl KeyframePath {
     /// Checks the keyframes (at least two), compiles them and prepares the solver, with equal
     /// durations and linear segments.
-    pub fn new(keyframes: &[PlanarMesh]) -> Result<Path, MorphError> {
-        Path::with_options(keyframes, PathOptions::default())
+    pub fn new(keyframes: &[PlanarMesh]) -> Result<KeyframePath, MorphError> {
+        KeyframePath::with_options(keyframes, PathOptions::default())
     }
 
-    /// As [`Path::new`], with options.
+    /// As [`KeyframePath::new`], with options.
     pub fn with_options(
         keyframes: &[PlanarMesh],
         options: PathOptions,
-    ) -> Result<Path, MorphError> {
+    ) -> Result<KeyframePath, MorphError> {
         check_path_options(keyframes.len(), &options)?;
         check_count(keyframes)?;
         let engine = Solver::new(keyframes, Unwrap::Cumulative, options.morph)?;
-        Ok(Path::assemble(engine, keyframes.len(), &options))
+        Ok(KeyframePath::assemble(engine, keyframes.len(), &options))
     }
 
     /// Prepares a path from an already compiled program (made for the first keyframe's
@@ -227,15 +227,15 @@ impl Path {
         program: Program,
         keyframes: &[PlanarMesh],
         options: PathOptions,
-    ) -> Result<Path, MorphError> {
+    ) -> Result<KeyframePath, MorphError> {
         check_path_options(keyframes.len(), &options)?;
         check_count(keyframes)?;
         let engine = Solver::with_program(program, keyframes, Unwrap::Cumulative, options.morph)?;
-        Ok(Path::assemble(engine, keyframes.len(), &options))
+        Ok(KeyframePath::assemble(engine, keyframes.len(), &options))
     }
 
     /// The path's knots and easings around its solver.
-    fn assemble(engine: Solver, keyframes: usize, options: &PathOptions) -> Path {
+    fn assemble(engine: Solver, keyframes: usize, options: &PathOptions) -> KeyframePath {
         let segments = keyframes - 1;
         let durations = if options.durations.is_empty() {
             vec![1.0; segments]
@@ -256,7 +256,7 @@ impl Path {
             1 => vec![options.easings[0]; segments],
             _ => options.easings.clone(),
         };
-        Path {
+        KeyframePath {
             weights: vec![0.0; keyframes],
             engine,
             knots,
@@ -375,6 +375,14 @@ fn check_path_options(keyframes: usize, options: &PathOptions) -> Result<(), Mor
     }
     Ok(())
 }
+
+/// The former name of [`KeyframePath`], which shadowed `std::path::Path` when both were
+/// imported.
+#[deprecated(
+    since = "0.2.0",
+    note = "renamed `KeyframePath` (it shadowed `std::path::Path`)"
+)]
+pub type Path = KeyframePath;
 
 #[cfg(test)]
 mod tests {

@@ -9,25 +9,54 @@ use super::{
 };
 
 /// How the options that messages suggest are spelled where the user set them.
+///
+/// The library's own errors name its options in Rust ([`Spelling::RUST`]); a program that
+/// shows them to people who set the options elsewhere respells them:
+///
+/// ```
+/// use bdmorph::{generate, Morph, MorphOptions, Spelling};
+/// let square = generate::disk(4, 0.3);
+/// let mut mirrored = square.clone();
+/// mirrored.positions.iter_mut().for_each(|p| p[0] = -p[0]);
+/// let e = Morph::new(&square, &mirrored, MorphOptions::default()).unwrap_err().to_string();
+/// assert!(e.contains("MorphOptions::allow_inverted"), "{e}");
+/// assert!(Spelling::CLI.respell(&e).contains("--allow-inverted"));
+/// assert!(Spelling::PYTHON.respell(&e).contains("allow_inverted=True"));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Spelling {
     /// The iteration limit.
     pub iterations: &'static str,
     /// The collapse barrier's weight, up to its value.
     pub collapse_barrier: &'static str,
+    /// Accepting keyframes with a few inverted triangles.
+    pub allow_inverted: &'static str,
 }
 
 impl Spelling {
+    /// The library's options, as its own errors name them.
+    pub const RUST: Spelling = Spelling {
+        iterations: "ParamOptions::iterations",
+        collapse_barrier: "ParamOptions::with_collapse_barrier ",
+        allow_inverted: "MorphOptions::allow_inverted",
+    };
     /// The command line's flags.
     pub const CLI: Spelling = Spelling {
         iterations: "--iterations",
         collapse_barrier: "--collapse-barrier ",
+        allow_inverted: "--allow-inverted",
     };
     /// The Python package's keyword arguments.
     pub const PYTHON: Spelling = Spelling {
         iterations: "iterations=",
         collapse_barrier: "collapse_barrier=",
+        allow_inverted: "allow_inverted=True",
     };
+
+    /// `message` (a library error's) with the options it names spelled as here.
+    pub fn respell(&self, message: &str) -> String {
+        message.replace(Spelling::RUST.allow_inverted, self.allow_inverted)
+    }
 }
 
 /// What went wrong with a parameterisation, if anything: a stall (the map is not a minimum)

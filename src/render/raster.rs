@@ -711,7 +711,8 @@ pub fn decode_image(bytes: &[u8]) -> Result<Image, RenderError> {
 /// # Errors
 /// [`RenderError::Read`] when the file cannot be read; otherwise those of [`decode_image`],
 /// naming the file.
-pub fn read_image(path: &Path) -> Result<Image, RenderError> {
+pub fn read_image(path: impl AsRef<Path>) -> Result<Image, RenderError> {
+    let path = path.as_ref();
     let bytes = crate::io::read_input(path, crate::io::MAX_INPUT_BYTES).map_err(|source| {
         RenderError::Read {
             path: path.to_path_buf(),

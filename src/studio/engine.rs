@@ -1,6 +1,6 @@
 //! What the studio derives from its document to answer quickly: the rest mesh and its pieces,
 //! the [`Deformer`] of the keyframe being posed (with its pins set, so a drag costs one solve),
-//! the compiled [`Path`] through the keyframes for scrubbing, and each keyframe's flipped
+//! the compiled [`KeyframePath`] through the keyframes for scrubbing, and each keyframe's flipped
 //! triangles. All of it is a cache: rebuilt from the document when what it depends on changes
 //! ([`Engine::sync`]), never a second copy of the document's data to keep in step by hand.
 //!
@@ -10,21 +10,21 @@
 
 use super::edit::Touched;
 use super::project::{MethodData, Project};
-use crate::deform::{Deformer, DragReport, KvfOptions, Method};
+use crate::deform::{Deformer, DragReport, KvfOptions, PoseMethod};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
-use crate::{Easing, MorphOptions, Path, PathOptions};
+use crate::{Easing, KeyframePath, MorphOptions, PathOptions};
 
 /// How much larger than the rest mesh a pose may spread before a drag is refused.
 pub const MAX_POSE_SPREAD: f64 = 100.0;
 
 /// The posing method a project names.
-pub fn method_of(m: &MethodData) -> Result<Method, String> {
+pub fn method_of(m: &MethodData) -> Result<PoseMethod, String> {
     m.check()?;
     Ok(match m.name.as_str() {
-        "kvf" => Method::Kvf(KvfOptions::default().with_weight(m.weight)),
-        "arap" => Method::arap(),
-        _ => Method::bounded(m.max_distortion),
+        "kvf" => PoseMethod::Kvf(KvfOptions::default().with_weight(m.weight)),
+        "arap" => PoseMethod::arap(),
+        _ => PoseMethod::bounded(m.max_distortion),
     })
 }
 
@@ -125,7 +125,7 @@ pub struct Engine {
     pub pieces: Pieces,
     /// Each piece's anchor edge: where the morph places and turns it.
     pub anchors: Vec<[u32; 2]>,
-    path: Option<Path>,
+    path: Option<KeyframePath>,
     /// Why the path could not be compiled, if it could not.
     pub path_error: Option<String>,
     /// Flipped triangles of each keyframe.
@@ -151,7 +151,7 @@ impl Engine {
     pub fn new(doc: &Project, current: usize) -> Result<Engine, String> {
         let rest = doc.rest();
         let deformer = Deformer::new(&rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
-        let anchors = Path::new(&[rest.clone(), rest.clone()])
+        let anchors = KeyframePath::new(&[rest.clone(), rest.clone()])
             .map_err(|e| e.to_string())?
             .structure()
             .pieces
@@ -324,7 +324,7 @@ impl Engine {
 
     /// The compiled path through the keyframes (compiled again after any change). Keyframes
     /// with flipped triangles morph as the command line's `--allow-inverted` does.
-    fn path(&mut self, doc: &Project) -> Result<&mut Path, String> {
+    fn path(&mut self, doc: &Project) -> Result<&mut KeyframePath, String> {
         if doc.keyframes.len() < 2 {
             return Err("add a second keyframe to play".into());
         }
@@ -426,7 +426,7 @@ pub fn pose_problem(rest: &PlanarMesh, pose: &[[f64; 2]]) -> Option<String> {
 }
 
 /// The path through `meshes` (the keyframes' poses) with the document's times and easings.
-pub fn path_of(doc: &Project, meshes: &[PlanarMesh]) -> Result<Path, String> {
+pub fn path_of(doc: &Project, meshes: &[PlanarMesh]) -> Result<KeyframePath, String> {
     let keys = &doc.keyframes;
     let durations: Vec<f64> = keys.windows(2).map(|w| w[1].time - w[0].time).collect();
     let easings: Vec<Easing> = keys[..keys.len() - 1]
@@ -437,7 +437,7 @@ pub fn path_of(doc: &Project, meshes: &[PlanarMesh]) -> Result<Path, String> {
         .with_durations(durations)
         .with_easings(easings)
         .with_morph(MorphOptions::default().with_allow_inverted(true));
-    Path::with_options(meshes, options).map_err(|e| people(&e.to_string()))
+    KeyframePath::with_options(meshes, options).map_err(|e| people(&e.to_string()))
 }
 
 /// A library message in the page's words: keyframes counted from 1, no vertex or face
@@ -471,8 +471,13 @@ pub fn people(message: &str) -> String {
         rest = &after[close..];
     }
     out.push_str(rest);
-    out.replace("; morphs with --allow-inverted", "")
-        .replace(" (--allow-inverted)", "")
+    // The studio accepts inverted triangles: the library's hint is moot here.
+    out.replace(
+        " (a keyframe with a few inverted triangles morphs with MorphOptions::allow_inverted)",
+        "",
+    )
+    .replace("; morphs with --allow-inverted", "")
+    .replace(" (--allow-inverted)", "")
 }
 
 /// Why a mesh file cannot be a keyframe of the project, in the page's words.

@@ -504,7 +504,7 @@ impl Workspace {
             project: project.clone(),
         };
         let bytes = serde_json::to_vec(&body).map_err(|e| e.to_string())?;
-        crate::io::write_bytes_atomic(&self.autosave_path(), &bytes).map_err(|e| e.to_string())
+        crate::io::write_bytes_atomic(self.autosave_path(), &bytes).map_err(|e| e.to_string())
     }
 
     /// Removes this studio's autosave (the document is saved, or the studio stopped with

@@ -105,3 +105,11 @@ pub fn meshing(e: impl std::fmt::Display) -> PyErr {
 pub fn file(e: impl std::fmt::Display) -> PyErr {
     FileError::new_err(e.to_string())
 }
+
+/// A morph error as [`morph`] gives it, its message led by `at` (which frame of a batch).
+pub fn morph_at(e: bdmorph::MorphError, at: &str) -> PyErr {
+    match e {
+        bdmorph::MorphError::Mesh(m) => MeshError::new_err(format!("{at}: {m}")),
+        other => MorphError::new_err(format!("{at}: {other}")),
+    }
+}

@@ -1,5 +1,5 @@
 """The package as a user calls it, for a type checker: CI runs mypy over this file with the
-package installed (`mypy --strict`-like settings in .ci/run), and test_typing.py runs it, so
+package installed (`mypy --strict`, .ci/run; pyright passes too), and test_typing.py runs it, so
 that it is both well typed and true. Not collected by pytest (its name is not test_*)."""
 
 from __future__ import annotations

@@ -601,6 +601,9 @@ def bounded_distortion(V, F, max_distortion: float, *, pins=None, init: str = "t
     """
     pv = pt = None
     if pins is not None:
+        if isinstance(pins, (str, bytes, np.ndarray)) or not hasattr(pins, "__len__") \
+                or len(pins) != 2:
+            raise ParamError(f"pins must be a pair (vertices, targets), not {pins!r}")
         vertices, targets = pins
         pv, pt = _indices(vertices, "pins"), _points2(targets, "pin targets")
     k = _number(max_distortion, "max_distortion", ParamError, low=1.0, strict=False)

@@ -138,6 +138,9 @@ def test_parameterisation_options():
     for value in (0.5, float("nan"), float("inf"), "2"):
         with pytest.raises(bdmorph.ParamError, match="^max_distortion must be"):
             bdmorph.bounded_distortion(V, F, value)
+    for pins in ([0, 1, 2], 5, "01", ([0], [[0, 0]], "extra")):
+        with pytest.raises(bdmorph.ParamError, match=r"^pins must be a pair \(vertices, targets\)"):
+            bdmorph.bounded_distortion(V, F, 2.0, pins=pins)
 
 
 def test_meshing_options(tmp_path):

@@ -644,8 +644,11 @@ class Deformer:
             _real(tolerance, "tolerance", DeformError, strict=False))
 
     def set_pins(self, pins) -> None:
-        """Sets the handles (vertex indices)."""
-        self._d.set_pins(_indices(pins, "pins"))
+        """Sets the handles (vertex indices; at least one)."""
+        a = _indices(pins, "pins")
+        if a.size == 0:
+            raise DeformError("pins: give at least one handle vertex (the list is empty)")
+        self._d.set_pins(a)
 
     def drag(self, targets) -> np.ndarray:
         """Moves the handles to ``targets`` (``k x 2``, in the pins' order); the pose,

@@ -41,6 +41,12 @@ def test_deformer_other_options(plate):
     for value in (0.5, float("nan"), float("inf")):
         with pytest.raises(bdmorph.DeformError, match="^max_distortion must be a finite number >= 1"):
             bdmorph.Deformer(V, F, "bounded", max_distortion=value)
+    d = bdmorph.Deformer(V, F, "arap")
+    for empty in ([], np.zeros(0)):
+        with pytest.raises(bdmorph.DeformError, match="^pins: give at least one handle"):
+            d.set_pins(empty)
+    with pytest.raises(bdmorph.Error, match=f"pins: vertex {len(V)} does not exist \\(the mesh has {len(V)} vertices"):
+        d.set_pins([0, len(V)])
     # The good values still work, and tolerance 0 (never stop early) is allowed.
     d = bdmorph.Deformer(V, F, "kvf", weight=10, iterations=3, tolerance=0)
     d.set_pins([0, len(V) - 1])

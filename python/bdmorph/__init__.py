@@ -20,8 +20,10 @@ Results are new float64 NumPy arrays. Every solve releases the GIL.
 
 from __future__ import annotations
 
+import math
 import warnings
-from typing import Optional, Sequence, Tuple, Union
+from dataclasses import dataclass
+from typing import List, Literal, Optional, Sequence, Tuple, Type, Union, overload
 
 import numpy as np
 
@@ -59,6 +61,7 @@ __all__ = [
     "MeshingError",
     "FileError",
     "SolverWarning",
+    "FrameFailure",
 ]
 
 
@@ -103,6 +106,8 @@ def _faces(F) -> np.ndarray:
 
 def _indices(S, name: str) -> np.ndarray:
     a = np.atleast_1d(np.asarray(S))
+    if a.size == 0 and a.ndim == 1:
+        a = a.astype(np.int64)          # [] is float64 to NumPy: an empty list of indices
     if a.dtype.kind not in "iu":
         raise Error(f"{name} must be vertex indices (integers), not {a.dtype}")
     if a.ndim != 1:
@@ -125,7 +130,91 @@ def _keyframes(Vs, name: str = "keyframes") -> list:
     Vs = list(Vs)
     if len(Vs) < 2:
         raise MorphError(f"{name}: give at least two poses, not {len(Vs)}")
-    return [_points(V, f"keyframe {i}") for i, V in enumerate(Vs)]
+    keys = [_points(V, f"keyframe {i}") for i, V in enumerate(Vs)]
+    _same_counts([(f"keyframe {i}", V) for i, V in enumerate(keys)])
+    return keys
+
+
+def _whole(value, name: str, error: Type[Error], low: int = 1,
+           high: int = 2**32 - 1) -> Optional[int]:
+    """``value`` (None, or a whole number from ``low`` to ``high``) as an int; anything else is
+    refused with ``error``, naming ``name``."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise error(f"{name} must be a whole number from {low} to {high}, not {value!r}")
+    if not low <= int(value) <= high:
+        raise error(f"{name} must be from {low} to {high}, not {int(value)}")
+    return int(value)
+
+
+def _real(value, name: str, error: Type[Error], *, low: float = 0.0, strict: bool = True,
+          high: Optional[float] = None, high_strict: bool = False) -> Optional[float]:
+    """``value`` (None, or a finite number above ``low`` (at least ``low`` unless ``strict``),
+    and below ``high`` when given) as a float; anything else (NaN, infinities, other types)
+    is refused with ``error``, naming ``name``."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise error(f"{name} must be a number, not {value!r}")
+    x = float(value)
+    want = f"> {low:g}" if strict else f">= {low:g}"
+    if high is not None:
+        want += f" and {'<' if high_strict else '<='} {high:g}"
+    ok = math.isfinite(x) and (x > low if strict else x >= low)
+    if high is not None:
+        ok = ok and (x < high if high_strict else x <= high)
+    if not ok:
+        raise error(f"{name} must be a finite number {want}, not {x!r}")
+    return x
+
+
+def _number(value, name: str, error: Type[Error], **bounds) -> float:
+    """As :func:`_real`, ``None`` refused too."""
+    x = _real(value, name, error, **bounds)
+    if x is None:
+        raise error(f"{name} must be a number, not None")
+    return x
+
+
+def _same_counts(poses: Sequence[Tuple[str, np.ndarray]]) -> None:
+    """Every pose lists as many vertices as the first (checked before the meshes are built,
+    so that a short pose is blamed, not ``F``)."""
+    first, a = poses[0]
+    for name, b in poses[1:]:
+        if len(b) != len(a):
+            raise MeshError(f"{name} has {len(b)} vertices but {first} has {len(a)}: every "
+                            "pose lists the same vertices, in the same order")
+
+
+def _morph_options(tolerance, max_iterations) -> Tuple[Optional[float], Optional[int]]:
+    return (_real(tolerance, "tolerance", MorphError),
+            _whole(max_iterations, "max_iterations", MorphError))
+
+
+@dataclass(frozen=True)
+class FrameFailure:
+    """A frame that a batch (``frames(..., on_error="nan")``) could not compute: its
+    ``index`` in the batch, where it was asked (``at``: the ``t``, or the row of weights of a
+    :class:`Blend`) and the ``error`` it raised (a :class:`MorphError` or
+    :class:`MeshError`, which ``raise failure.error`` raises)."""
+
+    index: int
+    at: Union[float, Tuple[float, ...]]
+    error: Error
+
+
+def _t(t) -> float:
+    """A frame's ``t`` as a float (NaN and infinities are the engine's to refuse, naming t)."""
+    if isinstance(t, bool) or not isinstance(t, (int, float, np.integer, np.floating)):
+        raise MorphError(f"t must be a number, not {t!r}")
+    return float(t)
+
+
+def _on_error(on_error) -> str:
+    if on_error not in ("raise", "nan"):
+        raise MorphError(f"on_error must be 'raise' or 'nan', not {on_error!r}")
+    return on_error
 
 
 def _threads(threads) -> Optional[int]:
@@ -172,19 +261,45 @@ class Morph:
     def __init__(self, V0, V1, F, *, tolerance: Optional[float] = None,
                  max_iterations: Optional[int] = None, allow_inverted: bool = False,
                  warm_start: bool = True, threads: Optional[int] = None):
-        self._m = _native.Morph(_points(V0, "V0"), _points(V1, "V1"), _faces(F), tolerance,
-                                max_iterations, allow_inverted, warm_start, _threads(threads))
+        a, b = _points(V0, "V0"), _points(V1, "V1")
+        _same_counts([("V0", a), ("V1", b)])
+        self._m = _native.Morph(a, b, _faces(F), *_morph_options(tolerance, max_iterations),
+                                allow_inverted, warm_start, _threads(threads))
+        self._failures: List[FrameFailure] = []
 
     def frame(self, t: float) -> np.ndarray:
         """The frame at ``t`` (0 is ``V0``'s shape, 1 is ``V1``'s; slightly outside [0, 1]
         extrapolates while the edge lengths stay Euclidean, as the command line's ``--t``)
         as an ``n x 2`` array."""
-        return self._m.frame(float(t))
+        return self._m.frame(_t(t))
 
-    def frames(self, ts) -> np.ndarray:
+    def frames(self, ts, *, on_error: Literal["raise", "nan"] = "raise") -> np.ndarray:
         """The frames at each of ``ts`` as a ``k x n x 2`` array (one call, the GIL released
-        throughout)."""
-        return self._m.frames(_numbers(ts, "ts"))
+        throughout).
+
+        ``on_error``: ``"raise"`` (default) raises the first frame's error that cannot be
+        computed (a ``t`` past where the extrapolation breaks, NaN, ...), its message led by
+        which one (``ts[2]: ...``), and returns none; ``"nan"`` returns every frame, those that
+        cannot be computed filled with NaN, each listed in :attr:`failures`.
+
+        >>> import numpy as np, bdmorph
+        >>> V0 = np.array([[0, 0], [1, 0], [0, 1]], dtype=float)
+        >>> m = bdmorph.Morph(V0, V0 * [3, 1], [[0, 1, 2]])
+        >>> m.frames([0, 1, float("nan")], on_error="nan").shape
+        (3, 3, 2)
+        >>> [(f.index, f.at) for f in m.failures]
+        [(2, nan)]
+        """
+        t = _numbers(ts, "ts")
+        frames, failed = self._m.frames(t, _on_error(on_error))
+        self._failures = [FrameFailure(i, float(t[i]), e) for i, e in failed]
+        return frames
+
+    @property
+    def failures(self) -> List[FrameFailure]:
+        """The frames the last :meth:`frames` call could not compute (with
+        ``on_error="nan"``; empty when every frame was computed)."""
+        return list(self._failures)
 
     @property
     def stats(self) -> Optional[dict]:
@@ -205,6 +320,7 @@ class Morph:
 
     @property
     def n_vertices(self) -> int:
+        """Vertices of the mesh (rows of each frame)."""
         return self._m.n_vertices
 
     def __repr__(self) -> str:
@@ -225,19 +341,35 @@ class Blend:
     def __init__(self, keyframes: Sequence, F, *, tolerance: Optional[float] = None,
                  max_iterations: Optional[int] = None, allow_inverted: bool = False,
                  warm_start: bool = True, threads: Optional[int] = None):
-        self._b = _native.Blend(_keyframes(keyframes), _faces(F), tolerance, max_iterations,
-                                allow_inverted, warm_start, _threads(threads))
+        self._b = _native.Blend(_keyframes(keyframes), _faces(F),
+                                *_morph_options(tolerance, max_iterations), allow_inverted,
+                                warm_start, _threads(threads))
+        self._failures: List[FrameFailure] = []
 
     def frame(self, weights) -> np.ndarray:
         """The blend with ``weights`` as an ``n x 2`` array."""
         return self._b.frame(_numbers(weights, "weights"))
 
-    def frames(self, weights) -> np.ndarray:
-        """The blends for each row of ``weights`` (``k x poses``) as a ``k x n x 2`` array."""
+    def frames(self, weights, *, on_error: Literal["raise", "nan"] = "raise") -> np.ndarray:
+        """The blends for each row of ``weights`` (``k x poses``) as a ``k x n x 2`` array.
+
+        ``on_error``: ``"raise"`` (default) raises the first row's error (weights that do not
+        sum to 1, ...), its message led by which row (``weights row 2: ...``), and returns
+        none; ``"nan"`` returns every blend, those that cannot be computed filled with NaN,
+        each listed in :attr:`failures`."""
         w = np.asarray(weights)
         if w.dtype.kind not in "fiu" or w.ndim != 2:
             raise MorphError(f"weights must be a k x {self.n_keyframes} array of numbers")
-        return self._b.frames(np.ascontiguousarray(w, dtype=np.float64))
+        w = np.ascontiguousarray(w, dtype=np.float64)
+        frames, failed = self._b.frames(w, _on_error(on_error))
+        self._failures = [FrameFailure(i, tuple(float(x) for x in w[i]), e) for i, e in failed]
+        return frames
+
+    @property
+    def failures(self) -> List[FrameFailure]:
+        """The blends the last :meth:`frames` call could not compute (with
+        ``on_error="nan"``; empty when every blend was computed)."""
+        return list(self._failures)
 
     @property
     def stats(self) -> Optional[dict]:
@@ -246,6 +378,7 @@ class Blend:
 
     @property
     def n_keyframes(self) -> int:
+        """Poses blended (the columns of ``weights``)."""
         return self._b.n_keyframes
 
     @property
@@ -272,7 +405,7 @@ class Path:
     True
     """
 
-    def __init__(self, keyframes: Sequence, F, *, durations=None,
+    def __init__(self, keyframes: Sequence, F, *, durations: Optional[Sequence[float]] = None,
                  easings: Union[None, str, Sequence[str]] = None,
                  tolerance: Optional[float] = None, max_iterations: Optional[int] = None,
                  allow_inverted: bool = False, warm_start: bool = True,
@@ -281,19 +414,39 @@ class Path:
         if isinstance(easings, str):
             easings = [easings] * (len(keys) - 1)
         if durations is not None:
-            durations = [float(d) for d in durations]
+            if isinstance(durations, (str, bytes)) or not hasattr(durations, "__iter__"):
+                raise MorphError(f"durations must be a list of numbers (one per segment), not "
+                                 f"{durations!r}")
+            durations = [_number(d, f"durations[{i}]", MorphError)
+                         for i, d in enumerate(durations)]
         if easings is not None:
             easings = [str(e) for e in easings]
-        self._p = _native.Path(keys, _faces(F), durations, easings, tolerance, max_iterations,
-                               allow_inverted, warm_start, _threads(threads))
+        self._p = _native.Path(keys, _faces(F), durations, easings,
+                               *_morph_options(tolerance, max_iterations), allow_inverted,
+                               warm_start, _threads(threads))
+        self._failures: List[FrameFailure] = []
 
     def frame(self, t: float) -> np.ndarray:
         """The frame at ``t`` in [0, 1] as an ``n x 2`` array."""
-        return self._p.frame(float(t))
+        return self._p.frame(_t(t))
 
-    def frames(self, ts) -> np.ndarray:
-        """The frames at each of ``ts`` as a ``k x n x 2`` array."""
-        return self._p.frames(_numbers(ts, "ts"))
+    def frames(self, ts, *, on_error: Literal["raise", "nan"] = "raise") -> np.ndarray:
+        """The frames at each of ``ts`` as a ``k x n x 2`` array.
+
+        ``on_error``: ``"raise"`` (default) raises the first frame's error (a ``t`` outside
+        [0, 1], ...), its message led by which one (``ts[2]: ...``), and returns none;
+        ``"nan"`` returns every frame, those that cannot be computed filled with NaN, each
+        listed in :attr:`failures`."""
+        t = _numbers(ts, "ts")
+        frames, failed = self._p.frames(t, _on_error(on_error))
+        self._failures = [FrameFailure(i, float(t[i]), e) for i, e in failed]
+        return frames
+
+    @property
+    def failures(self) -> List[FrameFailure]:
+        """The frames the last :meth:`frames` call could not compute (with
+        ``on_error="nan"``; empty when every frame was computed)."""
+        return list(self._failures)
 
     @property
     def keyframe_times(self) -> list:
@@ -316,6 +469,13 @@ class Path:
 
 # ---- geodesics ----------------------------------------------------------------------------
 
+def _sources(S) -> np.ndarray:
+    a = _indices(S, "sources")
+    if a.size == 0:
+        raise GeodesicError("sources: give at least one source vertex (the list is empty)")
+    return a
+
+
 class HeatGeodesics:
     """Geodesic distances on a triangle mesh (``V`` n x 3, or n x 2 for a planar one) by the
     heat method, prefactored once; each query is a few back-substitutions.
@@ -336,16 +496,24 @@ class HeatGeodesics:
 
     def __init__(self, V, F, *, time_factor: Optional[float] = None, boundary: str = "robin",
                  intrinsic_delaunay: bool = True):
-        self._g = _native.HeatGeodesics(_points(V), _faces(F), time_factor, boundary,
-                                        intrinsic_delaunay)
+        self._g = _native.HeatGeodesics(_points(V), _faces(F),
+                                        _real(time_factor, "time_factor", GeodesicError),
+                                        boundary, intrinsic_delaunay)
 
     def distance(self, sources) -> np.ndarray:
-        """Distances from the nearest of ``sources`` (a vertex or a list), an array of n."""
-        return self._g.distance(_indices(sources, "sources"))
+        """Distances from the nearest of ``sources`` (a vertex or a non-empty list), an array
+        of n."""
+        return self._g.distance(_sources(sources))
 
     def distances_each(self, sources) -> np.ndarray:
-        """The distances from each source alone, a ``k x n`` array."""
-        return self._g.distances_each(_indices(sources, "sources"))
+        """The distances from each source alone (a vertex or a non-empty list), a ``k x n``
+        array."""
+        return self._g.distances_each(_sources(sources))
+
+    @property
+    def n_vertices(self) -> int:
+        """Vertices of the mesh (entries of each distance field)."""
+        return self._g.n_vertices
 
     @property
     def stats(self) -> dict:
@@ -359,9 +527,23 @@ class HeatGeodesics:
 
 # ---- parameterisation ---------------------------------------------------------------------
 
+@overload
+def parameterize(V, F, method: str = ..., *, iterations: Optional[int] = ...,
+                 tolerance: Optional[float] = ..., collapse_barrier: Optional[float] = ...,
+                 full_output: Literal[False] = ...) -> np.ndarray: ...
+@overload
+def parameterize(V, F, method: str = ..., *, iterations: Optional[int] = ...,
+                 tolerance: Optional[float] = ..., collapse_barrier: Optional[float] = ...,
+                 full_output: Literal[True]) -> Tuple[np.ndarray, dict]: ...
+@overload
+def parameterize(V, F, method: str = ..., *, iterations: Optional[int] = ...,
+                 tolerance: Optional[float] = ..., collapse_barrier: Optional[float] = ...,
+                 full_output: bool = ...) -> Union[np.ndarray, Tuple[np.ndarray, dict]]: ...
+
+
 def parameterize(V, F, method: str = "arap", *, iterations: Optional[int] = None,
                  tolerance: Optional[float] = None, collapse_barrier: Optional[float] = None,
-                 full_output: bool = False):
+                 full_output: bool = False) -> Union[np.ndarray, Tuple[np.ndarray, dict]]:
     """Flattens a disk-topology mesh into the plane: an ``n x 2`` array of texture
     coordinates (with ``full_output``, also a dict: iterations, stop, energies, flipped and
     collapsed triangles, seconds, ``message``).
@@ -377,14 +559,32 @@ def parameterize(V, F, method: str = "arap", *, iterations: Optional[int] = None
     >>> UV.shape, info["flipped"]
     ((5, 2), 0)
     """
-    uv, info = _native.parameterize(_points(V), _faces(F), method, iterations, tolerance,
-                                    collapse_barrier)
+    uv, info = _native.parameterize(_points(V), _faces(F), method,
+                                    _whole(iterations, "iterations", ParamError),
+                                    _real(tolerance, "tolerance", ParamError, strict=False),
+                                    _real(collapse_barrier, "collapse_barrier", ParamError,
+                                          strict=False))
     _warn(info)
     return (uv, info) if full_output else uv
 
 
+@overload
+def bounded_distortion(V, F, max_distortion: float, *, pins=..., init: str = ...,
+                       iterations: Optional[int] = ...,
+                       full_output: Literal[False] = ...) -> np.ndarray: ...
+@overload
+def bounded_distortion(V, F, max_distortion: float, *, pins=..., init: str = ...,
+                       iterations: Optional[int] = ...,
+                       full_output: Literal[True]) -> Tuple[np.ndarray, dict]: ...
+@overload
+def bounded_distortion(V, F, max_distortion: float, *, pins=..., init: str = ...,
+                       iterations: Optional[int] = ...,
+                       full_output: bool = ...) -> Union[np.ndarray, Tuple[np.ndarray, dict]]: ...
+
+
 def bounded_distortion(V, F, max_distortion: float, *, pins=None, init: str = "tutte",
-                       iterations: Optional[int] = None, full_output: bool = False):
+                       iterations: Optional[int] = None,
+                       full_output: bool = False) -> Union[np.ndarray, Tuple[np.ndarray, dict]]:
     """Flattens a disk-topology mesh with every triangle's conformal distortion at most
     ``max_distortion`` (K >= 1), from a Tutte (or ``init="lscm"``) start, trying the other
     start when the first does not meet the bound. ``pins``: ``(vertices, targets)``, targets
@@ -401,10 +601,14 @@ def bounded_distortion(V, F, max_distortion: float, *, pins=None, init: str = "t
     """
     pv = pt = None
     if pins is not None:
+        if isinstance(pins, (str, bytes, np.ndarray)) or not hasattr(pins, "__len__") \
+                or len(pins) != 2:
+            raise ParamError(f"pins must be a pair (vertices, targets), not {pins!r}")
         vertices, targets = pins
         pv, pt = _indices(vertices, "pins"), _points2(targets, "pin targets")
-    uv, info = _native.bounded_distortion(_points(V), _faces(F), float(max_distortion), pv, pt,
-                                          init, iterations)
+    k = _number(max_distortion, "max_distortion", ParamError, low=1.0, strict=False)
+    uv, info = _native.bounded_distortion(_points(V), _faces(F), k, pv, pt, init,
+                                          _whole(iterations, "iterations", ParamError))
     _warn(info)
     return (uv, info) if full_output else uv
 
@@ -433,12 +637,18 @@ class Deformer:
     def __init__(self, V, F, method: str = "kvf", *, weight: Optional[float] = None,
                  max_distortion: Optional[float] = None, iterations: Optional[int] = None,
                  tolerance: Optional[float] = None):
-        self._d = _native.Deformer(_points(V), _faces(F), method, weight, max_distortion,
-                                   iterations, tolerance)
+        self._d = _native.Deformer(
+            _points(V), _faces(F), method, _real(weight, "weight", DeformError),
+            _real(max_distortion, "max_distortion", DeformError, low=1.0, strict=False),
+            _whole(iterations, "iterations", DeformError),
+            _real(tolerance, "tolerance", DeformError, strict=False))
 
     def set_pins(self, pins) -> None:
-        """Sets the handles (vertex indices)."""
-        self._d.set_pins(_indices(pins, "pins"))
+        """Sets the handles (vertex indices; at least one)."""
+        a = _indices(pins, "pins")
+        if a.size == 0:
+            raise DeformError("pins: give at least one handle vertex (the list is empty)")
+        self._d.set_pins(a)
 
     def drag(self, targets) -> np.ndarray:
         """Moves the handles to ``targets`` (``k x 2``, in the pins' order); the pose,
@@ -447,7 +657,7 @@ class Deformer:
 
     def set_weight(self, weight: float) -> None:
         """KVF's handle weight (refactors; the pins stay)."""
-        self._d.set_weight(float(weight))
+        self._d.set_weight(_number(weight, "weight", DeformError))
 
     def reset(self) -> None:
         """Back to the rest shape."""
@@ -463,11 +673,13 @@ class Deformer:
         return self._d.positions
 
     @property
-    def pins(self) -> list:
+    def pins(self) -> List[int]:
+        """The handles (vertex indices), in :meth:`set_pins`' order."""
         return self._d.pins
 
     @property
     def method(self) -> str:
+        """``"kvf"``, ``"arap"`` or ``"bounded"``."""
         return self._d.method
 
     @property
@@ -487,8 +699,19 @@ def mesh_from_image(path, vertices: int = 2000, *, tolerance: Optional[float] = 
                     threshold: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
     """Meshes a picture's subject (its opaque part; for an opaque picture, what differs from
     the background): ``(V, F)`` with about ``vertices`` vertices, ``V`` ``n x 2`` in the
-    picture's pixels (y up), ready to morph or pose."""
-    return _native.mesh_from_image(str(path), int(vertices), tolerance, min_angle, threshold)
+    picture's pixels (y up), ready to morph or pose.
+
+    Options: ``vertices`` (3 to 20,000,000), ``tolerance`` (how far, in pixels, the outline
+    may be simplified; > 0, default 1), ``min_angle`` (the smallest triangle angle, in
+    degrees, from 0 to 33; default 28), ``threshold`` (in [0, 1): the opacity, colour
+    difference or brightness the subject is traced at)."""
+    n = _whole(vertices, "vertices", MeshingError, low=3, high=20_000_000)
+    if n is None:
+        raise MeshingError("vertices must be a whole number from 3 to 20000000, not None")
+    return _native.mesh_from_image(
+        str(path), n, _real(tolerance, "tolerance", MeshingError),
+        _real(min_angle, "min_angle", MeshingError, strict=False, high=33.0),
+        _real(threshold, "threshold", MeshingError, strict=False, high=1.0, high_strict=True))
 
 
 def read_mesh(path) -> Tuple[np.ndarray, np.ndarray]:

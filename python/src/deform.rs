@@ -12,6 +12,17 @@ use bdmorph::deform::{
 use crate::arrays;
 use crate::errors;
 
+/// Refuses a KVF handle weight that is not a finite number > 0.
+fn check_weight(w: f64) -> PyResult<()> {
+    if w.is_finite() && w > 0.0 {
+        Ok(())
+    } else {
+        Err(errors::deform(format!(
+            "weight must be a finite number > 0, not {w}"
+        )))
+    }
+}
+
 /// A planar mesh prepared for posing by handles.
 #[pyclass(module = "bdmorph._bdmorph")]
 pub struct Deformer {
@@ -49,6 +60,25 @@ impl Deformer {
         }
         if iterations == Some(0) {
             return Err(errors::deform("iterations must be at least 1"));
+        }
+        // Refused here, each by its name (the library would find a bad weight only when the
+        // pins are set, and takes any tolerance).
+        if let Some(w) = weight {
+            check_weight(w)?;
+        }
+        if let Some(k) = max_distortion {
+            if !(k.is_finite() && k >= 1.0) {
+                return Err(errors::deform(format!(
+                    "max_distortion must be a finite number >= 1, not {k}"
+                )));
+            }
+        }
+        if let Some(t) = tolerance {
+            if !(t.is_finite() && t >= 0.0) {
+                return Err(errors::deform(format!(
+                    "tolerance must be a finite number >= 0, not {t}"
+                )));
+            }
         }
         let method = match method {
             "kvf" => {
@@ -126,6 +156,7 @@ impl Deformer {
 
     /// KVF's handle weight (refactors; the pins stay).
     fn set_weight(&mut self, py: Python<'_>, weight: f64) -> PyResult<()> {
+        check_weight(weight)?;
         let inner = &mut self.inner;
         py.detach(|| inner.set_weight(weight))
             .map_err(errors::deform)

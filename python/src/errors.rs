@@ -1,54 +1,59 @@
 //! The package's exceptions: `bdmorph.Error` (a `ValueError`) and one subclass per system,
 //! each carrying the library's message (the command line's).
+//!
+//! They are declared in the module `bdmorph` (their `__module__`), where the package
+//! re-exports them, so that pickle finds them by name: an error raised in a
+//! `multiprocessing` or `ProcessPoolExecutor` worker reaches the parent as itself, its
+//! message (its only argument) intact.
 
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 create_exception!(
-    _bdmorph,
+    bdmorph,
     Error,
     PyValueError,
     "Any error of bdmorph (a ValueError): the message says what and where."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     MeshError,
     Error,
     "A mesh that cannot be used: shapes, indices, non-finite or inverted triangles..."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     MorphError,
     Error,
     "A morph, blend or path that cannot be prepared or computed."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     GeodesicError,
     Error,
     "Heat-method geodesics that cannot be prepared or queried."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     ParamError,
     Error,
     "A parameterisation that cannot be computed."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     DeformError,
     Error,
     "Posing by handles: bad pins, targets or options."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     MeshingError,
     Error,
     "A picture or outline that cannot be meshed."
 );
 create_exception!(
-    _bdmorph,
+    bdmorph,
     FileError,
     Error,
     "A file that cannot be read or written."
@@ -104,4 +109,12 @@ pub fn meshing(e: impl std::fmt::Display) -> PyErr {
 /// A file error.
 pub fn file(e: impl std::fmt::Display) -> PyErr {
     FileError::new_err(e.to_string())
+}
+
+/// A morph error as [`morph`] gives it, its message led by `at` (which frame of a batch).
+pub fn morph_at(e: bdmorph::MorphError, at: &str) -> PyErr {
+    match e {
+        bdmorph::MorphError::Mesh(m) => MeshError::new_err(format!("{at}: {m}")),
+        other => MorphError::new_err(format!("{at}: {other}")),
+    }
 }

@@ -9,6 +9,16 @@ use bdmorph::geodesic::{Boundary, HeatGeodesics as Heat, HeatOptions};
 use crate::arrays;
 use crate::errors;
 
+/// Source vertices: at least one, each below `n`.
+fn sources_of(s: &PyReadonlyArray1<'_, i64>, n: usize) -> PyResult<Vec<u32>> {
+    if s.as_array().is_empty() {
+        return Err(errors::geodesic(
+            "sources: give at least one source vertex (the list is empty)",
+        ));
+    }
+    arrays::indices(s, n, "sources")
+}
+
 /// Geodesic distances on a triangle mesh by the heat method.
 #[pyclass(module = "bdmorph._bdmorph")]
 pub struct HeatGeodesics {
@@ -44,6 +54,11 @@ impl HeatGeodesics {
             .with_boundary(boundary)
             .with_intrinsic_delaunay(intrinsic_delaunay);
         if let Some(m) = time_factor {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(errors::geodesic(format!(
+                    "time_factor must be a finite number > 0, not {m}"
+                )));
+            }
             options = options.with_time_factor(m);
         }
         let n = mesh.positions.len();
@@ -59,7 +74,7 @@ impl HeatGeodesics {
         py: Python<'py>,
         sources: PyReadonlyArray1<'_, i64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let sources = arrays::indices(&sources, self.n, "sources")?;
+        let sources = sources_of(&sources, self.n)?;
         let inner = &mut self.inner;
         let d = py
             .detach(|| inner.distance(&sources))
@@ -73,7 +88,7 @@ impl HeatGeodesics {
         py: Python<'py>,
         sources: PyReadonlyArray1<'_, i64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let sources = arrays::indices(&sources, self.n, "sources")?;
+        let sources = sources_of(&sources, self.n)?;
         let inner = &mut self.inner;
         let rows = py
             .detach(|| inner.distances_each(&sources))

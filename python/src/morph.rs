@@ -1,6 +1,7 @@
 //! `Morph`, `Blend` and `Path`: frames computed by the compiled engine, the GIL released.
 
 use numpy::{PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyBaseException;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -39,6 +40,94 @@ fn options(
     Ok(o)
 }
 
+/// What a batch (`frames`) does with a frame that cannot be computed: `"raise"` the error
+/// (its message led by which frame), or `"nan"`: fill that frame with NaN, go on, and list
+/// the failure.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum OnError {
+    Raise,
+    Nan,
+}
+
+impl OnError {
+    fn parse(s: &str) -> PyResult<OnError> {
+        match s {
+            "raise" => Ok(OnError::Raise),
+            "nan" => Ok(OnError::Nan),
+            other => Err(errors::MorphError::new_err(format!(
+                "on_error must be 'raise' or 'nan', not '{other}'"
+            ))),
+        }
+    }
+}
+
+/// A batch's frames (flattened), the last good frame's statistics and the failures (index,
+/// error); or, with [`OnError::Raise`], the first failure.
+type Batch = (
+    Vec<f64>,
+    Option<FrameStats>,
+    Vec<(usize, bdmorph::MorphError)>,
+);
+
+/// Solves `count` frames of `n` vertices, frame `i` by `solve(i, buffer)`.
+fn batch(
+    count: usize,
+    n: usize,
+    buffer: &mut [[f64; 2]],
+    on_error: OnError,
+    mut solve: impl FnMut(usize, &mut [[f64; 2]]) -> Result<FrameStats, bdmorph::MorphError>,
+) -> Result<Batch, (usize, bdmorph::MorphError)> {
+    let mut flat = Vec::with_capacity(count * n * 2);
+    let mut last = None;
+    let mut failures = Vec::new();
+    for i in 0..count {
+        match solve(i, buffer) {
+            Ok(stats) => {
+                last = Some(stats);
+                flat.extend(buffer.iter().flatten());
+            }
+            Err(e) if on_error == OnError::Nan => {
+                failures.push((i, e));
+                flat.extend(std::iter::repeat_n(f64::NAN, n * 2));
+            }
+            Err(e) => return Err((i, e)),
+        }
+    }
+    Ok((flat, last, failures))
+}
+
+/// A batch's result for Python: the `k x n x 2` frames and the failures as
+/// `(index, exception)` pairs.
+type Frames<'py> = (Bound<'py, PyArray3<f64>>, Vec<(usize, Py<PyBaseException>)>);
+
+/// The failures of a batch as `(index, exception)` pairs.
+fn failures(
+    py: Python<'_>,
+    f: Vec<(usize, bdmorph::MorphError)>,
+) -> Vec<(usize, Py<PyBaseException>)> {
+    f.into_iter()
+        .map(|(i, e)| (i, errors::morph(e).into_value(py)))
+        .collect()
+}
+
+/// Checks that every pose lists as many vertices as the first, before any mesh is built (a
+/// short pose would otherwise be blamed on `F`).
+fn same_counts(poses: &[(&str, &PyReadonlyArray2<'_, f64>)]) -> PyResult<()> {
+    let Some((first, v)) = poses.first() else {
+        return Ok(());
+    };
+    let n = v.as_array().nrows();
+    for (name, v) in &poses[1..] {
+        let m = v.as_array().nrows();
+        if m != n {
+            return Err(errors::mesh(format!(
+                "{name} has {m} vertices but {first} has {n}: every pose lists the same vertices, in the same order"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// A frame's statistics as a dict (`t`, `newton_iterations`, `factorizations`,
 /// `cg_iterations`, `gradient_norm`, `flipped_triangles`, `max_conformal_distortion`,
 /// `seconds`).
@@ -65,6 +154,10 @@ fn keyframes(
     f: &PyReadonlyArray2<'_, i64>,
     allow_inverted: bool,
 ) -> PyResult<Vec<PlanarMesh>> {
+    let names: Vec<String> = (0..vs.len()).map(|i| format!("keyframe {i}")).collect();
+    let poses: Vec<(&str, &PyReadonlyArray2<'_, f64>)> =
+        names.iter().map(String::as_str).zip(vs).collect();
+    same_counts(&poses)?;
     vs.iter()
         .enumerate()
         .map(|(i, v)| arrays::planar(v, f, &format!("keyframe {i}"), allow_inverted))
@@ -98,6 +191,7 @@ impl Morph {
         threads: Option<usize>,
     ) -> PyResult<Morph> {
         let options = options(tolerance, max_iterations, allow_inverted, warm_start)?;
+        same_counts(&[("V0", &v0), ("V1", &v1)])?;
         let source = arrays::planar(&v0, &f, "V0", allow_inverted)?;
         let target = arrays::planar(&v1, &f, "V1", allow_inverted)?;
         let n = source.positions.len();
@@ -124,32 +218,35 @@ impl Morph {
         Ok(arrays::out2(py, &self.buffer))
     }
 
-    /// The frames at each of `ts` as a k x n x 2 array.
+    /// The frames at each of `ts` as a k x n x 2 array, and the failures (`on_error="nan"`:
+    /// those frames are NaN) as `(index, exception)` pairs.
+    #[pyo3(signature = (ts, on_error="raise"))]
     fn frames<'py>(
         &mut self,
         py: Python<'py>,
         ts: PyReadonlyArray1<'_, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        on_error: &str,
+    ) -> PyResult<Frames<'py>> {
+        let on_error = OnError::parse(on_error)?;
         let ts = ts.as_array().to_vec();
-        let (n, inner, buffer) = (self.n, &mut self.inner, &mut self.buffer);
-        let threads = &self.threads;
-        let (flat, last) = py
+        let (n, inner) = (self.n, &mut self.inner);
+        let (buffer, threads) = (&mut self.buffer, &self.threads);
+        let (flat, last, failed) = py
             .detach(|| {
                 threads.run(|| {
-                    let mut flat = Vec::with_capacity(ts.len() * n * 2);
-                    let mut last = None;
-                    for &t in &ts {
-                        last = Some(inner.frame_into(t, buffer)?);
-                        flat.extend(buffer.iter().flatten());
-                    }
-                    Ok::<_, bdmorph::MorphError>((flat, last))
+                    batch(ts.len(), n, buffer, on_error, |i, out| {
+                        inner.frame_into(ts[i], out)
+                    })
                 })
             })
-            .map_err(errors::morph)?;
+            .map_err(|(i, e)| errors::morph_at(e, &format!("ts[{i}]")))?;
         if last.is_some() {
             self.stats = last;
         }
-        Ok(arrays::out_frames(py, ts.len(), n, flat))
+        Ok((
+            arrays::out_frames(py, ts.len(), n, flat),
+            failures(py, failed),
+        ))
     }
 
     /// The last frame's statistics (None before the first frame).
@@ -236,12 +333,16 @@ impl Blend {
         Ok(arrays::out2(py, &self.buffer))
     }
 
-    /// The blends for each row of `weights` (k x keyframes) as a k x n x 2 array.
+    /// The blends for each row of `weights` (k x keyframes) as a k x n x 2 array, and the
+    /// failures (`on_error="nan"`: those frames are NaN) as `(index, exception)` pairs.
+    #[pyo3(signature = (weights, on_error="raise"))]
     fn frames<'py>(
         &mut self,
         py: Python<'py>,
         weights: PyReadonlyArray2<'_, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        on_error: &str,
+    ) -> PyResult<Frames<'py>> {
+        let on_error = OnError::parse(on_error)?;
         let w = weights.as_array();
         if w.ncols() != self.k {
             return Err(errors::MorphError::new_err(format!(
@@ -252,25 +353,24 @@ impl Blend {
             )));
         }
         let rows: Vec<Vec<f64>> = w.rows().into_iter().map(|r| r.to_vec()).collect();
-        let (n, inner, buffer) = (self.n, &mut self.inner, &mut self.buffer);
-        let threads = &self.threads;
-        let (flat, last) = py
+        let (n, inner) = (self.n, &mut self.inner);
+        let (buffer, threads) = (&mut self.buffer, &self.threads);
+        let (flat, last, failed) = py
             .detach(|| {
                 threads.run(|| {
-                    let mut flat = Vec::with_capacity(rows.len() * n * 2);
-                    let mut last = None;
-                    for row in &rows {
-                        last = Some(inner.frame_weights_into(row, buffer)?);
-                        flat.extend(buffer.iter().flatten());
-                    }
-                    Ok::<_, bdmorph::MorphError>((flat, last))
+                    batch(rows.len(), n, buffer, on_error, |i, out| {
+                        inner.frame_weights_into(&rows[i], out)
+                    })
                 })
             })
-            .map_err(errors::morph)?;
+            .map_err(|(i, e)| errors::morph_at(e, &format!("weights row {i}")))?;
         if last.is_some() {
             self.stats = last;
         }
-        Ok(arrays::out_frames(py, rows.len(), n, flat))
+        Ok((
+            arrays::out_frames(py, rows.len(), n, flat),
+            failures(py, failed),
+        ))
     }
 
     /// The last frame's statistics (None before the first frame).
@@ -354,32 +454,35 @@ impl Path {
         Ok(arrays::out2(py, &self.buffer))
     }
 
-    /// The frames at each of `ts` as a k x n x 2 array.
+    /// The frames at each of `ts` as a k x n x 2 array, and the failures (`on_error="nan"`:
+    /// those frames are NaN) as `(index, exception)` pairs.
+    #[pyo3(signature = (ts, on_error="raise"))]
     fn frames<'py>(
         &mut self,
         py: Python<'py>,
         ts: PyReadonlyArray1<'_, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        on_error: &str,
+    ) -> PyResult<Frames<'py>> {
+        let on_error = OnError::parse(on_error)?;
         let ts = ts.as_array().to_vec();
-        let (n, inner, buffer) = (self.n, &mut self.inner, &mut self.buffer);
-        let threads = &self.threads;
-        let (flat, last) = py
+        let (n, inner) = (self.n, &mut self.inner);
+        let (buffer, threads) = (&mut self.buffer, &self.threads);
+        let (flat, last, failed) = py
             .detach(|| {
                 threads.run(|| {
-                    let mut flat = Vec::with_capacity(ts.len() * n * 2);
-                    let mut last = None;
-                    for &t in &ts {
-                        last = Some(inner.frame_into(t, buffer)?);
-                        flat.extend(buffer.iter().flatten());
-                    }
-                    Ok::<_, bdmorph::MorphError>((flat, last))
+                    batch(ts.len(), n, buffer, on_error, |i, out| {
+                        inner.frame_into(ts[i], out)
+                    })
                 })
             })
-            .map_err(errors::morph)?;
+            .map_err(|(i, e)| errors::morph_at(e, &format!("ts[{i}]")))?;
         if last.is_some() {
             self.stats = last;
         }
-        Ok(arrays::out_frames(py, ts.len(), n, flat))
+        Ok((
+            arrays::out_frames(py, ts.len(), n, flat),
+            failures(py, failed),
+        ))
     }
 
     /// The path's `t` at each keyframe.

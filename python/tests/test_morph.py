@@ -137,7 +137,7 @@ def test_bad_inputs_are_refused_with_the_reason(tmp_path, cli, strip):
         ((V0.astype(str), V1, F), bdmorph.MeshError, "numbers"),
         ((V0, V1, F + len(V0)), bdmorph.MeshError, "V has"),
         ((V0, V1, -F), bdmorph.MeshError, "vertex -"),
-        ((V0, V1[:-1], F[:-3]), bdmorph.MeshError, "vertex"),
+        ((V0, V1[:-1], F[:-3]), bdmorph.MeshError, "^V1 has .* vertices but V0 has"),
         ((np.column_stack([V0, np.ones(len(V0))]), V1, F), bdmorph.MeshError, "z = 1"),
     ]
     for args, error, says in cases:

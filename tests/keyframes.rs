@@ -480,10 +480,7 @@ fn distortion_never_exceeds_the_targets_on_the_man_poses() {
         said.split('/').next().unwrap_or(""),
         said.split('/').nth(1).unwrap_or("")
     );
-    assert!(
-        readme.contains(&figures),
-        "README.md should say {figures}"
-    );
+    assert!(readme.contains(&figures), "README.md should say {figures}");
 }
 
 mod properties {

@@ -73,48 +73,54 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// A library message with the options it names spelled as Python's keywords
+/// (`allow_inverted=True`, not the Rust option's name).
+fn said(e: &impl std::fmt::Display) -> String {
+    bdmorph::Spelling::PYTHON.respell(&e.to_string())
+}
+
 /// A mesh error as `MeshError`.
 pub fn mesh(e: impl std::fmt::Display) -> PyErr {
-    MeshError::new_err(e.to_string())
+    MeshError::new_err(said(&e))
 }
 
 /// A morph error as `MorphError`, or `MeshError` when it is about the meshes.
 pub fn morph(e: bdmorph::MorphError) -> PyErr {
     match e {
-        bdmorph::MorphError::Mesh(m) => MeshError::new_err(m.to_string()),
-        other => MorphError::new_err(other.to_string()),
+        bdmorph::MorphError::Mesh(m) => MeshError::new_err(said(&m)),
+        other => MorphError::new_err(said(&other)),
     }
 }
 
 /// A geodesic error.
 pub fn geodesic(e: impl std::fmt::Display) -> PyErr {
-    GeodesicError::new_err(e.to_string())
+    GeodesicError::new_err(said(&e))
 }
 
 /// A parameterisation error.
 pub fn param(e: impl std::fmt::Display) -> PyErr {
-    ParamError::new_err(e.to_string())
+    ParamError::new_err(said(&e))
 }
 
 /// A posing error.
 pub fn deform(e: impl std::fmt::Display) -> PyErr {
-    DeformError::new_err(e.to_string())
+    DeformError::new_err(said(&e))
 }
 
 /// A meshing error.
 pub fn meshing(e: impl std::fmt::Display) -> PyErr {
-    MeshingError::new_err(e.to_string())
+    MeshingError::new_err(said(&e))
 }
 
 /// A file error.
 pub fn file(e: impl std::fmt::Display) -> PyErr {
-    FileError::new_err(e.to_string())
+    FileError::new_err(said(&e))
 }
 
 /// A morph error as [`morph`] gives it, its message led by `at` (which frame of a batch).
 pub fn morph_at(e: bdmorph::MorphError, at: &str) -> PyErr {
     match e {
-        bdmorph::MorphError::Mesh(m) => MeshError::new_err(format!("{at}: {m}")),
-        other => MorphError::new_err(format!("{at}: {other}")),
+        bdmorph::MorphError::Mesh(m) => MeshError::new_err(format!("{at}: {}", said(&m))),
+        other => MorphError::new_err(format!("{at}: {}", said(&other))),
     }
 }

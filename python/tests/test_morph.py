@@ -240,3 +240,14 @@ def test_threads_agree_repeat_and_are_checked():
     for bad in (0, 1025, -1, 2.5, "2", True):
         with pytest.raises(bdmorph.MorphError, match="threads"):
             bdmorph.Morph(V0, V1, F, threads=bad)
+
+
+def test_messages_name_the_python_keyword_not_the_rust_option():
+    V = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.5]], dtype=float)
+    F = np.array([[0, 1, 4], [1, 2, 4], [2, 4, 3], [3, 0, 4]])
+    with pytest.raises(bdmorph.MeshError) as caught:
+        bdmorph.Morph(V, V * 1.1, F)
+    message = str(caught.value)
+    assert "clockwise" in message
+    assert "allow_inverted=True" in message
+    assert "MorphOptions" not in message and "--allow-inverted" not in message

@@ -66,6 +66,7 @@ pub mod reference;
 pub mod render;
 #[cfg(feature = "studio")]
 pub mod studio;
+pub mod threads;
 
 /// The sparse Cholesky engine every system factors and solves with.
 pub use bdmorph_cholesky as cholesky;
@@ -84,6 +85,7 @@ pub use param::messages::Spelling;
 #[allow(deprecated)]
 pub use path::Path;
 pub use path::{Easing, KeyframePath, PathOptions};
+pub use threads::ThreadsError;
 
 /// The README's examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -222,3 +222,129 @@ fn frames_called_from_outside_the_pool_are_those_of_the_pool() {
         .all(|(p, q)| p[0].to_bits() == q[0].to_bits() && p[1].to_bits() == q[1].to_bits());
     assert!(same, "{threads} threads: outside the pool, the pool's bits");
 }
+
+/// The library's own thread option on each precompute object: the same frames, distances,
+/// maps and poses on one thread, two threads and the global pool (to the solver's
+/// tolerance), the same bits for the same count, and a count out of range refused by name.
+#[test]
+fn each_precompute_object_runs_on_the_threads_it_is_given() {
+    use bdmorph::deform::{Deformer, PoseMethod};
+    use bdmorph::geodesic::{HeatGeodesics, HeatOptions};
+    use bdmorph::param::{ParamMethod, ParamOptions, Parameterization};
+    use bdmorph::{Blend, KeyframePath, SurfaceMesh};
+
+    let a = generate::disk(60, 0.2);
+    let b = generate::bend(&a, 0.6);
+    let size = a.diameter();
+    let close = |p: &[[f64; 2]], q: &[[f64; 2]]| {
+        p.iter()
+            .zip(q)
+            .map(|(x, y)| (x[0] - y[0]).hypot(x[1] - y[1]))
+            .fold(0.0, f64::max)
+            <= 1e-9 * size
+    };
+    let options = [None, Some(1), Some(2)];
+    // Morph, Blend, KeyframePath.
+    let morphs: Vec<Vec<[f64; 2]>> = options
+        .iter()
+        .map(|&t| {
+            let o = match t {
+                Some(n) => MorphOptions::default().with_threads(n),
+                None => MorphOptions::default(),
+            };
+            let mut m = Morph::new(&a, &b, o).expect("morph");
+            m.frame(0.4).expect("frame").positions.to_vec()
+        })
+        .collect();
+    assert!(close(&morphs[0], &morphs[1]) && close(&morphs[0], &morphs[2]));
+    let again = Morph::new(&a, &b, MorphOptions::default().with_threads(2))
+        .expect("morph")
+        .frame(0.4)
+        .expect("frame")
+        .positions
+        .to_vec();
+    assert_eq!(again, morphs[2], "the same count repeats bit for bit");
+    let keys = [a.clone(), b.clone()];
+    assert!(
+        Blend::with_options(&keys, MorphOptions::default().with_threads(2))
+            .expect("blend")
+            .frame_weights(&[0.6, 0.4])
+            .map(|f| close(f.positions, &morphs[0]))
+            .expect("frame")
+    );
+    let path_options =
+        bdmorph::PathOptions::default().with_morph(MorphOptions::default().with_threads(1));
+    let mut path = KeyframePath::with_options(&keys, path_options).expect("path");
+    assert!(close(path.frame(0.4).expect("frame").positions, &morphs[0]));
+    // Geodesics.
+    let surface = SurfaceMesh::from(&a);
+    let distances: Vec<Vec<f64>> = options
+        .iter()
+        .map(|&t| {
+            let o = match t {
+                Some(n) => HeatOptions::default().with_threads(n),
+                None => HeatOptions::default(),
+            };
+            HeatGeodesics::new(&surface, o)
+                .expect("geodesics")
+                .distance(&[0])
+                .expect("distance")
+        })
+        .collect();
+    for d in &distances[1..] {
+        let worst = d
+            .iter()
+            .zip(&distances[0])
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 1e-9 * size, "geodesics differ by {worst}");
+    }
+    // Parameterisation.
+    let maps: Vec<Vec<[f64; 2]>> = options
+        .iter()
+        .map(|&t| {
+            let o = match t {
+                Some(n) => ParamOptions::default().with_threads(n),
+                None => ParamOptions::default(),
+            };
+            let mut p =
+                Parameterization::new(&surface, ParamMethod::Lscm, o).expect("parameterisation");
+            p.solve().expect("solve");
+            p.uv().to_vec()
+        })
+        .collect();
+    assert!(close(&maps[0], &maps[1]) && close(&maps[0], &maps[2]));
+    // Posing.
+    let poses: Vec<Vec<[f64; 2]>> = options
+        .iter()
+        .map(|&t| {
+            let mut d = Deformer::new(&a, PoseMethod::arap()).expect("deformer");
+            d.set_threads(t).expect("threads");
+            d.set_pins(&[0, 1]).expect("pins");
+            let p = a.positions[1];
+            d.drag(&[a.positions[0], [p[0] + 0.1, p[1] + 0.05]])
+                .expect("drag");
+            d.positions().to_vec()
+        })
+        .collect();
+    assert!(close(&poses[0], &poses[1]) && close(&poses[0], &poses[2]));
+    // Counts out of range.
+    for n in [0, 1025] {
+        let said = Morph::new(&a, &b, MorphOptions::default().with_threads(n))
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            said.contains(&format!("threads must be from 1 to 1024, not {n}")),
+            "{said}"
+        );
+        assert!(HeatGeodesics::new(&surface, HeatOptions::default().with_threads(n)).is_err());
+        assert!(Parameterization::new(
+            &surface,
+            ParamMethod::Tutte,
+            ParamOptions::default().with_threads(n)
+        )
+        .is_err());
+        let mut d = Deformer::new(&a, PoseMethod::kvf()).expect("deformer");
+        assert!(d.set_threads(Some(n)).is_err());
+    }
+}

@@ -106,6 +106,9 @@ impl From<crate::io::ReadError> for DeformError {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DeformError {
+    /// [`Deformer::set_threads`]'s count cannot be used.
+    #[error(transparent)]
+    Threads(#[from] crate::ThreadsError),
     /// The mesh is not valid.
     #[error(transparent)]
     Mesh(#[from] MeshError),
@@ -194,6 +197,8 @@ pub struct DragReport {
 
 /// A mesh prepared for posing.
 pub struct Deformer {
+    /// Where its systems are factored and its drags solved ([`Deformer::set_threads`]).
+    pool: crate::threads::Pool,
     rest: PlanarMesh,
     frames: Frames,
     diameter: f64,
@@ -231,6 +236,7 @@ impl Deformer {
             }
         };
         Ok(Deformer {
+            pool: crate::threads::Pool::default(),
             solver,
             diameter: mesh.diameter().max(f64::MIN_POSITIVE),
             positions: mesh.positions.clone(),
@@ -252,6 +258,30 @@ impl Deformer {
     /// Sets the pinned vertices (the handles, in the order [`Deformer::drag`] takes their
     /// targets) and factors the system. The pose so far is kept as the next drag's start.
     pub fn set_pins(&mut self, pins: &[u32]) -> Result<(), DeformError> {
+        let pool = self.pool.clone();
+        pool.run(|| self.set_pins_here(pins))
+    }
+
+    /// Runs the factorisations and drags from now on in a pool of its own of `threads`
+    /// threads (`None`: rayon's global pool, one thread per core, the default). The split of
+    /// a factorisation over threads is planned when it is analysed: set the threads before
+    /// [`Deformer::set_pins`].
+    ///
+    /// ```
+    /// use bdmorph::{deform::{Deformer, PoseMethod}, generate};
+    /// let disk = generate::disk(6, 0.2);
+    /// let mut pose = Deformer::new(&disk, PoseMethod::arap())?;
+    /// pose.set_threads(Some(1))?;
+    /// pose.set_pins(&[0, 1])?;
+    /// assert!(pose.set_threads(Some(0)).is_err());
+    /// # Ok::<(), bdmorph::deform::DeformError>(())
+    /// ```
+    pub fn set_threads(&mut self, threads: Option<usize>) -> Result<(), DeformError> {
+        self.pool = crate::threads::Pool::new(threads)?;
+        Ok(())
+    }
+
+    fn set_pins_here(&mut self, pins: &[u32]) -> Result<(), DeformError> {
         let n = self.rest.positions.len();
         let pinned = pinned_vertices(n, pins)?;
         if let Some(vertex) = unpinned_piece(n, &self.rest.faces, &pinned) {
@@ -268,8 +298,9 @@ impl Deformer {
 
     /// Sets [`PoseMethod::Kvf`]'s handle weight and refactors; the pins stay.
     pub fn set_weight(&mut self, weight: f64) -> Result<(), DeformError> {
+        let (pool, frames) = (&self.pool, &self.frames);
         match &mut self.solver {
-            Solver::Kvf(s) => s.set_weight(&self.frames, weight),
+            Solver::Kvf(s) => pool.run(|| s.set_weight(frames, weight)),
             _ => Err(DeformError::NoWeight),
         }
     }
@@ -277,6 +308,11 @@ impl Deformer {
     /// Moves the pins to `targets` (one per pin, in [`Deformer::set_pins`]'s order) and
     /// updates the pose, starting from the previous one. Allocates nothing.
     pub fn drag(&mut self, targets: &[[f64; 2]]) -> Result<DragReport, DeformError> {
+        let pool = self.pool.clone();
+        pool.run(|| self.drag_here(targets))
+    }
+
+    fn drag_here(&mut self, targets: &[[f64; 2]]) -> Result<DragReport, DeformError> {
         if targets.len() != self.pins.len() || self.pins.is_empty() {
             return Err(DeformError::TargetCount {
                 pins: self.pins.len(),

@@ -127,6 +127,10 @@ pub struct HeatOptions {
     /// the margin (every shared mesh) nothing changes. `0` turns it off, and then a triangle
     /// of zero area is an error.
     pub mollify: f64,
+    /// Threads for this object's work: `None` (default) for rayon's global pool, one thread
+    /// per core; `Some(n)` for a pool of its own of `n` threads, in which the systems are
+    /// factored and the queries solved ([`crate::threads`]).
+    pub threads: Option<usize>,
 }
 
 impl Default for HeatOptions {
@@ -142,11 +146,17 @@ impl Default for HeatOptions {
             intrinsic_delaunay: true,
             flip_boundary: true,
             mollify: 1e-5,
+            threads: None,
         }
     }
 }
 
 impl HeatOptions {
+    /// Runs on a pool of its own of `threads` threads ([`HeatOptions::threads`]).
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = Some(threads);
+        self
+    }
     /// Sets the time factor `m` of `t = m h²`.
     pub fn with_time_factor(mut self, m: f64) -> Self {
         self.time_factor = m;
@@ -244,6 +254,9 @@ pub enum GeodesicError {
         /// Buffer length.
         got: usize,
     },
+    /// [`HeatOptions::threads`] cannot be used.
+    #[error(transparent)]
+    Threads(#[from] crate::ThreadsError),
     /// The mesh file could not be read (for callers that read and measure with one `?`).
     #[error(transparent)]
     Read(#[from] crate::io::ReadError),
@@ -368,6 +381,8 @@ impl System {
 /// Geodesic distances on one mesh by the heat method, everything that depends on the mesh
 /// alone computed once. See [the module](super).
 pub struct HeatGeodesics {
+    /// Where it was built and its queries run.
+    pool: crate::threads::Pool,
     n_vertices: usize,
     geometry: FaceGeometry,
     heat: System,
@@ -423,6 +438,13 @@ impl HeatGeodesics {
     /// Checks the mesh, builds the (intrinsic Delaunay) triangulation and its operators, and
     /// factors the heat and Poisson systems once.
     pub fn new(mesh: &SurfaceMesh, options: HeatOptions) -> Result<HeatGeodesics, GeodesicError> {
+        let pool = crate::threads::Pool::new(options.threads)?;
+        let mut built = pool.run(|| HeatGeodesics::new_here(mesh, options))?;
+        built.pool = pool;
+        Ok(built)
+    }
+
+    fn new_here(mesh: &SurfaceMesh, options: HeatOptions) -> Result<HeatGeodesics, GeodesicError> {
         if mesh.faces.is_empty() {
             return Err(GeodesicError::Empty);
         }
@@ -577,6 +599,7 @@ impl HeatGeodesics {
             Anchor::Sources => (Vec::new(), Vec::new()),
         };
         Ok(HeatGeodesics {
+            pool: crate::threads::Pool::default(),
             misfit: vec![(0.0, 0); n_components],
             anchor: options.anchor,
             nearest: if ring.is_empty() {
@@ -650,12 +673,18 @@ impl HeatGeodesics {
             });
         }
         self.check_sources(sources)?;
-        self.query(&[sources], out)
+        let pool = self.pool.clone();
+        pool.run(|| self.query(&[sources], out))
     }
 
     /// One distance field per source, reusing the factors (the back-substitutions run on all
     /// sources at once): `result[k][v]` is the distance from `sources[k]` to `v`.
     pub fn distances_each(&mut self, sources: &[u32]) -> Result<Vec<Vec<f64>>, GeodesicError> {
+        let pool = self.pool.clone();
+        pool.run(|| self.distances_each_here(sources))
+    }
+
+    fn distances_each_here(&mut self, sources: &[u32]) -> Result<Vec<Vec<f64>>, GeodesicError> {
         self.check_sources(sources)?;
         let groups: Vec<[u32; 1]> = sources.iter().map(|&s| [s]).collect();
         let groups: Vec<&[u32]> = groups.iter().map(|g| &g[..]).collect();

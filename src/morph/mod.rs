@@ -50,6 +50,10 @@ pub struct MorphOptions {
     /// differs from the given pose around them (it reproduces the pose only where no
     /// triangle is inverted). A mesh mostly clockwise is still refused as mirrored.
     pub allow_inverted: bool,
+    /// Threads for this object's work: `None` (default) for rayon's global pool, one thread
+    /// per core; `Some(n)` for a pool of its own of `n` threads (1 to
+    /// [`crate::threads::MAX_THREADS`]), in which it is built and its frames are solved.
+    pub threads: Option<usize>,
 }
 
 impl Default for MorphOptions {
@@ -61,6 +65,7 @@ impl Default for MorphOptions {
             tangents: false,
             factor_precision: FactorPrecision::Auto,
             allow_inverted: false,
+            threads: None,
         }
     }
 }
@@ -69,6 +74,21 @@ impl MorphOptions {
     /// Sets the gradient-norm tolerance of Newton's method.
     pub fn with_tolerance(mut self, tolerance: f64) -> Self {
         self.newton = self.newton.with_tolerance(tolerance);
+        self
+    }
+    /// Runs on a pool of its own of `threads` threads ([`MorphOptions::threads`]).
+    ///
+    /// ```
+    /// use bdmorph::{generate, Morph, MorphOptions};
+    /// let a = generate::disk(6, 0.2);
+    /// let b = generate::bend(&a, 0.5);
+    /// let mut one = Morph::new(&a, &b, MorphOptions::default().with_threads(1))?;
+    /// let mut every = Morph::new(&a, &b, MorphOptions::default())?;
+    /// assert_eq!(one.frame(0.5)?.positions, every.frame(0.5)?.positions);
+    /// # Ok::<(), bdmorph::MorphError>(())
+    /// ```
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = Some(threads);
         self
     }
     /// Accepts keyframes with a few inverted triangles ([`MorphOptions::allow_inverted`]).
@@ -353,6 +373,9 @@ pub enum MorphError {
         /// itself or runs clockwise); empty when each can be alone but no filling suits all.
         keyframes: Vec<usize>,
     },
+    /// [`MorphOptions::threads`] cannot be used.
+    #[error(transparent)]
+    Threads(#[from] crate::ThreadsError),
     /// The output buffer has the wrong length.
     #[error("output buffer holds {got} positions, the mesh has {expected} vertices")]
     OutputLength {

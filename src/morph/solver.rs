@@ -84,6 +84,8 @@ pub(crate) struct Solver {
     positions: Vec<[f64; 2]>,
     distortion: Vec<f64>,
     structure: Structure,
+    /// Where it was built and its frames are solved.
+    pool: crate::threads::Pool,
 }
 
 impl std::fmt::Debug for Solver {
@@ -165,6 +167,17 @@ impl Solver {
     /// Checks the keyframes (at least one), splits the mesh into pieces, fills their holes,
     /// compiles each piece and prepares its solver.
     pub(crate) fn new(
+        keyframes: &[PlanarMesh],
+        unwrap: Unwrap,
+        options: MorphOptions,
+    ) -> Result<Solver, MorphError> {
+        let pool = crate::threads::Pool::new(options.threads)?;
+        let mut solver = pool.run(|| Solver::new_here(keyframes, unwrap, options))?;
+        solver.pool = pool;
+        Ok(solver)
+    }
+
+    fn new_here(
         keyframes: &[PlanarMesh],
         unwrap: Unwrap,
         options: MorphOptions,
@@ -282,6 +295,7 @@ impl Solver {
                 pieces: infos,
                 inverted,
             },
+            pool: crate::threads::Pool::default(),
         })
     }
 
@@ -295,8 +309,12 @@ impl Solver {
     ) -> Result<Solver, MorphError> {
         // The program holds one disk; a face it does not have is refused when the solver
         // looks up the face's edges ([`MorphError::ProgramMismatch`]).
+        let pool = crate::threads::Pool::new(options.threads)?;
         let inverted = check(keyframes, options.allow_inverted)?;
-        Solver::disk(program, keyframes, inverted, unwrap, options)
+        let mut solver =
+            pool.run(|| Solver::disk(program, keyframes, inverted, unwrap, options))?;
+        solver.pool = pool;
+        Ok(solver)
     }
 
     /// The solver of one disk, from its program.
@@ -324,6 +342,7 @@ impl Solver {
                 faces: (0..first.faces.len() as u32).collect(),
                 out: Vec::new(),
             }],
+            pool: crate::threads::Pool::default(),
             structure: Structure {
                 pieces: vec![PieceInfo {
                     vertices: n,
@@ -400,11 +419,21 @@ impl Solver {
         time: Option<f64>,
         line: Option<Line>,
     ) -> Result<FrameStats, MorphError> {
+        let pool = self.pool.clone();
+        pool.run(|| self.frame_here(weights, time, line))
+    }
+
+    fn frame_here(
+        &mut self,
+        weights: &[f64],
+        time: Option<f64>,
+        line: Option<Line>,
+    ) -> Result<FrameStats, MorphError> {
         if self.direct {
             return self.pieces[0].engine.frame(weights, time, line);
         }
         let mut out = std::mem::take(&mut self.positions);
-        let result = self.frame_into(weights, time, line, &mut out);
+        let result = self.frame_into_here(weights, time, line, &mut out);
         self.positions = out;
         result
     }
@@ -412,6 +441,17 @@ impl Solver {
     /// Solves the frame with `weights` into `out`; see [`Engine::frame_into`]. Allocates
     /// nothing unless it fails; on error `out` is left untouched.
     pub(crate) fn frame_into(
+        &mut self,
+        weights: &[f64],
+        time: Option<f64>,
+        line: Option<Line>,
+        out: &mut [[f64; 2]],
+    ) -> Result<FrameStats, MorphError> {
+        let pool = self.pool.clone();
+        pool.run(|| self.frame_into_here(weights, time, line, out))
+    }
+
+    fn frame_into_here(
         &mut self,
         weights: &[f64],
         time: Option<f64>,

@@ -113,6 +113,10 @@ impl std::str::FromStr for ParamMethod {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct ParamOptions {
+    /// Threads for this object's work: `None` (default) for rayon's global pool, one thread
+    /// per core; `Some(n)` for a pool of its own of `n` threads, in which it is prepared and
+    /// each iteration runs ([`crate::threads`]).
+    pub threads: Option<usize>,
     /// The most iterations [`Parameterization::solve`] runs (default 100 for local/global
     /// methods, 200 for projected Newton).
     pub iterations: Option<u32>,
@@ -213,11 +217,17 @@ impl Default for ParamOptions {
             iterations: None,
             tolerance: 1e-9,
             collapse_barrier: DEFAULT_COLLAPSE_BARRIER,
+            threads: None,
         }
     }
 }
 
 impl ParamOptions {
+    /// Runs on a pool of its own of `threads` threads ([`ParamOptions::threads`]).
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = Some(threads);
+        self
+    }
     /// Sets the iteration limit.
     pub fn with_iterations(mut self, iterations: u32) -> Self {
         self.iterations = Some(iterations);
@@ -254,6 +264,9 @@ pub(crate) fn check_indices(mesh: &SurfaceMesh) -> Result<(), ParamError> {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ParamError {
+    /// [`ParamOptions::threads`] cannot be used.
+    #[error(transparent)]
+    Threads(#[from] crate::ThreadsError),
     /// The mesh file could not be read (for callers that read and parameterise with one `?`).
     #[error(transparent)]
     Read(#[from] crate::io::ReadError),
@@ -446,6 +459,8 @@ enum Solver {
 
 /// A parameterisation in progress: the current map and the prepared solver.
 pub struct Parameterization {
+    /// Where it was prepared and its iterations run.
+    pool: crate::threads::Pool,
     method: ParamMethod,
     options: ParamOptions,
     frames: Frames,
@@ -471,6 +486,17 @@ impl Parameterization {
     /// computes the per-triangle constants and the start (the result itself for `tutte` and
     /// `lscm`, the Tutte map for the iterative methods), and prepares the iterations.
     pub fn new(
+        mesh: &SurfaceMesh,
+        method: ParamMethod,
+        options: ParamOptions,
+    ) -> Result<Parameterization, ParamError> {
+        let pool = crate::threads::Pool::new(options.threads)?;
+        let mut built = pool.run(|| Parameterization::new_here(mesh, method, options))?;
+        built.pool = pool;
+        Ok(built)
+    }
+
+    fn new_here(
         mesh: &SurfaceMesh,
         method: ParamMethod,
         options: ParamOptions,
@@ -528,6 +554,7 @@ impl Parameterization {
             }
         };
         Ok(Parameterization {
+            pool: crate::threads::Pool::default(),
             method,
             options,
             frames,
@@ -570,6 +597,11 @@ impl Parameterization {
     /// One iteration; `None` for the direct methods (`tutte`, `lscm`), which are done at
     /// [`Parameterization::new`].
     pub fn step(&mut self) -> Result<Option<StepReport>, ParamError> {
+        let pool = self.pool.clone();
+        pool.run(|| self.step_here())
+    }
+
+    fn step_here(&mut self) -> Result<Option<StepReport>, ParamError> {
         match &mut self.solver {
             Solver::Direct => Ok(None),
             Solver::LocalGlobal(lg) => {

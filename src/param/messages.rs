@@ -14,11 +14,13 @@ use super::{
 /// shows them to people who set the options elsewhere respells them:
 ///
 /// ```
-/// use bdmorph::{generate, Morph, MorphOptions, Spelling};
-/// let square = generate::disk(4, 0.3);
-/// let mut mirrored = square.clone();
-/// mirrored.positions.iter_mut().for_each(|p| p[0] = -p[0]);
-/// let e = Morph::new(&square, &mirrored, MorphOptions::default()).unwrap_err().to_string();
+/// use bdmorph::{Morph, MorphOptions, PlanarMesh, Spelling};
+/// // A square fan of four triangles, the third one clockwise.
+/// let fan = PlanarMesh {
+///     positions: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5]],
+///     faces: vec![[0, 1, 4], [1, 2, 4], [2, 4, 3], [3, 0, 4]],
+/// };
+/// let e = Morph::new(&fan, &fan, MorphOptions::default()).unwrap_err().to_string();
 /// assert!(e.contains("MorphOptions::allow_inverted"), "{e}");
 /// assert!(Spelling::CLI.respell(&e).contains("--allow-inverted"));
 /// assert!(Spelling::PYTHON.respell(&e).contains("allow_inverted=True"));

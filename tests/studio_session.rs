@@ -164,7 +164,20 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
                 rng.pick(&pins)
             },
         },
-        5 => Request::PinsClear,
+        5 => match rng.below(3) {
+            0 => Request::PinsClear,
+            1 => Request::PinMove {
+                from: if pins.is_empty() || rng.below(5) == 0 {
+                    vertex(rng)
+                } else {
+                    rng.pick(&pins)
+                },
+                to: vertex(rng),
+            },
+            _ => Request::Ghosts {
+                keyframes: (0..rng.below(4)).map(|_| k(rng)).collect(),
+            },
+        },
         6..=9 => {
             let mut targets: Vec<[f64; 2]> = pins
                 .iter()
@@ -214,6 +227,7 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
         19 => Request::SetTime {
             keyframe: k(rng),
             time: time(rng),
+            ripple: rng.below(2) == 0,
         },
         20 => Request::SetEasing {
             keyframe: k(rng),
@@ -658,6 +672,7 @@ fn messages_count_from_one() {
         Request::SetTime {
             keyframe: 1,
             time: 7.0,
+            ripple: false,
         },
     )
     .expect("refused");
@@ -670,4 +685,130 @@ fn messages_count_from_one() {
         .labels()
         .last()
         .is_some_and(|l| l.contains("keyframe 1")));
+}
+
+/// A ripple retime moves the keyframe and every later one by the same time, as one undo step;
+/// without ripple the later ones stay.
+#[test]
+fn a_ripple_retime_moves_the_later_keyframes_in_one_step() {
+    let mut s = session(animated(4, 4), "ripple");
+    let times =
+        |s: &Session| -> Vec<f64> { s.project().keyframes.iter().map(|k| k.time).collect() };
+    assert_eq!(times(&s), [0.0, 1.0, 2.0, 3.0]);
+    let set = |keyframe, time, ripple| Request::SetTime {
+        keyframe,
+        time,
+        ripple,
+    };
+    assert_eq!(ask(&mut s, set(1, 1.5, true)), None);
+    assert_eq!(times(&s), [0.0, 1.5, 2.5, 3.5]);
+    assert_eq!(s.view().current, 1);
+    // Earlier again, past where keyframe 3 was: each step keeps the order.
+    assert_eq!(ask(&mut s, set(1, 0.25, true)), None);
+    assert_eq!(times(&s), [0.0, 0.25, 1.25, 2.25]);
+    // Not before the keyframe before it.
+    assert!(ask(&mut s, set(2, 0.2, true)).is_some());
+    assert_eq!(times(&s), [0.0, 0.25, 1.25, 2.25]);
+    assert_eq!(ask(&mut s, Request::Undo), None);
+    assert_eq!(times(&s), [0.0, 1.5, 2.5, 3.5]);
+    assert_eq!(ask(&mut s, Request::Undo), None);
+    assert_eq!(times(&s), [0.0, 1.0, 2.0, 3.0]);
+    assert_eq!(ask(&mut s, set(1, 1.5, false)), None);
+    assert_eq!(times(&s), [0.0, 1.5, 2.0, 3.0]);
+    // The last keyframe ripples alone; the first never moves.
+    assert_eq!(ask(&mut s, set(3, 4.0, true)), None);
+    assert_eq!(times(&s), [0.0, 1.5, 2.0, 4.0]);
+    assert!(ask(&mut s, set(0, 0.5, true)).is_some());
+}
+
+/// A pin moved to another vertex keeps the pose (the handle is placed again), is one undo step,
+/// and is refused onto a pinned vertex or off the mesh.
+#[test]
+fn a_pin_moves_to_another_vertex_without_moving_the_pose() {
+    let mut s = session(animated(4, 3), "pin-move");
+    assert_eq!(ask(&mut s, Request::Select { keyframe: 1 }), None);
+    assert_eq!(ask(&mut s, Request::PinAdd { vertex: 3 }), None);
+    assert_eq!(ask(&mut s, Request::PinAdd { vertex: 5 }), None);
+    let pose = s.project().keyframes[1].positions.clone();
+    assert_eq!(ask(&mut s, Request::PinMove { from: 3, to: 7 }), None);
+    assert_eq!(s.project().keyframes[1].pins, [7, 5]);
+    assert_eq!(s.project().keyframes[1].positions, pose);
+    assert!(ask(&mut s, Request::PinMove { from: 7, to: 5 }).is_some());
+    assert!(ask(
+        &mut s,
+        Request::PinMove {
+            from: 7,
+            to: 1_000_000
+        }
+    )
+    .is_some());
+    assert!(ask(&mut s, Request::PinMove { from: 8, to: 9 }).is_some());
+    assert_eq!(ask(&mut s, Request::Undo), None);
+    assert_eq!(s.project().keyframes[1].pins, [3, 5]);
+}
+
+/// Keyframe poses are sent to the page that asks, each with its revision, which is new when
+/// that keyframe's pose changes and the same when another's does.
+#[test]
+fn keyframe_poses_are_sent_with_revisions_that_follow_their_edits() {
+    let mut s = session(animated(4, 3), "ghosts");
+    let revs = |s: &Session| -> Vec<u64> {
+        let state: serde_json::Value = serde_json::from_str(&s.state_json()).expect("json");
+        state["keyframes"]
+            .as_array()
+            .expect("keys")
+            .iter()
+            .map(|k| k["rev"].as_u64().expect("rev"))
+            .collect()
+    };
+    let before = revs(&s);
+    let reply = s.handle(Request::Ghosts {
+        keyframes: vec![2, 0],
+    });
+    let ghosts: Vec<&Vec<u8>> = reply
+        .answers
+        .iter()
+        .filter_map(|a| match a {
+            Answer::Binary(b) => Some(b),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(ghosts.len(), 2);
+    let word = |b: &[u8], i: usize| u32::from_le_bytes(b[4 * i..4 * i + 4].try_into().expect("4"));
+    let n = s.project().mesh.positions.len();
+    assert_eq!(
+        [word(ghosts[0], 0), word(ghosts[0], 1), word(ghosts[0], 2)],
+        [4, 2, n as u32]
+    );
+    assert_eq!(u64::from(word(ghosts[0], 3)), before[2]);
+    assert_eq!(ghosts[0].len(), 16 + 8 * n);
+    let x = f32::from_le_bytes(ghosts[0][16..20].try_into().expect("4"));
+    assert_eq!(x, s.project().keyframes[2].positions[0][0] as f32);
+    // A drag on keyframe 2 renews its revision only.
+    assert_eq!(ask(&mut s, Request::Select { keyframe: 1 }), None);
+    assert_eq!(ask(&mut s, Request::PinAdd { vertex: 0 }), None);
+    let p = s.project().keyframes[1].positions[0];
+    assert_eq!(
+        ask(
+            &mut s,
+            Request::Drag {
+                seq: 1,
+                pins: vec![0],
+                targets: vec![[p[0] + 0.05, p[1]]],
+            }
+        ),
+        None
+    );
+    assert_eq!(ask(&mut s, Request::DragEnd), None);
+    let after = revs(&s);
+    assert_eq!((after[0], after[2]), (before[0], before[2]));
+    assert_ne!(after[1], before[1]);
+    assert!(ask(&mut s, Request::Ghosts { keyframes: vec![3] }).is_some());
+    assert!(ask(
+        &mut s,
+        Request::Ghosts {
+            keyframes: vec![0; 65]
+        }
+    )
+    .is_some());
 }

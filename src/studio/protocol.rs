@@ -21,6 +21,8 @@ pub mod kind {
     pub const MESH: u32 = 2;
     /// A frame of the animation at a time.
     pub const FRAME: u32 = 3;
+    /// A keyframe's pose, asked for by a page for its onion skins and key thumbnails.
+    pub const GHOST: u32 = 4;
     /// A file uploaded by the page (page to server).
     pub const UPLOAD: u32 = 10;
 }
@@ -54,6 +56,14 @@ pub enum Request {
     },
     /// Every pin of the keyframe shown removed.
     PinsClear,
+    /// The pin on `from` moved to vertex `to` of the keyframe shown: the handle is placed
+    /// again, the pose does not move.
+    PinMove {
+        /// The pinned vertex.
+        from: u32,
+        /// The vertex the pin goes to.
+        to: u32,
+    },
     /// The pins moved: `pins` (the keyframe's pins, in order, as the page knows them) to
     /// `targets`. Answered with the pose; one undo step per stroke (until `drag_end`).
     Drag {
@@ -106,12 +116,16 @@ pub enum Request {
         /// Its new index.
         to: usize,
     },
-    /// Move a keyframe in time (not the first).
+    /// Move a keyframe in time (not the first); with `ripple`, every later keyframe moves by
+    /// the same time (one undo step).
     SetTime {
         /// Its index.
         keyframe: usize,
         /// Seconds.
         time: f64,
+        /// Whether the later keyframes move with it.
+        #[serde(default)]
+        ripple: bool,
     },
     /// The easing of the segment starting at a keyframe.
     SetEasing {
@@ -256,6 +270,12 @@ pub enum Request {
         /// The recovery file's name, as listed.
         name: String,
     },
+    /// The poses of some keyframes (at most [`MAX_GHOSTS`]), answered to the asking page
+    /// only, one [`kind::GHOST`] message each ([`ghost_bytes`]).
+    Ghosts {
+        /// Their indices.
+        keyframes: Vec<usize>,
+    },
     /// A note dismissed.
     Dismiss {
         /// Its number.
@@ -291,6 +311,28 @@ pub fn upload(message: &[u8]) -> Result<(UploadHeader, &[u8]), String> {
     let header: UploadHeader =
         serde_json::from_slice(header).map_err(|e| format!("an upload's header: {e}"))?;
     Ok((header, &message[8 + length..]))
+}
+
+/// The most keyframe poses one [`Request::Ghosts`] asks for.
+pub const MAX_GHOSTS: usize = 64;
+
+/// A keyframe's pose as a binary message: `[kind::GHOST, keyframe, n, revision]` as u32 (the
+/// revision is the keyframe's `rev` in the state, low 32 bits), then `2n` f32 positions.
+pub fn ghost_bytes(keyframe: usize, revision: u64, positions: &[[f64; 2]]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(16 + 8 * positions.len());
+    for x in [
+        kind::GHOST,
+        keyframe as u32,
+        positions.len() as u32,
+        revision as u32,
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    for p in positions {
+        out.extend_from_slice(&(p[0] as f32).to_le_bytes());
+        out.extend_from_slice(&(p[1] as f32).to_le_bytes());
+    }
+    out
 }
 
 /// A frame as a binary message: `[kind, seq, n, m]` as u32, `[largest distortion]` f32,

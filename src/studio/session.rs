@@ -24,7 +24,7 @@ use super::open::{
     fitted_uv, per_vertex_uv, read_named_texture, read_texture, OpenOptions, Texture,
 };
 use super::project::{Keyframe, PictureSettings, Project};
-use super::protocol::{frame_bytes, kind, mesh_bytes, upload, Request};
+use super::protocol::{frame_bytes, ghost_bytes, kind, mesh_bytes, upload, Request, MAX_GHOSTS};
 use super::workspace::{kind_of, read_regular, Recovered, Workspace, MAX_UPLOAD};
 use crate::mesh::PlanarMesh;
 use crate::render::{colour, raster, Drawing, ImageSize, Viewport};
@@ -152,6 +152,9 @@ pub struct Session {
     /// Bumped on every change to the document (for autosaves).
     version: u64,
     shown_cache: Option<(u64, Vec<u8>)>,
+    /// Each keyframe's pose revision (new when its pose may have changed), for the pages'
+    /// copies of keyframe poses (onion skins, thumbnails).
+    pose_revs: Vec<u64>,
     /// The size and centre of the rest mesh (for the reach of drags).
     reach: ([f64; 2], f64),
 }
@@ -256,9 +259,11 @@ impl Session {
             dragging: false,
             version: 0,
             shown_cache: None,
+            pose_revs: Vec::new(),
             reach,
         };
         session.bump_all();
+        session.renew_pose_revs();
         Ok(session)
     }
 
@@ -350,6 +355,16 @@ impl Session {
         self.tick
     }
 
+    /// Every keyframe's pose revision renewed (the keyframes were added, removed, reordered or
+    /// the mesh replaced).
+    fn renew_pose_revs(&mut self) {
+        let len = self.doc.keyframes.len();
+        self.pose_revs = (0..len).map(|_| 0).collect();
+        for k in 0..len {
+            self.pose_revs[k] = self.next();
+        }
+    }
+
     fn bump_state(&mut self) {
         self.revs.state = self.next();
     }
@@ -376,6 +391,11 @@ impl Session {
     fn changed(&mut self, touched: Touched) {
         self.version += 1;
         self.bump_state();
+        if touched.mesh || touched.keyframes || self.pose_revs.len() != self.doc.keyframes.len() {
+            self.renew_pose_revs();
+        } else if let Some(k) = touched.pose {
+            self.pose_revs[k] = self.next();
+        }
         if touched.mesh {
             self.bump_all();
             self.reach = reach_of(&self.engine.rest);
@@ -601,6 +621,70 @@ impl Session {
         )
     }
 
+    fn pin_move(&mut self, from: u32, to: u32) -> Done {
+        let n = self.doc.mesh.positions.len();
+        if to as usize >= n {
+            return Err(format!("there is no vertex there (the mesh has {n})"));
+        }
+        if self.view.shown != Shown::Keyframe {
+            return Err("a frame between keyframes is shown: its pins are a keyframe's".into());
+        }
+        let k = self.view.current;
+        let mut pins = self.current_key().pins.clone();
+        let Some(at) = pins.iter().position(|&v| v == from) else {
+            return Err("that vertex has no pin".into());
+        };
+        if from == to {
+            return Ok(());
+        }
+        if pins.contains(&to) {
+            return Err("that vertex is already pinned".into());
+        }
+        pins[at] = to;
+        self.commit(
+            format!("move a pin on keyframe {}", nth(k)),
+            Edit::Pins { keyframe: k, pins },
+        )
+    }
+
+    /// Keyframe `keyframe` moved to `time`; with `ripple`, the later ones by the same time.
+    fn set_time(&mut self, keyframe: usize, time: f64, ripple: bool) -> Done {
+        let len = self.doc.keyframes.len();
+        if !ripple || keyframe == 0 || keyframe >= len || keyframe + 1 == len {
+            return self.commit(
+                format!("time of keyframe {}", nth(keyframe)),
+                Edit::Time { keyframe, time },
+            );
+        }
+        let shift = time - self.doc.keyframes[keyframe].time;
+        if !shift.is_finite() {
+            return Err(format!("keyframe {} cannot go to {time} s", nth(keyframe)));
+        }
+        // Later keyframes first when moving later, earlier first when moving earlier, so that
+        // each step keeps the order.
+        let mut order: Vec<usize> = (keyframe..len).collect();
+        if shift > 0.0 {
+            order.reverse();
+        }
+        let edits = order
+            .into_iter()
+            .map(|k| Edit::Time {
+                keyframe: k,
+                time: self.doc.keyframes[k].time + shift,
+            })
+            .collect();
+        self.commit(
+            format!(
+                "move keyframes {} to {} by {shift:+.3} s",
+                nth(keyframe),
+                nth(len - 1)
+            ),
+            Edit::Batch(edits),
+        )?;
+        self.show_keyframe(keyframe);
+        Ok(())
+    }
+
     fn drag(&mut self, pins: &[u32], targets: &[[f64; 2]]) -> Done {
         if self.view.shown != Shown::Keyframe {
             return Err("a frame between keyframes is shown: pin it to make it a keyframe".into());
@@ -641,6 +725,7 @@ impl Session {
             self.dragging = true;
         }
         self.version += 1;
+        self.pose_revs[k] = self.next();
         // The state (undo label, the keyframe's flips) changes with a stroke's first move,
         // or when the flips do; the shape with every move.
         if first || flips != self.engine.flips[k] {
@@ -1207,6 +1292,11 @@ impl Session {
             .map(|(k, &flipped)| {
                 serde_json::json!({"time": k.time, "easing": k.easing, "pins": k.pins.len(), "flipped": flipped})
             })
+            .zip(&self.pose_revs)
+            .map(|(mut key, rev)| {
+                key["rev"] = serde_json::json!(rev & 0xffff_ffff);
+                key
+            })
             .collect();
         let job = self.job.as_ref().map(|j| {
             serde_json::json!({
@@ -1484,6 +1574,26 @@ impl Session {
                     Edit::Pins { keyframe: k, pins },
                 )?;
             }
+            Request::PinMove { from, to } => self.pin_move(from, to)?,
+            Request::Ghosts { keyframes } => {
+                if keyframes.len() > MAX_GHOSTS {
+                    return Err(format!(
+                        "{} keyframe poses asked for at once; at most {MAX_GHOSTS}",
+                        keyframes.len()
+                    ));
+                }
+                for k in keyframes {
+                    let key = self
+                        .doc
+                        .keyframes
+                        .get(k)
+                        .ok_or_else(|| format!("there is no keyframe {}", nth(k)))?;
+                    let rev = self.pose_revs.get(k).copied().unwrap_or(0);
+                    reply
+                        .answers
+                        .push(Answer::Binary(ghost_bytes(k, rev, &key.positions)));
+                }
+            }
             Request::PinsClear => {
                 let k = self.view.current;
                 if self.current_key().pins.is_empty() {
@@ -1498,7 +1608,11 @@ impl Session {
                 )?;
             }
             Request::Drag { pins, targets, .. } => self.drag(&pins, &targets)?,
-            Request::DragEnd => self.dragging = false,
+            Request::DragEnd => {
+                self.dragging = false;
+                // The pages learn the dragged keyframe's new pose revision.
+                self.bump_state();
+            }
             Request::Method {
                 name,
                 weight,
@@ -1534,12 +1648,11 @@ impl Session {
                     Edit::Reorder { from: keyframe, to },
                 )?;
             }
-            Request::SetTime { keyframe, time } => {
-                self.commit(
-                    format!("time of keyframe {}", nth(keyframe)),
-                    Edit::Time { keyframe, time },
-                )?;
-            }
+            Request::SetTime {
+                keyframe,
+                time,
+                ripple,
+            } => self.set_time(keyframe, time, ripple)?,
             Request::SetEasing { keyframe, easing } => {
                 self.commit(
                     format!("easing after keyframe {}", nth(keyframe)),

@@ -146,7 +146,14 @@ fn message(r: &mut Rng) -> Value {
         2 => json!({"op": "mode", "mode": r.pick(&["pose", "outline", "other"])}),
         3 | 4 => json!({"op": "pin_add", "vertex": index(r)}),
         5 => json!({"op": "pin_remove", "vertex": index(r)}),
-        6 => json!({"op": "pins_clear"}),
+        6 => match r.below(3) {
+            0 => json!({"op": "pins_clear"}),
+            1 => json!({"op": "pin_move", "from": index(r), "to": index(r)}),
+            _ => {
+                let keys: Vec<Value> = (0..r.below(4)).map(|_| index(r)).collect();
+                json!({"op": "ghosts", "keyframes": keys})
+            }
+        },
         7..=10 => {
             let n = r.below(3);
             let pins: Vec<Value> = (0..n).map(|_| index(r)).collect();
@@ -164,7 +171,9 @@ fn message(r: &mut Rng) -> Value {
         18 => json!({"op": "add_keyframe", "time": number(r), "copy": index(r)}),
         19 => json!({"op": "delete_keyframe", "keyframe": index(r)}),
         20 => json!({"op": "move_keyframe", "keyframe": index(r), "to": index(r)}),
-        21 => json!({"op": "set_time", "keyframe": index(r), "time": number(r)}),
+        21 => {
+            json!({"op": "set_time", "keyframe": index(r), "time": number(r), "ripple": r.below(2) == 0})
+        }
         22 => json!({"op": "set_easing", "keyframe": index(r), "easing": text(r)}),
         23 => json!({"op": "frame_to_keyframe", "time": number(r)}),
         24 => {

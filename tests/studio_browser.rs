@@ -366,11 +366,14 @@ impl PageTab {
     }
 
     /// Moves the time slider to `fraction` of its length with the mouse.
+    /// A click on the timeline's axis at `fraction` of the animation's duration (away from
+    /// the keys' thumbnails, on the ruler).
     fn slide_to(&self, fraction: f64) {
-        let [left, top, right, bottom] = self.rect("#time");
-        // The thumb's centre runs from half a thumb in from either end; Chromium's is 16 px.
-        let x = left + 8.0 + fraction * (right - left - 16.0);
-        self.click([x, (top + bottom) / 2.0]);
+        let at = self.eval(&format!(
+            "studio.timeToPage({fraction} * studio.state.duration)"
+        ));
+        let top = self.rect("#time")[1];
+        self.click([at[0].as_f64().expect("x"), top + 8.0]);
     }
 
     /// Leaves the page on purpose (no unsaved-changes question) and reloads it.
@@ -1512,6 +1515,18 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
     let studio = Studio::start(&dir, Some("disk5k.obj"));
     let page = PageTab::open(&browser, &studio.url, &dir);
     page.tab.activate().expect("front tab");
+    // With onion skins on: a second keyframe, posed, with the first as its ghost.
+    page.click_on("#add-key");
+    page.wait(
+        "studio.state.keyframes.length === 2 && studio.state.current === 1",
+        10,
+    );
+    let onion = "(() => { const o = document.getElementById('onion'); if (!o.checked) o.click(); return o.checked; })()";
+    page.eval(onion);
+    page.wait(
+        "document.getElementById('onion').checked && studio.ghosts.has(0)",
+        10,
+    );
     page.click(page.vertex(0));
     page.wait("studio.pins.length === 1", 10);
     let rim = small.positions.len() - 1;
@@ -1542,19 +1557,24 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
     let studio = Studio::start(&dir, Some("disk10k.json"));
     let page = PageTab::open(&browser, &studio.url, &dir);
     page.tab.activate().expect("front tab");
+    page.eval(onion);
+    page.wait("document.getElementById('onion').checked", 10);
     let scrub = page.eval_async(
         "(async () => {
             const pause = (ms) => new Promise((done) => { const until = performance.now() + ms; const c = new MessageChannel(); c.port1.onmessage = () => (performance.now() >= until ? done() : c.port2.postMessage(0)); c.port2.postMessage(0); });
-            const slider = document.getElementById('time');
+            const axis = document.getElementById('time');
+            const ev = (type, t, target) => { const [x, y] = studio.timeToPage(t); target.dispatchEvent(new MouseEvent(type, { clientX: x, clientY: y - 25, button: 0, bubbles: true })); };
+            const d = studio.state.duration;
             studio.stats.latencies = []; studio.stats.drawMs = [];
             const before = studio.stats.frameUpdates, t0 = performance.now();
             let moves = 0;
+            ev('mousedown', 0.5 * d, axis);
             while (performance.now() - t0 < 3000) {
                 moves++;
-                slider.value = String(Math.round(500 + 480 * Math.sin(moves / 30)));
-                slider.dispatchEvent(new Event('input', { bubbles: true }));
+                ev('mousemove', d * (0.5 + 0.48 * Math.sin(moves / 30)), window);
                 await pause(8);
             }
+            ev('mouseup', 0.5 * d, window);
             const seconds = (performance.now() - t0) / 1000;
             const median = (a) => a.slice().sort((p, q) => p - q)[a.length >> 1];
             return [studio.stats.frameUpdates - before, seconds, moves, median(studio.stats.latencies), median(studio.stats.drawMs), studio.stats.handleMs];
@@ -1562,7 +1582,7 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
     );
     let num = |v: &serde_json::Value, i: usize| v[i].as_f64().unwrap_or(f64::NAN);
     let report = format!(
-        "studio rates (reported, not asserted; {} mouse and {} slider events in 3 s, renderer {}): \
+        "studio rates with onion skins on (reported, not asserted; {} mouse and {} timeline events in 3 s, renderer {}): \
          drag at {} vertices: {} updates in {:.2} s = {:.1} per second, median {:.1} ms from request to drawn frame, {:.2} ms to draw, {:.2} ms handling messages per update; \
          scrub at {} vertices: {} frames in {:.2} s = {:.1} per second, median {:.1} ms, {:.2} ms to draw, {:.2} ms handling messages per update",
         num(&drag, 2),
@@ -1587,4 +1607,579 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
     std::fs::write(dir.join("rates.txt"), &report).expect("write");
     // Rates are reported, not asserted (the machines are small and noisy): the paths work.
     assert!(num(&drag, 0) >= 5.0 && num(&scrub, 0) >= 5.0, "{report}");
+}
+
+/// The studio as an animator's workspace, at 1024x768 in light and dark: one time axis with
+/// the playhead under the selected key; a key Alt-dragged moves the later keys by the same
+/// time; a key inserted at the playhead reproduces the frame shown; copy and paste; a ghost of
+/// the previous keyframe drawn where its pose is; pins placed without moving the mesh; three
+/// pins box-selected and rotated together; the easing edited as a curve; every shortcut of the
+/// help overlay does what it says.
+#[test]
+fn the_studio_is_an_animators_workspace() {
+    let Some(browser) = browser() else { return };
+    let dir = scratch("b40-workspace");
+    let (project, _) = textured_project(&dir, 4, 1200);
+    project.write(&dir.join("anim.json")).expect("write");
+    let studio = Studio::start(&dir, Some("anim.json"));
+    let page = PageTab::open(&browser, &studio.url, &dir);
+    page.tab
+        .call_method(
+            headless_chrome::protocol::cdp::Emulation::SetDeviceMetricsOverride {
+                width: 1024,
+                height: 768,
+                device_scale_factor: 1.0,
+                mobile: false,
+                scale: None,
+                screen_width: None,
+                screen_height: None,
+                position_x: None,
+                position_y: None,
+                dont_set_visible_size: None,
+                screen_orientation: None,
+                viewport: None,
+                display_feature: None,
+                device_posture: None,
+            },
+        )
+        .expect("1024x768");
+    page.eval("(localStorage.clear(), true)");
+    page.settle();
+    // Layout: everything within 1024x768, the current mode's tools only.
+    let fits = page.eval(
+        "['#toolbar', '#side', '#time', '#status', '#view', '#transport'].map((s) => { const r = document.querySelector(s).getBoundingClientRect(); return r.width > 0 && r.height > 0 && r.right <= innerWidth + 1 && r.bottom <= innerHeight + 1; })",
+    );
+    assert!(
+        fits.as_array().expect("list").iter().all(|v| v == true),
+        "every panel fits 1024x768: {fits}"
+    );
+    assert!(page.num("document.documentElement.scrollWidth") <= 1024.0);
+    assert!(
+        page.shown("#pose-tools") && !page.shown("#animate-tools") && !page.shown("#outline-tools")
+    );
+    page.click_on("#animate-mode");
+    page.wait("document.body.dataset.mode === 'animate'", 5);
+    assert!(!page.shown("#pose-tools") && page.shown("#animate-tools"));
+    let status = page.rect("#status");
+    assert!(status[3] - status[1] <= 24.0);
+    page.shot("40-light-1024.png");
+    page.click_on("#theme");
+    page.wait("document.body.classList.contains('dark')", 5);
+    page.settle();
+    let dark = page.shot("40-dark-1024.png");
+    let side = page.rect("#side");
+    let darkish = dark.count_in(side, |p| p[0] < 70 && p[1] < 70 && p[2] < 70);
+    let area = ((side[2] - side[0]) * (side[3] - side[1])) as usize;
+    assert!(
+        darkish > area / 2,
+        "the dark theme is dark: {darkish} of {area}"
+    );
+    page.click_on("#theme");
+    page.wait("!document.body.classList.contains('dark')", 5);
+
+    // The playhead under the selected key.
+    page.click_on("#keys .key:nth-child(3)");
+    page.wait(
+        "studio.state.current === 2 && 'keyframe' in studio.state.shown",
+        10,
+    );
+    page.settle();
+    let key = page.rect("#keys .key:nth-child(3) .mark");
+    let head = page.rect("#playhead");
+    assert!(
+        ((key[0] + key[2]) / 2.0 - head[0]).abs() <= 3.0,
+        "the playhead {head:?} is under the key {key:?}"
+    );
+    // Alt-drag key 2 by half a second: keys 3 and 4 move by the same time.
+    let times = |page: &PageTab| -> Vec<f64> {
+        page.eval("studio.state.keyframes.map((k) => k.time)")
+            .as_array()
+            .expect("times")
+            .iter()
+            .map(|t| t.as_f64().expect("time"))
+            .collect()
+    };
+    assert_eq!(times(&page), [0.0, 1.0, 2.0, 3.0]);
+    let key2 = page.rect("#keys .key:nth-child(2) .mark");
+    let from = [(key2[0] + key2[2]) / 2.0, (key2[1] + key2[3]) / 2.0];
+    let to = page.eval("studio.timeToPage(1.5)")[0].as_f64().expect("x");
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MouseMoved,
+        from,
+        None,
+        0,
+        None,
+    );
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MousePressed,
+        from,
+        Some(Input::MouseButton::Left),
+        1,
+        Some(1),
+    );
+    for k in 1..=6 {
+        let x = from[0] + (to - from[0]) * k as f64 / 6.0;
+        page.mouse(
+            Input::DispatchMouseEventTypeOption::MouseMoved,
+            [x, from[1]],
+            Some(Input::MouseButton::Left),
+            1,
+            Some(1),
+        );
+    }
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MouseReleased,
+        [to, from[1]],
+        Some(Input::MouseButton::Left),
+        0,
+        Some(1),
+    );
+    page.wait("studio.state.keyframes[1].time !== 1", 10);
+    let moved = times(&page);
+    let shift = moved[1] - 1.0;
+    assert!((shift - 0.5).abs() < 0.05, "{moved:?}");
+    for k in 2..4 {
+        assert!(
+            (moved[k] - (k as f64 + shift)).abs() < 1e-9,
+            "ripple: {moved:?}"
+        );
+    }
+    assert_eq!(
+        page.eval("studio.state.undo"),
+        format!("move keyframes 2 to 4 by {shift:+.3} s").as_str()
+    );
+    // A key inserted between two others at the playhead reproduces the frame shown there.
+    let mid = (moved[1] + moved[2]) / 2.0;
+    page.slide_to(mid / moved[3]);
+    page.wait("studio.showing === 'frame' && !studio.busy()", 10);
+    page.settle();
+    let frame = page.pose();
+    let shown_time = page.num("studio.frameInfo.time");
+    page.eval("document.getElementById('view').focus()");
+    page.key("i", &[]);
+    page.wait("studio.state.keyframes.length === 5", 10);
+    page.settle();
+    assert_eq!(page.num("studio.state.current"), 2.0);
+    assert!((page.num("studio.state.keyframes[2].time") - shown_time).abs() < 1e-3);
+    assert_eq!(
+        page.pose(),
+        frame,
+        "the inserted key is the frame that was shown"
+    );
+    // Copy key 2, paste it at a free time: the same pose there.
+    page.click_on("#keys .key:nth-child(2)");
+    page.wait("studio.state.current === 1", 10);
+    page.settle();
+    let key2_pose = page.pose();
+    page.eval("document.getElementById('view').focus()");
+    page.key("c", &[ModifierKey::Ctrl]);
+    page.slide_to(0.9);
+    page.wait("studio.showing === 'frame' && !studio.busy()", 10);
+    page.eval("document.getElementById('view').focus()");
+    page.key("v", &[ModifierKey::Ctrl]);
+    page.wait("studio.state.keyframes.length === 6", 10);
+    page.settle();
+    let pasted = page.pose();
+    let differ = pasted
+        .iter()
+        .zip(&key2_pose)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differ, 0, "the pasted key is the copied pose");
+    page.undo();
+    page.wait("studio.state.keyframes.length === 5", 10);
+
+    // Onion skins: on key 4, the ghost of key 3 (red) lies along key 3's outline.
+    page.click_on("#keys .key:nth-child(4)");
+    page.wait("studio.state.current === 3", 10);
+    page.settle();
+    let red = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; let n = 0; for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 60 && d[i] > 120 && d[i + 1] < 90 && d[i + 2] < 90) n++; return n; })()";
+    let before = page.num(red);
+    page.eval("document.getElementById('view').focus()");
+    page.key("o", &[]);
+    page.wait(
+        "document.getElementById('onion').checked && studio.ghosts.has(2)",
+        10,
+    );
+    page.settle();
+    let after = page.num(red);
+    assert!(
+        after > before + 300.0,
+        "ghost pixels: {before} without, {after} with onion skins"
+    );
+    let on_outline = page.num(
+        "(() => { const c = document.getElementById('view'), g = c.getContext('2d'), P = studio.ghosts.get(2).pos; const r = c.getBoundingClientRect(); let hit = 0, n = 0; for (const [a] of studio.boundary) { n++; const [x, y] = studio.toPage(P[2 * a], P[2 * a + 1]); const d = g.getImageData(Math.round(x - r.left) - 2, Math.round(y - r.top) - 2, 5, 5).data; let red = false; for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 60 && d[i] > 120 && d[i + 1] < 90) red = true; if (red) hit++; } return hit / n; })()",
+    );
+    assert!(
+        on_outline > 0.8,
+        "{on_outline} of the previous key's outline is drawn as a ghost"
+    );
+    page.shot("40-onion.png");
+
+    // Pins tool: clicks pin without moving the mesh; a pin dragged goes to another vertex.
+    page.click_on("#pose-mode");
+    page.wait("document.body.dataset.mode === 'pose'", 5);
+    page.click_on("#tool-pins");
+    let pose = page.pose();
+    let vs = [
+        page.extreme(0, 1.0, 0.3),
+        page.extreme(0, -1.0, 0.3),
+        page.extreme(0, 0.0, -1.0),
+    ];
+    for (i, &v) in vs.iter().enumerate() {
+        page.click(page.vertex(v));
+        page.wait(&format!("studio.pins.length === {}", i + 1), 10);
+    }
+    page.settle();
+    assert_eq!(page.pose(), pose, "placing pins moves nothing");
+    // Box-select the three from off the mesh, then rotate them by the round handle.
+    page.click_on("#tool-drag");
+    let canvas = page.canvas();
+    let corners: Vec<[f64; 2]> = vs.iter().map(|&v| page.vertex(v)).collect();
+    let (x0, y0) = (
+        corners.iter().map(|p| p[0]).fold(f64::MAX, f64::min) - 20.0,
+        corners.iter().map(|p| p[1]).fold(f64::MAX, f64::min) - 20.0,
+    );
+    let (x1, y1) = (
+        corners.iter().map(|p| p[0]).fold(f64::MIN, f64::max) + 20.0,
+        corners.iter().map(|p| p[1]).fold(f64::MIN, f64::max) + 20.0,
+    );
+    let ctrl = Some(2);
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MouseMoved,
+        [x0, y0],
+        None,
+        0,
+        ctrl,
+    );
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MousePressed,
+        [x0, y0],
+        Some(Input::MouseButton::Left),
+        1,
+        ctrl,
+    );
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MouseMoved,
+        [x1, y1],
+        Some(Input::MouseButton::Left),
+        1,
+        ctrl,
+    );
+    page.mouse(
+        Input::DispatchMouseEventTypeOption::MouseReleased,
+        [x1, y1],
+        Some(Input::MouseButton::Left),
+        0,
+        ctrl,
+    );
+    page.wait("studio.selected.size === 3", 5);
+    let handle = page.eval("(() => { const r = document.getElementById('view').getBoundingClientRect(); const P = studio.pins.map((v) => studio.vertexOnPage(v)); const xs = P.map((p) => p[0]), ys = P.map((p) => p[1]); return [(Math.min(...xs) + Math.max(...xs)) / 2, Math.min(...ys) - 14 - 22]; })()");
+    let handle = [
+        handle[0].as_f64().expect("x"),
+        handle[1].as_f64().expect("y"),
+    ];
+    let centre = [
+        corners.iter().map(|p| p[0]).sum::<f64>() / 3.0,
+        corners.iter().map(|p| p[1]).sum::<f64>() / 3.0,
+    ];
+    // A quarter turn clockwise on screen, in steps.
+    let r = ((handle[0] - centre[0]).powi(2) + (handle[1] - centre[1]).powi(2)).sqrt();
+    let a0 = (handle[1] - centre[1]).atan2(handle[0] - centre[0]);
+    page.press(handle);
+    for k in 1..=8 {
+        let a = a0 + std::f64::consts::FRAC_PI_2 * k as f64 / 8.0;
+        page.move_to([centre[0] + r * a.cos(), centre[1] + r * a.sin()], true);
+        page.settle();
+    }
+    let end = [
+        centre[0] + r * (a0 + std::f64::consts::FRAC_PI_2).cos(),
+        centre[1] + r * (a0 + std::f64::consts::FRAC_PI_2).sin(),
+    ];
+    page.release(end);
+    page.settle();
+    for (i, &v) in vs.iter().enumerate() {
+        let now = page.vertex(v);
+        let was = [corners[i][0] - centre[0], corners[i][1] - centre[1]];
+        let want = [centre[0] - was[1], centre[1] + was[0]];
+        let miss = ((now[0] - want[0]).powi(2) + (now[1] - want[1]).powi(2)).sqrt();
+        let size = (was[0].powi(2) + was[1].powi(2)).sqrt();
+        assert!(
+            miss < 0.15 * size.max(20.0),
+            "pin {i} is {miss:.1} px from a quarter turn (radius {size:.1})"
+        );
+    }
+    assert!(canvas[2] > canvas[0]);
+    page.shot("40-rotated.png");
+    page.undo();
+
+    // The easing as a curve: a handle dragged sets a cubic Bezier, undone in one step.
+    page.click_on("#keys .key:nth-child(2)");
+    page.wait("studio.state.current === 1", 10);
+    let curve = page.rect("#easing-curve");
+    // The first handle of linear sits at (0, 0): the box's lower left, 18 px in, 28 px up.
+    let h = [curve[0] + 18.0, curve[3] - 28.0];
+    page.drag(h, [curve[0] + 120.0, curve[3] - 28.0], 5);
+    page.wait(
+        "studio.state.keyframes[1].easing.startsWith('cubic-bezier(')",
+        10,
+    );
+    assert_eq!(
+        page.eval("document.getElementById('key-easing').value"),
+        "custom"
+    );
+    page.undo();
+    page.wait("studio.state.keyframes[1].easing === 'linear'", 10);
+
+    // Every shortcut in the help overlay.
+    page.eval("document.getElementById('view').focus()");
+    page.key("?", &[]);
+    page.wait("document.getElementById('help-dialog').open", 5);
+    let listed: Vec<String> = page
+        .eval("[...document.querySelectorAll('#shortcut-list tr')].map((r) => r.dataset.id)")
+        .as_array()
+        .expect("rows")
+        .iter()
+        .map(|v| v.as_str().expect("id").to_owned())
+        .collect();
+    page.shot("40-help.png");
+    page.key("Escape", &[]);
+    page.wait("!document.getElementById('help-dialog').open", 5);
+    check_every_shortcut(&page, &listed);
+}
+
+/// Presses each listed shortcut and checks that it did what the overlay says.
+fn check_every_shortcut(page: &PageTab, listed: &[String]) {
+    let focus = || {
+        page.eval("document.getElementById('view').focus()");
+    };
+    let press = |key: &str, mods: &[ModifierKey]| {
+        focus();
+        page.key(key, mods);
+    };
+    let select = |k: usize| {
+        page.click_on(&format!("#keys .key:nth-child({k})"));
+        page.wait(
+            &format!("studio.state.current === {} && !studio.busy()", k - 1),
+            10,
+        );
+    };
+    let mut checked = Vec::new();
+    for id in listed {
+        match id.as_str() {
+            "play" => {
+                select(1);
+                press(" ", &[]);
+                page.wait("studio.playing", 5);
+                press(" ", &[]);
+                page.wait("!studio.playing", 5);
+            }
+            "frame-next" | "frame-previous" => {
+                select(2);
+                let t = page.num("studio.state.keyframes[1].time");
+                let fps = page.num("studio.state.fps");
+                let (key, sign) = if id == "frame-next" {
+                    ("ArrowRight", 1.0)
+                } else {
+                    ("ArrowLeft", -1.0)
+                };
+                press(key, &[]);
+                page.wait(
+                    &format!(
+                        "Math.abs(studio.frameInfo.time - {}) < 1e-3 && !studio.busy()",
+                        ((t * fps).round() + sign) / fps
+                    ),
+                    10,
+                );
+            }
+            "key-next" => {
+                select(2);
+                press("ArrowUp", &[]);
+                page.wait("studio.state.current === 2", 10);
+            }
+            "key-previous" => {
+                select(3);
+                press("ArrowDown", &[]);
+                page.wait("studio.state.current === 1", 10);
+            }
+            "key-first" => {
+                select(3);
+                press("Home", &[]);
+                page.wait("studio.state.current === 0", 10);
+            }
+            "key-last" => {
+                select(1);
+                press("End", &[]);
+                page.wait(
+                    "studio.state.current === studio.state.keyframes.length - 1",
+                    10,
+                );
+            }
+            "insert" => {
+                page.slide_to(0.1);
+                page.wait("studio.showing === 'frame' && !studio.busy()", 10);
+                let n = page.num("studio.state.keyframes.length");
+                press("i", &[]);
+                page.wait(
+                    &format!("studio.state.keyframes.length === {}", n + 1.0),
+                    10,
+                );
+                page.undo();
+            }
+            "copy" => {
+                select(2);
+                press("c", &[ModifierKey::Ctrl]);
+                page.wait("studio.copied && studio.copied.keyframe === 1", 5);
+            }
+            "paste" => {
+                page.slide_to(0.95);
+                page.wait("studio.showing === 'frame' && !studio.busy()", 10);
+                let n = page.num("studio.state.keyframes.length");
+                press("v", &[ModifierKey::Ctrl]);
+                page.wait(
+                    &format!("studio.state.keyframes.length === {}", n + 1.0),
+                    10,
+                );
+                page.undo();
+            }
+            "duplicate" => {
+                select(2);
+                let n = page.num("studio.state.keyframes.length");
+                press("d", &[ModifierKey::Ctrl]);
+                page.wait(
+                    &format!("studio.state.keyframes.length === {}", n + 1.0),
+                    10,
+                );
+                page.undo();
+            }
+            "delete" => {
+                select(2);
+                let n = page.num("studio.state.keyframes.length");
+                press("Delete", &[]);
+                page.wait(
+                    &format!("studio.state.keyframes.length === {}", n - 1.0),
+                    10,
+                );
+                page.undo();
+                page.wait(&format!("studio.state.keyframes.length === {n}"), 10);
+            }
+            "undo" | "redo" => {
+                select(2);
+                page.set_value("#fps", "12");
+                page.wait("studio.state.fps === 12", 10);
+                press("z", &[ModifierKey::Ctrl]);
+                page.wait("studio.state.fps !== 12", 10);
+                if id == "redo" {
+                    press("z", &[ModifierKey::Ctrl, ModifierKey::Shift]);
+                    page.wait("studio.state.fps === 12", 10);
+                    press("z", &[ModifierKey::Ctrl]);
+                    page.wait("studio.state.fps !== 12", 10);
+                }
+            }
+            "save" => {
+                press("s", &[ModifierKey::Ctrl]);
+                page.wait("!studio.state.dirty", 10);
+            }
+            "mode-outline" => {
+                press("1", &[]);
+                page.wait("studio.state.mode === 'outline'", 10);
+            }
+            "mode-pose" => {
+                press("2", &[]);
+                page.wait(
+                    "studio.state.mode === 'pose' && document.body.dataset.mode === 'pose'",
+                    10,
+                );
+            }
+            "mode-animate" => {
+                press("3", &[]);
+                page.wait("document.body.dataset.mode === 'animate'", 10);
+            }
+            "tool-drag" => {
+                press("d", &[]);
+                page.wait("studio.tool === 'drag'", 5);
+            }
+            "tool-pins" => {
+                press("p", &[]);
+                page.wait("studio.tool === 'pins'", 5);
+                press("d", &[]);
+            }
+            "select-all" | "select-none" => {
+                select(2);
+                if page.num("studio.pins.length") == 0.0 {
+                    page.click(page.vertex(page.extreme(0, 0.0, 1.0)));
+                    page.wait("studio.pins.length === 1", 10);
+                }
+                press("a", &[ModifierKey::Ctrl]);
+                page.wait("studio.selected.size === studio.pins.length", 5);
+                if id == "select-none" {
+                    press("Escape", &[]);
+                    page.wait("studio.selected.size === 0", 5);
+                }
+            }
+            "onion" => {
+                let on = page.eval("document.getElementById('onion').checked");
+                press("o", &[]);
+                page.wait(
+                    &format!(
+                        "document.getElementById('onion').checked === {}",
+                        on != true
+                    ),
+                    5,
+                );
+            }
+            "loop-from" | "loop-to" => {
+                select(2);
+                let key = if id == "loop-from" { "[" } else { "]" };
+                press(key, &[]);
+                let t = page.num("studio.state.keyframes[1].time");
+                let end = if id == "loop-from" { "from" } else { "to" };
+                page.wait(
+                    &format!("studio.loopRange && Math.abs(studio.loopRange.{end} - {t}) < 1e-9"),
+                    5,
+                );
+                page.click_on("#loop-clear");
+            }
+            "zoom-in" | "zoom-out" | "zoom-fit" => {
+                let before = page.num("studio.axis.span || studio.state.duration");
+                let key = match id.as_str() {
+                    "zoom-in" => "=",
+                    "zoom-out" => "-",
+                    _ => "0",
+                };
+                press(key, &[]);
+                let test = match id.as_str() {
+                    "zoom-in" => {
+                        format!("(studio.axis.span || 0) < {before} && studio.axis.span > 0")
+                    }
+                    "zoom-out" => format!("(studio.axis.span || 0) > {before}"),
+                    _ => "studio.axis.span === null".to_owned(),
+                };
+                page.wait(&test, 5);
+            }
+            "fit" => {
+                page.eval("(studio.view.scale *= 3, true)");
+                press("f", &[]);
+                page.wait(
+                    "Math.abs(studio.view.scale - studio.view.fitScale) < 1e-9",
+                    5,
+                );
+            }
+            "theme" => {
+                press("t", &[]);
+                page.wait("document.body.classList.contains('dark')", 5);
+                press("t", &[]);
+                page.wait("!document.body.classList.contains('dark')", 5);
+            }
+            "help" => {
+                press("?", &[]);
+                page.wait("document.getElementById('help-dialog').open", 5);
+                page.key("Escape", &[]);
+                page.wait("!document.getElementById('help-dialog').open", 5);
+            }
+            other => panic!("the help overlay lists '{other}', which this test does not check"),
+        }
+        checked.push(id.clone());
+    }
+    assert!(checked.len() >= 30, "{checked:?}");
 }

@@ -67,6 +67,22 @@ const FILES: &[(&str, &str, &str)] = &[
         "text/javascript",
     ),
     ("files.js", include_str!("page/files.js"), "text/javascript"),
+    ("onion.js", include_str!("page/onion.js"), "text/javascript"),
+    (
+        "easing.js",
+        include_str!("page/easing.js"),
+        "text/javascript",
+    ),
+    (
+        "layout.js",
+        include_str!("page/layout.js"),
+        "text/javascript",
+    ),
+    (
+        "shortcuts.js",
+        include_str!("page/shortcuts.js"),
+        "text/javascript",
+    ),
     (
         "panels.js",
         include_str!("page/panels.js"),

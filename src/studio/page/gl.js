@@ -135,7 +135,7 @@ function make() {
     },
     draw() {
       gl.viewport(0, 0, glCanvas.width, glCanvas.height);
-      gl.clearColor(1, 1, 1, 1);
+      if (S.theme === "dark") gl.clearColor(0.169, 0.18, 0.2, 1); else gl.clearColor(1, 1, 1, 1);
       gl.clear(gl.COLOR_BUFFER_BIT);
       if (!corners || !S.pose) return;
       gl.useProgram(program);

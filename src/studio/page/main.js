@@ -2,14 +2,16 @@
 // server, reached over one WebSocket (net.js). Every panel draws what the server last said.
 
 import { S, $, fit, resize, redraw } from "./view.js";
-import { connect, on, send, textureUrl } from "./net.js";
+import { connect, on, textureUrl } from "./net.js";
 import { GL } from "./gl.js";
 import { computePieces } from "./overlay.js";
 import { syncMethod } from "./pose.js";
 import { syncOutlineTools } from "./outline.js";
-import { drawTimeline, togglePlay } from "./timeline.js";
-import { save } from "./files.js";
+import { drawTimeline } from "./timeline.js";
 import { connection } from "./panels.js";
+import { syncLayout } from "./layout.js";
+import { drawKeyPanel } from "./easing.js";
+import "./shortcuts.js";
 
 let firstMesh = true;
 on("mesh", () => {
@@ -46,7 +48,9 @@ on("state", (st) => {
   everTextured = everTextured || st.textured;
   syncMethod();
   syncOutlineTools();
+  syncLayout();
   drawTimeline();
+  drawKeyPanel();
 });
 
 on("error", (msg) => {
@@ -63,22 +67,8 @@ on("error", (msg) => {
 on("open", () => connection(true));
 on("close", (was) => connection(false, was));
 
-for (const id of ["edges", "colours", "texture", "overlay", "anchor", "pieces"]) $(id).addEventListener("change", redraw);
+for (const id of ["edges", "colours", "texture", "overlay", "anchor", "pieces", "highlight"]) $(id).addEventListener("change", redraw);
 $("fit").onclick = fit;
-
-window.addEventListener("keydown", (e) => {
-  // Typing is in a text field, a number field or a list; on the time slider, a checkbox or a
-  // button the keys are the studio's (Space plays right after a scrub).
-  const t = e.target;
-  const typing = (t instanceof HTMLInputElement && !["range", "checkbox", "button", "submit"].includes(t.type)) || t instanceof HTMLSelectElement || t instanceof HTMLTextAreaElement;
-  const mod = e.ctrlKey || e.metaKey;
-  if (mod && e.key.toLowerCase() === "s") { e.preventDefault(); save(); return; }
-  if (typing || document.querySelector("dialog[open]")) return;
-  if (mod && e.key.toLowerCase() === "z") { send({ op: e.shiftKey ? "redo" : "undo" }); e.preventDefault(); }
-  else if (mod && e.key.toLowerCase() === "y") { send({ op: "redo" }); e.preventDefault(); }
-  else if (e.key === " ") { togglePlay(); e.preventDefault(); }
-  else if (e.key === "Escape" && S.state && S.state.drawing !== null) send({ op: "outline_close" });
-});
 
 window.addEventListener("resize", resize);
 resize();

@@ -3,7 +3,7 @@
 // same folder listens on the same port with the same token, and the page picks up its
 // document as it is.
 
-import { S, $, KIND_MESH, KIND_POSE, KIND_FRAME, KIND_UPLOAD, redraw } from "./view.js";
+import { S, KIND_MESH, KIND_POSE, KIND_FRAME, KIND_GHOST, KIND_UPLOAD, redraw } from "./view.js";
 
 const token = new URLSearchParams(location.search).get("token") || "";
 const handlers = { state: [], pins: [], outline: [], files: [], error: [], mesh: [], frame: [], open: [], close: [] };
@@ -48,6 +48,7 @@ export function connect() {
     const was = S.connected;
     S.connected = false;
     S.inFlight = 0; S.waiting = null; S.drag = null;
+    asked.clear();
     emit("close", was);
     retry = setTimeout(connect, 2000);
   };
@@ -94,7 +95,17 @@ function onBinary(buffer) {
     S.uv = textured ? new Float32Array(buffer, 16 + 8 * n + 12 * m, 2 * n) : null;
     S.pose = Float32Array.from(S.rest);
     S.dist = new Float32Array(m).fill(1);
+    S.ghosts.clear();
+    asked.clear();
     emit("mesh");
+    redraw();
+    return;
+  }
+  if (kind === KIND_GHOST) {
+    const k = head.getUint32(4, true), n = head.getUint32(8, true), rev = head.getUint32(12, true);
+    asked.delete(`${k}:${rev}`);
+    if (n !== S.n) return;
+    S.ghosts.set(k, { rev, pos: new Float32Array(buffer, 16, 2 * n) });
     redraw();
     return;
   }
@@ -108,6 +119,11 @@ function onBinary(buffer) {
   S.pose = new Float32Array(buffer, 32, 2 * n);
   S.dist = new Float32Array(buffer, 32 + 8 * n, m);
   S.showing = kind === KIND_POSE ? "pose" : "frame";
+  // The keyframe posed is the newest copy of its pose (kept under the revision last said).
+  if (kind === KIND_POSE && S.state && S.state.keyframes[S.frameInfo.keyframe]) {
+    const old = S.ghosts.get(S.frameInfo.keyframe);
+    S.ghosts.set(S.frameInfo.keyframe, { rev: old ? old.rev : S.state.keyframes[S.frameInfo.keyframe].rev, pos: S.pose });
+  }
   if (kind === KIND_POSE) S.stats.poseUpdates++;
   if (kind === KIND_FRAME) S.stats.frameUpdates++;
   const sentAt = S.stats.sent.get(seq);
@@ -119,6 +135,20 @@ function onBinary(buffer) {
   if (seq) settle(seq);
   emit("frame", kind);
   redraw();
+}
+
+// Keyframe poses this page lacks (or holds at an old revision) asked for, once each.
+const asked = new Set();
+export function needPoses(keyframes) {
+  const st = S.state;
+  if (!st || !S.connected) return;
+  const missing = keyframes.filter((k) => {
+    const key = st.keyframes[k], have = S.ghosts.get(k);
+    return key && (!have || have.rev !== key.rev) && !asked.has(`${k}:${key.rev}`);
+  });
+  if (!missing.length) return;
+  for (const k of missing) asked.add(`${k}:${st.keyframes[k].rev}`);
+  send({ op: "ghosts", keyframes: missing.slice(0, 64) });
 }
 
 // At most one drag or scrub in flight; a newer one waits in a one-slot mailbox and replaces

@@ -100,10 +100,6 @@ export function trace() {
 export function syncOutlineTools() {
   const st = S.state;
   if (!st) return;
-  $("outline-tools").hidden = st.mode !== "outline";
-  $("pose-tools").hidden = st.mode === "outline";
-  $("outline-mode").classList.toggle("on", st.mode === "outline");
-  $("pose-mode").classList.toggle("on", st.mode === "pose");
   const p = st.picture_settings;
   if (document.activeElement !== $("background")) {
     $("background").value = p.background === null ? "transparency" : p.background === "auto" ? "auto" : "colour";
@@ -119,12 +115,12 @@ export function syncOutlineTools() {
   for (const id of ["background", "threshold", "threshold-on"]) $(id).disabled = !st.picture;
 }
 
-$("outline-mode").onclick = () => {
+export function outlineMode() {
   send({ op: "mode", mode: "outline" });
   // A picture with no outline yet is traced at once.
   if (S.state && S.state.picture && S.outline.length === 0) trace();
-};
-$("pose-mode").onclick = () => send({ op: "mode", mode: "pose" });
+}
+$("outline-mode").onclick = outlineMode;
 $("trace").onclick = trace;
 // Each change traces again with the controls' settings (the document's follow).
 for (const id of ["background", "background-colour", "threshold", "threshold-on"]) {

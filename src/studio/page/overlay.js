@@ -4,6 +4,8 @@
 
 import { S, $, ctx, canvas, dpr, toCanvas, onDraw } from "./view.js";
 import { GL } from "./gl.js";
+import { drawGhosts } from "./onion.js";
+import { drawPins, drawAids, drawPinPanel } from "./pose.js";
 
 const PIECE_COLOURS = ["#1f77b4", "#e6550d", "#31a354", "#756bb1", "#d62728", "#8c564b", "#e377c2", "#17becf"];
 
@@ -102,23 +104,6 @@ function drawFlips() {
   }
 }
 
-function drawPins() {
-  if (S.showing !== "pose") return;
-  const P = S.pose;
-  for (const v of S.pins) {
-    if (v >= S.n) continue;
-    let [x, y] = toCanvas(P[2 * v], P[2 * v + 1]);
-    if (S.drag) {
-      const i = S.pins.indexOf(v);
-      if (i >= 0 && S.drag.targets[i]) [x, y] = toCanvas(...S.drag.targets[i]);
-    }
-    ctx.fillStyle = "#d62728";
-    ctx.strokeStyle = "#fff";
-    ctx.lineWidth = 2 * dpr();
-    ctx.beginPath(); ctx.arc(x, y, 6 * dpr(), 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
-  }
-}
-
 function drawAnchors() {
   if (!$("anchor").checked || !S.state) return;
   const P = S.pose;
@@ -174,8 +159,11 @@ onDraw(() => {
   if (!S.pose || !S.faces) return;
   if (!GL.ready() && S.state && S.state.mode !== "outline") drawMesh2d();
   if (S.state && S.state.mode === "outline") { drawOutline(); return; }
+  drawGhosts();
   drawPieces();
   drawFlips();
   drawAnchors();
+  drawAids();
   drawPins();
+  drawPinPanel();
 });

@@ -1,126 +1,326 @@
-// The timeline: keys on a bar (a click shows and poses a keyframe, a drag moves it in time,
-// keyframes with flipped triangles marked), the time slider (the frame at that time, shared
-// with every tab), playback at the project's frame rate (frames dropped, never slowed), and
-// the keyframe commands.
+// The timeline: one time axis for the ruler (seconds and frames), the keys (with thumbnails of
+// their poses) and the playhead. A click or drag on it scrubs; a drag on a key retimes it (Alt,
+// or the ripple toggle, moves every later key with it); the wheel zooms the axis about the
+// cursor and Shift+wheel scrolls it. Playback runs on the clock at the project's frame rate
+// (late frames are dropped, the clock is never slowed), over the loop range when one is set.
+// Keyframe commands: insert at the playhead (the frame shown there), copy and paste at the
+// playhead, duplicate, delete, reorder, load.
 
-import { S, $, nth, redraw, KIND_FRAME } from "./view.js";
-import { send, request, on } from "./net.js";
+import { S, $, nth, redraw, onDraw, dpr, KIND_FRAME } from "./view.js";
+import { send, request, on, needPoses } from "./net.js";
 import { confirmDialog } from "./panels.js";
 
-export function sliderTime() {
+const PAD = 26; // pixels of axis before 0 and after the end
+
+// The visible span of the axis: [start, start + span] seconds (fitted to the animation until
+// zoomed or scrolled).
+S.axis = { start: 0, span: null };
+S.loopRange = null;   // { from, to } seconds, or null: the whole animation
+S.localTime = 0;      // the playhead while playing or scrubbing here
+S.copied = null;      // { keyframe, rev } of the copied keyframe
+
+function span() {
   const st = S.state;
-  return st ? (Number($("time").value) / 1000) * st.duration : 0;
+  return S.axis.span || Math.max(st ? st.duration : 1, 0.5);
+}
+function width() { return Math.max(1, $("time").clientWidth - 2 * PAD); }
+export function timeToX(t) { return PAD + ((t - S.axis.start) / span()) * width(); }
+export function xToTime(x) { return S.axis.start + ((x - PAD) / width()) * span(); }
+// For scripted tests: the page position of a time on the axis.
+S.timeToPage = (t) => {
+  const r = $("time").getBoundingClientRect();
+  return [r.left + 1 + timeToX(t), r.top + r.height / 2];
+};
+
+// The time the playhead shows.
+export function playheadTime() {
+  const st = S.state;
+  if (!st) return 0;
+  if (S.playing || S.sliding) return S.localTime;
+  if ("keyframe" in st.shown) return st.keyframes[st.current].time;
+  return st.shown.time; // the server's own number (the frame's header holds it as f32)
+}
+// Kept for the exports' "still at the playhead".
+export const sliderTime = playheadTime;
+
+function readout(time) {
+  const fps = S.state ? S.state.fps : 25;
+  $("time-readout").textContent = `${time.toFixed(2)} s`;
+  $("frame-readout").textContent = `frame ${Math.round(time * fps)}`;
 }
 
-function setSlider(time) {
-  const st = S.state;
-  $("time").value = String(Math.round((1000 * time) / Math.max(st.duration, 1e-9)));
-  $("time-readout").textContent = `${time.toFixed(2)} s`;
+// The ruler: a tick per frame when there is room, seconds labelled at a readable step.
+function drawRuler() {
+  const c = $("ruler"), st = S.state;
+  const w = c.clientWidth, h = c.clientHeight;
+  if (c.width !== Math.round(w * dpr())) { c.width = Math.round(w * dpr()); c.height = Math.round(h * dpr()); }
+  const g = c.getContext("2d");
+  g.setTransform(dpr(), 0, 0, dpr(), 0, 0);
+  g.clearRect(0, 0, w, h);
+  const css = getComputedStyle(document.body);
+  g.strokeStyle = g.fillStyle = css.getPropertyValue("--ruler") || "#888";
+  g.font = "10px system-ui";
+  const pxPerSecond = width() / span();
+  const fps = Math.max(1, st.fps);
+  const t0 = Math.max(0, xToTime(0)), t1 = xToTime(w);
+  // Frames: a small tick each when they are at least 5 px apart.
+  if (pxPerSecond / fps >= 5) {
+    g.beginPath();
+    for (let f = Math.ceil(t0 * fps); f <= t1 * fps; f++) {
+      const x = Math.round(timeToX(f / fps)) + 0.5;
+      g.moveTo(x, h - 4); g.lineTo(x, h);
+    }
+    g.stroke();
+  }
+  // Seconds: the smallest step that leaves 70 px between labels.
+  const steps = [0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 30, 60, 120, 300, 600];
+  const step = steps.find((s) => s * pxPerSecond >= 70) || 600;
+  g.beginPath();
+  for (let i = Math.ceil(t0 / step); i * step <= t1; i++) {
+    const t = i * step, x = Math.round(timeToX(t)) + 0.5;
+    g.moveTo(x, h - 10); g.lineTo(x, h);
+    const label = `${+t.toFixed(2)} s`;
+    const frame = Math.round(t * fps);
+    g.fillText(Math.abs(t * fps - frame) < 1e-6 ? `${label} · ${frame}` : label, x + 3, 10);
+  }
+  g.stroke();
+  // The end of the animation.
+  g.fillStyle = "rgba(128,128,128,0.18)";
+  const end = timeToX(st.duration);
+  if (end < w) g.fillRect(end, 0, w - end, h);
+}
+
+// A thumbnail of keyframe k's pose (its boundary), all at one scale so motion shows.
+let thumbBounds = null;
+function poseBounds() {
+  let lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
+  for (const { pos } of S.ghosts.values()) {
+    for (let i = 0; i < pos.length; i += 2) {
+      if (pos[i] < lo[0]) lo[0] = pos[i]; if (pos[i] > hi[0]) hi[0] = pos[i];
+      if (pos[i + 1] < lo[1]) lo[1] = pos[i + 1]; if (pos[i + 1] > hi[1]) hi[1] = pos[i + 1];
+    }
+  }
+  return lo[0] <= hi[0] ? { lo, hi } : null;
+}
+function drawThumb(canvas, k) {
+  const ghost = S.ghosts.get(k);
+  const w = 42, h = 30;
+  if (canvas.width !== w * dpr()) { canvas.width = w * dpr(); canvas.height = h * dpr(); }
+  const g = canvas.getContext("2d");
+  g.setTransform(dpr(), 0, 0, dpr(), 0, 0);
+  g.clearRect(0, 0, w, h);
+  if (!ghost || !thumbBounds || !S.boundary.length) return;
+  const { lo, hi } = thumbBounds;
+  const s = Math.min((w - 6) / Math.max(hi[0] - lo[0], 1e-9), (h - 6) / Math.max(hi[1] - lo[1], 1e-9));
+  const ox = w / 2 - (s * (lo[0] + hi[0])) / 2, oy = h / 2 + (s * (lo[1] + hi[1])) / 2;
+  const P = ghost.pos;
+  g.strokeStyle = getComputedStyle(document.body).getPropertyValue("--text") || "#222";
+  g.lineWidth = 1;
+  g.beginPath();
+  for (const [a, b] of S.boundary) {
+    g.moveTo(ox + s * P[2 * a], oy - s * P[2 * a + 1]);
+    g.lineTo(ox + s * P[2 * b], oy - s * P[2 * b + 1]);
+  }
+  g.stroke();
 }
 
 export function drawTimeline() {
   const st = S.state, keys = $("keys");
-  const duration = Math.max(st.duration, 1e-9);
+  if (!st) return;
   const posing = "keyframe" in st.shown;
+  // Every key's pose, for the thumbnails (at most 64 asked for at a time; none for very large
+  // animations, whose thumbnails would hold too much memory in the page).
+  if (S.n * st.keyframes.length <= 4e6) needPoses(st.keyframes.map((_, i) => i).slice(0, 64));
   // The keys' elements are kept and updated in place: a click in progress never lands on one
   // that a redraw has just replaced.
   while (keys.children.length > st.keyframes.length) keys.lastChild.remove();
   while (keys.children.length < st.keyframes.length) {
     const el = document.createElement("div");
+    el.append(document.createElement("canvas"), document.createElement("div"));
+    el.lastChild.className = "mark";
     el.onmousedown = (e) => {
       if (e.button !== 0) return;
       e.preventDefault();
-      S.keyDrag = { index: Number(el.dataset.index), startX: e.clientX, moved: false };
+      e.stopPropagation();
+      const index = Number(el.dataset.index);
+      S.keyDrag = {
+        index, startX: e.clientX, moved: false,
+        ripple: e.altKey || $("ripple").checked,
+        times: S.state.keyframes.map((k) => k.time),
+      };
     };
     keys.appendChild(el);
   }
+  thumbBounds = poseBounds();
   st.keyframes.forEach((k, i) => {
     const el = keys.children[i];
-    const className = "key" + (i === st.current && posing ? " current" : "") + (k.flipped ? " flipped" : "");
+    const className = "key" + (i === st.current && posing ? " current" : "") + (k.flipped ? " flipped" : "")
+      + (S.copied && S.copied.rev === k.rev ? " copied" : "");
     if (el.className !== className) el.className = className;
-    const left = `${(100 * k.time) / duration}%`;
-    if (el.style.left !== left && !(S.keyDrag && S.keyDrag.index === i && S.keyDrag.moved)) el.style.left = left;
+    const dragging = S.keyDrag && S.keyDrag.moved && (S.keyDrag.index === i || (S.keyDrag.ripple && i > S.keyDrag.index));
+    const left = `${timeToX(k.time)}px`;
+    if (el.style.left !== left && !dragging) el.style.left = left;
     el.title = `keyframe ${nth(i)} at ${k.time} s (${k.easing})` + (k.flipped ? `: ${k.flipped} flipped triangles (Repair fixes them)` : "");
     el.dataset.index = String(i);
     const text = k.flipped ? "!" : "";
-    if (el.textContent !== text) el.textContent = text;
+    if (el.lastChild.textContent !== text) el.lastChild.textContent = text;
+    const ghost = S.ghosts.get(i);
+    const stamp = `${ghost ? ghost.rev : -1}:${thumbBounds ? thumbBounds.lo.concat(thumbBounds.hi).join() : ""}:${S.theme}`;
+    if (el.dataset.stamp !== stamp) { el.dataset.stamp = stamp; drawThumb(el.firstChild, i); }
   });
   // The fields follow the keyframe shown (never another's).
   const key = st.keyframes[st.current];
   if (document.activeElement !== $("key-time") || S.keyFieldFor !== st.current) $("key-time").value = key.time;
   S.keyFieldFor = st.current;
   $("key-time").disabled = st.current === 0;
-  $("key-easing").value = [...$("key-easing").options].some((o) => o.value === key.easing) ? key.easing : "linear";
   if (document.activeElement !== $("fps")) $("fps").value = st.fps;
   $("delete-key").disabled = st.current === 0;
-  if (!S.playing && !S.sliding && "time" in st.shown && S.showing === "frame") setSlider(S.frameInfo.time);
-  if (!S.playing && !S.sliding && posing) setSlider(key.time);
+  $("paste-key").disabled = !S.copied;
+  drawPlayhead();
 }
 
-// A key on the timeline: a click selects it, a drag moves it in time (between its neighbours).
+function drawPlayhead() {
+  const st = S.state;
+  if (!st) return;
+  const t = playheadTime();
+  $("playhead").style.left = `${timeToX(t)}px`;
+  readout(t);
+  const range = S.loopRange, box = $("loop-range");
+  box.hidden = !range;
+  if (range) {
+    box.style.left = `${timeToX(range.from)}px`;
+    box.style.width = `${Math.max(0, timeToX(range.to) - timeToX(range.from))}px`;
+  }
+  drawRuler();
+}
+onDraw(() => { if (S.state) drawTimeline(); });
+
+// A key dragged: its time (and with ripple the later keys' times, by the same shift).
 function keyDragTime(clientX) {
-  const st = S.state, k = S.keyDrag.index;
-  const r = $("keys").getBoundingClientRect();
-  const duration = Math.max(st.duration, 1e-9);
-  let time = Math.max(0, ((clientX - r.left) / r.width) * duration);
-  const after = st.keyframes[k - 1].time;
-  const before = k + 1 < st.keyframes.length ? st.keyframes[k + 1].time : Infinity;
+  const st = S.state, d = S.keyDrag, k = d.index;
+  const r = $("time").getBoundingClientRect();
+  let time = Math.max(0, xToTime(clientX - r.left - 1));
+  const after = d.times[k - 1];
+  const before = !d.ripple && k + 1 < d.times.length ? d.times[k + 1] : Infinity;
   const gap = 1e-3;
   time = Math.min(Math.max(time, after + gap), before - gap);
+  // Snapped to whole frames when the frames are far enough apart to aim at.
+  const fps = Math.max(1, st.fps);
+  const snapped = Math.round(time * fps) / fps;
+  if (width() / span() / fps >= 6 && snapped > after + gap && snapped < before - gap) time = snapped;
   return Math.round(time * 1000) / 1000;
 }
 window.addEventListener("mousemove", (e) => {
-  if (!S.keyDrag || S.keyDrag.index === 0) return;
-  if (Math.abs(e.clientX - S.keyDrag.startX) < 3 && !S.keyDrag.moved) return;
-  S.keyDrag.moved = true;
-  const el = $("keys").children[S.keyDrag.index];
+  if (S.scrubbing) { scrubAt(e.clientX); return; }
+  const d = S.keyDrag;
+  if (!d || d.index === 0) return;
+  if (Math.abs(e.clientX - d.startX) < 3 && !d.moved) return;
+  d.moved = true;
   const time = keyDragTime(e.clientX);
-  el.style.left = `${Math.min(100, (100 * time) / Math.max(S.state.duration, 1e-9))}%`;
-  el.title = `${time} s`;
+  const shift = time - d.times[d.index];
+  const keys = $("keys").children;
+  keys[d.index].style.left = `${timeToX(time)}px`;
+  keys[d.index].title = `${time} s`;
+  if (d.ripple) for (let i = d.index + 1; i < keys.length; i++) keys[i].style.left = `${timeToX(d.times[i] + shift)}px`;
 });
 window.addEventListener("mouseup", (e) => {
+  if (S.scrubbing) { S.scrubbing = false; S.sliding = false; return; }
   if (!S.keyDrag) return;
-  const { index, moved } = S.keyDrag;
+  const { index, moved, ripple } = S.keyDrag;
+  const time = moved ? keyDragTime(e.clientX) : 0;
   S.keyDrag = null;
-  if (moved) send({ op: "set_time", keyframe: index, time: keyDragTime(e.clientX) });
+  if (moved) send({ op: "set_time", keyframe: index, time, ripple });
   send({ op: "select", keyframe: index });
 });
 
-// A frame shown (asked for here or in another tab): the slider follows its time.
-on("frame", (kind) => {
-  if (kind === KIND_FRAME && !S.playing && !S.sliding && S.state) setSlider(S.frameInfo.time);
+// Scrubbing: a click or drag on the axis shows the frame there (a key's own time within 5 px
+// of it, so a click near a key shows that keyframe).
+function scrubAt(clientX) {
+  const st = S.state;
+  const r = $("time").getBoundingClientRect();
+  const x = clientX - r.left - 1;
+  let time = Math.min(Math.max(xToTime(x), 0), st.duration);
+  for (const k of st.keyframes) if (Math.abs(timeToX(k.time) - x) <= 5) time = k.time;
+  S.localTime = time;
+  readout(time);
+  drawPlayhead();
+  request({ op: "scrub", time });
+}
+$("time").addEventListener("mousedown", (e) => {
+  if (e.button !== 0 || !S.state) return;
+  e.preventDefault();
+  if (S.playing) stop();
+  S.scrubbing = true;
+  S.sliding = true;
+  scrubAt(e.clientX);
 });
 
-$("time").addEventListener("input", () => {
-  S.sliding = true;
-  const time = sliderTime();
-  $("time-readout").textContent = `${time.toFixed(2)} s`;
-  request({ op: "scrub", time });
-});
-$("time").addEventListener("change", () => { S.sliding = false; });
+// A frame shown (asked for here or in another tab): the playhead follows.
+on("frame", (kind) => { if (kind === KIND_FRAME && !S.playing && !S.sliding) redraw(); });
+
+// Zoom (wheel) about the cursor and scroll (Shift+wheel, or a sideways wheel).
+function zoomAxis(factor, aboutX) {
+  const st = S.state;
+  if (!st) return;
+  const t = xToTime(aboutX);
+  const fps = Math.max(1, st.fps);
+  const s = Math.min(Math.max(span() * factor, Math.max(4 / fps, 0.02)), Math.max(st.duration, 1) * 4);
+  S.axis.span = s;
+  S.axis.start = t - ((aboutX - PAD) / width()) * s;
+  clampAxis();
+  redraw();
+}
+function clampAxis() {
+  const st = S.state, s = span();
+  S.axis.start = Math.min(Math.max(S.axis.start, -0.02 * s), Math.max(0, st.duration - 0.1 * s));
+}
+function scrollAxis(dx) {
+  S.axis.start += (dx / width()) * span();
+  clampAxis();
+  redraw();
+}
+export function zoomIn() { zoomAxis(1 / 1.5, timeToX(playheadTime())); }
+export function zoomOut() { zoomAxis(1.5, timeToX(playheadTime())); }
+export function zoomFit() { S.axis = { start: 0, span: null }; redraw(); }
+$("time").addEventListener("wheel", (e) => {
+  e.preventDefault();
+  const r = $("time").getBoundingClientRect();
+  if (e.shiftKey || Math.abs(e.deltaX) > Math.abs(e.deltaY)) scrollAxis(e.shiftKey ? e.deltaY : e.deltaX);
+  else zoomAxis(Math.exp(e.deltaY * 0.002), e.clientX - r.left - 1);
+}, { passive: false });
+$("zoom-in").onclick = zoomIn;
+$("zoom-out").onclick = zoomOut;
+$("zoom-fit").onclick = zoomFit;
 
 // Playback: the time follows the clock; a frame is asked for at each step of 1/fps when the
 // last one has come back (late frames are dropped, the clock is never slowed).
 let clock = null;
+function range() {
+  const st = S.state;
+  return S.loopRange && $("loop").checked ? S.loopRange : { from: 0, to: st.duration };
+}
 function tick(now) {
   if (!S.playing) return;
   const st = S.state;
   const fps = Math.max(1, st.fps);
+  const { from, to } = range();
   let time = clock.from + (now - clock.start) / 1000;
-  if (time > st.duration) {
+  if (time > to) {
     if ($("loop").checked) {
-      clock = { start: now, from: 0 };
-      time = 0;
+      clock = { start: now, from, step: -1 };
+      time = from;
     } else {
-      time = st.duration;
+      time = to;
       stop();
     }
   }
+  S.localTime = time;
   const step = Math.floor(time * fps + 1e-9);
   if (step !== clock.step && !S.busy()) {
     clock.step = step;
-    const at = Math.min(step / fps, st.duration);
-    setSlider(at);
+    const at = Math.min(Math.max(step / fps, from), to);
+    readout(at);
+    drawPlayhead();
     request({ op: "scrub", time: at });
   }
   if (S.playing) requestAnimationFrame(tick);
@@ -128,35 +328,105 @@ function tick(now) {
 function stop() {
   S.playing = false;
   $("play").textContent = "Play";
+  redraw();
 }
 export function togglePlay() {
   const st = S.state;
   if (!st || st.keyframes.length < 2) { S.errors.push("add a second keyframe to play"); redraw(); return; }
   if (S.playing) { stop(); return; }
+  const { from, to } = range();
+  const now = playheadTime();
+  const start = now >= to - 1e-9 || now < from ? from : now;
   S.playing = true;
+  S.localTime = start;
   $("play").textContent = "Pause";
-  const from = sliderTime() >= st.duration - 1e-9 ? 0 : sliderTime();
-  clock = { start: performance.now(), from, step: -1 };
+  clock = { start: performance.now(), from: start, step: -1 };
   requestAnimationFrame(tick);
 }
 $("play").onclick = togglePlay;
 
-// A new keyframe one second after the last: a copy of the first ("add") or of the one shown
-// ("clone").
-function addKeyframe(copy) {
-  const last = S.state.keyframes[S.state.keyframes.length - 1].time;
-  send({ op: "add_keyframe", time: Math.round((last + 1) * 1000) / 1000, copy });
+// Stepping: a frame (Left/Right) or a keyframe (Up/Down, Home/End).
+export function stepFrame(direction) {
+  const st = S.state;
+  if (!st) return;
+  if (S.playing) stop();
+  const fps = Math.max(1, st.fps);
+  const frame = Math.round(playheadTime() * fps) + direction;
+  const time = Math.min(Math.max(frame / fps, 0), st.duration);
+  S.localTime = time;
+  request({ op: "scrub", time });
 }
-$("add-key").onclick = () => addKeyframe(0);
-$("clone-key").onclick = () => addKeyframe(S.state.current);
-$("frame-key").onclick = () => send({ op: "frame_to_keyframe", time: sliderTime() });
-$("delete-key").onclick = async () => {
+export function stepKey(direction) {
+  const st = S.state;
+  if (!st) return;
+  if (S.playing) stop();
+  const t = playheadTime(), times = st.keyframes.map((key) => key.time);
+  let k;
+  if (direction === Infinity) k = times.length - 1;
+  else if (direction === -Infinity) k = 0;
+  else if (direction > 0) k = times.findIndex((time) => time > t + 1e-9);
+  else k = times.map((time) => time < t - 1e-9).lastIndexOf(true);
+  if (k >= 0 && k < st.keyframes.length) send({ op: "select", keyframe: k });
+}
+
+// Keyframe commands.
+function lastPlusOne() {
+  const last = S.state.keyframes[S.state.keyframes.length - 1].time;
+  return Math.round((last + 1) * 1000) / 1000;
+}
+export function insertKey() {
+  const st = S.state;
+  if (!st) return;
+  if ("keyframe" in st.shown) { S.errors.push(`keyframe ${nth(st.current)} is at the playhead already: move the playhead between keys to insert one`); redraw(); return; }
+  send({ op: "frame_to_keyframe", time: playheadTime() });
+}
+export function copyKey() {
+  const st = S.state;
+  if (!st) return;
+  S.copied = { keyframe: st.current, rev: st.keyframes[st.current].rev };
+  S.flash = { text: `keyframe ${nth(st.current)} copied`, until: performance.now() + 2500 };
+  redraw();
+}
+export function pasteKey() {
+  const st = S.state;
+  if (!st || !S.copied) return;
+  // The copied keyframe by its pose's revision: found again if keyframes moved since.
+  const k = st.keyframes.findIndex((key) => key.rev === S.copied.rev);
+  if (k < 0) { S.errors.push("the copied keyframe was changed or deleted since: copy it again"); redraw(); return; }
+  const t = Math.round(playheadTime() * 1000) / 1000;
+  const clash = st.keyframes.findIndex((key) => Math.abs(key.time - t) < 1e-9);
+  send({ op: "add_keyframe", time: clash >= 0 ? lastPlusOne() : t, copy: k });
+}
+export function duplicateKey() { if (S.state) send({ op: "add_keyframe", time: lastPlusOne(), copy: S.state.current }); }
+export function deleteKey(ask = true) {
   const k = S.state.current;
-  if (k === 0) return;
-  if (await confirmDialog(`Delete keyframe ${nth(k)}? (Undo brings it back.)`, "Delete")) {
-    send({ op: "delete_keyframe", keyframe: k });
-  }
-};
+  if (k === 0) { S.errors.push("the first keyframe is the animation's start: it cannot be deleted"); redraw(); return; }
+  const go = () => send({ op: "delete_keyframe", keyframe: k });
+  if (!ask) { go(); return; }
+  confirmDialog(`Delete keyframe ${nth(k)}? (Undo brings it back.)`, "Delete").then((yes) => { if (yes) go(); });
+}
+export function setLoop(which) {
+  const st = S.state;
+  if (!st) return;
+  const t = playheadTime();
+  const r = S.loopRange || { from: 0, to: st.duration };
+  if (which === "from") S.loopRange = { from: Math.min(t, r.to - 1e-3), to: r.to };
+  else if (which === "to") S.loopRange = { from: r.from, to: Math.max(t, r.from + 1e-3) };
+  else S.loopRange = null;
+  redraw();
+}
+
+$("add-key").onclick = () => send({ op: "add_keyframe", time: lastPlusOne(), copy: 0 });
+$("clone-key").onclick = duplicateKey;
+$("duplicate-key").onclick = duplicateKey;
+$("frame-key").onclick = insertKey;
+$("insert-key").onclick = insertKey;
+$("copy-key").onclick = copyKey;
+$("paste-key").onclick = pasteKey;
+$("delete-key").onclick = () => deleteKey(true);
+$("loop-in").onclick = () => setLoop("from");
+$("loop-out").onclick = () => setLoop("to");
+$("loop-clear").onclick = () => setLoop(null);
 $("key-earlier").onclick = () => {
   const k = S.state.current;
   if (k > 0) send({ op: "move_keyframe", keyframe: k, to: k - 1 });
@@ -169,10 +439,8 @@ $("load-key").onclick = () => $("load-file").click();
 $("load-file").addEventListener("change", async () => {
   const file = $("load-file").files[0];
   if (!file) return;
-  const last = S.state.keyframes[S.state.keyframes.length - 1].time;
-  send({ op: "load_keyframe", name: file.name, text: await file.text(), time: Math.round((last + 1) * 1000) / 1000 });
+  send({ op: "load_keyframe", name: file.name, text: await file.text(), time: lastPlusOne() });
   $("load-file").value = "";
 });
 $("fps").addEventListener("change", () => send({ op: "fps", fps: Number($("fps").value) }));
 $("key-time").addEventListener("change", () => send({ op: "set_time", keyframe: S.state.current, time: Number($("key-time").value) }));
-$("key-easing").addEventListener("change", () => send({ op: "set_easing", keyframe: S.state.current, easing: $("key-easing").value }));

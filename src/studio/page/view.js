@@ -4,7 +4,7 @@
 
 export const $ = (id) => document.getElementById(id);
 
-export const KIND_POSE = 1, KIND_MESH = 2, KIND_FRAME = 3, KIND_UPLOAD = 10;
+export const KIND_POSE = 1, KIND_MESH = 2, KIND_FRAME = 3, KIND_GHOST = 4, KIND_UPLOAD = 10;
 
 export const S = {
   state: null,            // the last state message
@@ -29,6 +29,14 @@ export const S = {
   drag: null,             // { pin, targets } while dragging pins
   outlineDrag: null,      // { ring, index, point } while dragging an outline point
   keyDrag: null,
+  ghosts: new Map(),      // keyframe -> { rev, pos }: keyframe poses (onion skins, thumbnails)
+  selected: new Set(),    // the selected pins (vertex numbers) of the keyframe shown
+  tool: "drag",           // "drag" (pin and pose) or "pins" (place pins, the mesh stays)
+  ui: "pose",             // the tab shown: "outline", "pose" or "animate"
+  hover: null,            // { v, f } under the cursor, when highlighted
+  box: null,              // a selection box being dragged (canvas pixels)
+  xform: null,            // a rotation or scaling of the selected pins in progress
+  pinMove: null,          // a pin being placed again (pins tool)
   pan: null,
   playing: false,
   connected: false,

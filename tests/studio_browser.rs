@@ -142,7 +142,8 @@ impl PageTab {
         }
         let status = self.eval("document.getElementById('status').textContent");
         let notes = self.eval("document.getElementById('notes').textContent");
-        panic!("timed out waiting for {js} (status: {status}; notes: {notes})");
+        let errors = self.eval("studio.pageErrors");
+        panic!("timed out waiting for {js} (status: {status}; notes: {notes}; script errors: {errors})");
     }
 
     /// Waits until nothing is in flight and the page has drawn.
@@ -1549,7 +1550,7 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
             ev('mouseup', x0, y0, window);
             const seconds = (performance.now() - t0) / 1000;
             const median = (a) => a.slice().sort((p, q) => p - q)[a.length >> 1];
-            return [studio.stats.poseUpdates - before, seconds, moves, median(studio.stats.latencies), median(studio.stats.drawMs), studio.stats.handleMs];
+            return [studio.stats.poseUpdates - before, seconds, moves, median(studio.stats.latencies), median(studio.stats.drawMs), studio.stats.handleMs, studio.stats.perDrawer.map((x) => x.toFixed(0)).join(' ')];
         }})()"
     ));
     drop(page);
@@ -1577,7 +1578,7 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
             ev('mouseup', 0.5 * d, window);
             const seconds = (performance.now() - t0) / 1000;
             const median = (a) => a.slice().sort((p, q) => p - q)[a.length >> 1];
-            return [studio.stats.frameUpdates - before, seconds, moves, median(studio.stats.latencies), median(studio.stats.drawMs), studio.stats.handleMs];
+            return [studio.stats.frameUpdates - before, seconds, moves, median(studio.stats.latencies), median(studio.stats.drawMs), studio.stats.handleMs, studio.stats.poseUpdates, studio.inFlight, studio.errors.join('; '), studio.state.notes.map((n) => n.text).join('; ')];
         })()",
     );
     let num = |v: &serde_json::Value, i: usize| v[i].as_f64().unwrap_or(f64::NAN);
@@ -1604,6 +1605,7 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
         num(&scrub, 5) / num(&scrub, 0).max(1.0),
     );
     eprintln!("{report}");
+    eprintln!("scrub diagnostics: {scrub}; drag: {drag}");
     std::fs::write(dir.join("rates.txt"), &report).expect("write");
     // Rates are reported, not asserted (the machines are small and noisy): the paths work.
     assert!(num(&drag, 0) >= 5.0 && num(&scrub, 0) >= 5.0, "{report}");
@@ -2133,12 +2135,15 @@ fn check_every_shortcut(page: &PageTab, listed: &[String]) {
                 let key = if id == "loop-from" { "[" } else { "]" };
                 press(key, &[]);
                 let t = page.num("studio.state.keyframes[1].time");
-                let end = if id == "loop-from" { "from" } else { "to" };
+                let end = if id == "loop-from" { 0 } else { 1 };
                 page.wait(
-                    &format!("studio.loopRange && Math.abs(studio.loopRange.{end} - {t}) < 1e-9"),
+                    &format!(
+                        "studio.state.loop_range && Math.abs(studio.state.loop_range[{end}] - {t}) < 1e-9"
+                    ),
                     5,
                 );
                 page.click_on("#loop-clear");
+                page.wait("studio.state.loop_range === null", 5);
             }
             "zoom-in" | "zoom-out" | "zoom-fit" => {
                 let before = page.num("studio.axis.span || studio.state.duration");
@@ -2182,4 +2187,82 @@ fn check_every_shortcut(page: &PageTab, listed: &[String]) {
         checked.push(id.clone());
     }
     assert!(checked.len() >= 30, "{checked:?}");
+}
+
+/// The README's pictures of the studio, made by a scripted session (run by hand:
+/// `BDMORPH_DOCS=docs cargo test --test studio_browser readme -- --ignored`). Each step is
+/// checked as it is taken, so a picture never shows a step that failed.
+#[test]
+#[ignore = "writes the README's pictures; run by hand with BDMORPH_DOCS set"]
+fn readme_walkthrough_pictures() {
+    let Some(docs) = std::env::var_os("BDMORPH_DOCS").map(PathBuf::from) else {
+        eprintln!("BDMORPH_DOCS is not set: nothing written");
+        return;
+    };
+    let Some(browser) = browser() else { return };
+    let dir = scratch("readme");
+    write_png(&dir.join("figure.png"), &character(false, false));
+    let studio = Studio::start(&dir, Some("figure.png"));
+    let page = PageTab::open(&browser, &studio.url, &dir);
+    page.eval("(localStorage.clear(), true)");
+    page.wait("!!studio.texture", 10);
+    page.settle();
+    // 1. Outline: the picture traced.
+    page.click_on("#outline-mode");
+    page.wait(
+        "studio.state.mode === 'outline' && studio.outline.length > 0",
+        20,
+    );
+    page.settle();
+    page.shot("walk-1-outline.png");
+    // 2. Pose: a second keyframe, the arm raised by one pin while the foot is held.
+    page.click_on("#pose-mode");
+    page.wait("studio.state.mode === 'pose'", 10);
+    page.click_on("#add-key");
+    page.wait(
+        "studio.state.keyframes.length === 2 && studio.state.current === 1",
+        10,
+    );
+    let foot = page.extreme(0, 0.0, -1.0);
+    let hand = page.extreme(0, 1.0, 0.0);
+    page.click(page.vertex(foot));
+    page.wait("studio.pins.length === 1", 10);
+    let from = page.vertex(hand);
+    page.drag(from, [from[0] + 10.0, from[1] - 110.0], 12);
+    page.wait("studio.pins.length === 2 && !studio.busy()", 10);
+    page.settle();
+    page.shot("walk-2-pose.png");
+    // 3. Animate: a third keyframe, the arm down; onion skins on the middle one.
+    page.click_on("#animate-mode");
+    page.wait("document.body.dataset.mode === 'animate'", 5);
+    page.click_on("#clone-key");
+    page.wait(
+        "studio.state.keyframes.length === 3 && studio.state.current === 2",
+        10,
+    );
+    page.settle();
+    let hand_now = page.vertex(hand);
+    page.drag(hand_now, [hand_now[0] + 60.0, hand_now[1] + 150.0], 12);
+    page.settle();
+    page.click_on("#keys .key:nth-child(2)");
+    page.wait("studio.state.current === 1", 10);
+    page.eval("(() => { const o = document.getElementById('onion'); if (!o.checked) o.click(); return true; })()");
+    page.set_value("#key-easing", "ease-in-out");
+    page.wait("studio.state.keyframes[1].easing === 'ease-in-out'", 10);
+    page.wait("studio.ghosts.has(0) && studio.ghosts.has(2)", 10);
+    page.settle();
+    page.shot("walk-3-animate.png");
+    // 4. The whole studio, for the top of the section.
+    page.click_on("#pose-mode");
+    page.settle();
+    page.shot("studio.png");
+    for name in [
+        "walk-1-outline.png",
+        "walk-2-pose.png",
+        "walk-3-animate.png",
+        "studio.png",
+    ] {
+        std::fs::copy(dir.join(name), docs.join(name)).expect("copy");
+    }
+    eprintln!("README pictures written to {}", docs.display());
 }

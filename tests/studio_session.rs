@@ -246,8 +246,18 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
             seq: 2,
             time: time(rng),
         },
-        23 => Request::Fps {
-            fps: [25.0, 12.5, 0.0, -3.0, 1e9, f64::NAN][rng.below(6)],
+        23 => match rng.below(3) {
+            0 => Request::LoopRange {
+                range: [
+                    None,
+                    Some([0.5, 1.5]),
+                    Some([2.0, 1.0]),
+                    Some([f64::NAN, 1.0]),
+                ][rng.below(4)],
+            },
+            _ => Request::Fps {
+                fps: [25.0, 12.5, 0.0, -3.0, 1e9, f64::NAN][rng.below(6)],
+            },
         },
         24 => Request::OutlineMove {
             ring: rng.below(doc.outline.len() + 1),

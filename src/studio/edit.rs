@@ -11,8 +11,8 @@
 //! shows them.
 
 use super::project::{
-    check_limits, check_outline, check_pins, Keyframe, MeshData, MethodData, PictureSettings,
-    Project,
+    check_limits, check_loop_range, check_outline, check_pins, Keyframe, MeshData, MethodData,
+    PictureSettings, Project,
 };
 
 /// One change to the document.
@@ -70,6 +70,8 @@ pub enum Edit {
     Method(MethodData),
     /// The frame rate of playback and exports.
     Fps(f64),
+    /// The range playback loops over, or the whole animation.
+    LoopRange(Option<[f64; 2]>),
     /// The whole outline.
     Outline(Vec<Vec<[f64; 2]>>),
     /// A loop inserted into the outline at place `at`.
@@ -429,6 +431,17 @@ impl Edit {
                     },
                 )
             }
+            Edit::LoopRange(range) => {
+                check_loop_range(range)?;
+                let old = std::mem::replace(&mut doc.loop_range, range);
+                (
+                    Edit::LoopRange(old),
+                    Touched {
+                        settings: true,
+                        ..touched
+                    },
+                )
+            }
             Edit::Outline(loops) => {
                 check_outline(&loops)?;
                 let old = std::mem::replace(&mut doc.outline, loops);
@@ -693,6 +706,7 @@ mod tests {
                 ..MethodData::default()
             }),
             Edit::Fps(12.0),
+            Edit::LoopRange(Some([0.5, 1.5])),
             Edit::Outline(vec![]),
             Edit::AddLoop {
                 at: 1,
@@ -788,6 +802,8 @@ mod tests {
                 ..MethodData::default()
             }),
             Edit::Fps(0.0),
+            Edit::LoopRange(Some([1.0, 1.0])),
+            Edit::LoopRange(Some([f64::NAN, 1.0])),
             Edit::MovePoint {
                 ring: 0,
                 index: 9,

@@ -47,7 +47,7 @@ impl Progress {
 #[derive(Debug)]
 pub enum Work {
     /// An export of the animation.
-    Export(ExportWork),
+    Export(Box<ExportWork>),
     /// A new mesh from an outline.
     Mesh(MeshWork),
     /// A file opened.

@@ -75,6 +75,22 @@ pub struct Project {
     pub picture: PictureSettings,
     /// The keyframes, in time order; the first is at time 0.
     pub keyframes: Vec<Keyframe>,
+    /// The range playback loops over, `[from, to]` seconds (`from < to`), or the whole
+    /// animation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loop_range: Option<[f64; 2]>,
+}
+
+/// Whether a loop range is `[from, to]` with `0 <= from < to`, both finite.
+pub fn check_loop_range(range: Option<[f64; 2]>) -> Result<(), String> {
+    match range {
+        Some([from, to]) if !(from.is_finite() && to.is_finite() && from >= 0.0 && from < to) => {
+            Err(format!(
+                "loop range {from} s to {to} s: give 0 <= from < to"
+            ))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// How the picture's subject is told from its background (as `bdmorph mesh --background
@@ -269,6 +285,7 @@ impl Project {
                 positions: mesh.positions.clone(),
                 pins: Vec::new(),
             }],
+            loop_range: None,
         }
     }
 
@@ -360,6 +377,9 @@ impl Project {
         }
         if let Err(e) = self.picture.options() {
             return damaged(format!("picture settings: {e}"));
+        }
+        if let Err(e) = check_loop_range(self.loop_range) {
+            return damaged(e);
         }
         let mut last = f64::NEG_INFINITY;
         for (k, key) in self.keyframes.iter().enumerate() {

@@ -220,6 +220,11 @@ pub enum Request {
         /// Frames per second, in (0, 240].
         fps: f64,
     },
+    /// The range playback loops over, `[from, to]` seconds, or `null` for the whole animation.
+    LoopRange {
+        /// The range.
+        range: Option<[f64; 2]>,
+    },
     /// Show the animation's frame at `time`.
     Scrub {
         /// Echoed in the answer.

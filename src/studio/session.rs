@@ -1135,13 +1135,13 @@ impl Session {
                 super::jobs::MAX_EXPORT_FRAMES
             ));
         }
-        Ok(Some(Work::Export(ExportWork {
+        Ok(Some(Work::Export(Box::new(ExportWork {
             format: format.to_owned(),
             path,
             frames: count.max(2),
             project: self.doc.clone(),
             texture: self.texture.as_ref().map(|t| Arc::new(t.image.clone())),
-        })))
+        }))))
     }
 
     /// One frame as a PNG picture (800 pixels square): the animation at `time`, or the
@@ -1321,6 +1321,7 @@ impl Session {
             "drawing": self.view.drawing,
             "method": self.doc.method,
             "fps": self.doc.fps,
+            "loop_range": self.doc.loop_range,
             "duration": self.duration(),
             "textured": self.texture.is_some() && self.doc.mesh.texcoords.is_some(),
             "texture_rev": self.revs.texture,
@@ -1745,6 +1746,16 @@ impl Session {
                 if fps != self.doc.fps {
                     self.commit("frame rate", Edit::Fps(fps))?;
                 }
+            }
+            Request::LoopRange { range } => {
+                if range == self.doc.loop_range {
+                    return Ok(reply);
+                }
+                let label = match range {
+                    Some([from, to]) => format!("loop from {from:.2} s to {to:.2} s"),
+                    None => "loop over the whole animation".to_owned(),
+                };
+                self.commit(label, Edit::LoopRange(range))?;
             }
             Request::Scrub { time, .. } => self.scrub(time)?,
             Request::Save { name, overwrite } => {

@@ -200,7 +200,10 @@ fn message(r: &mut Rng) -> Value {
             let (name, body) = file_text(r);
             json!({"op": "import_outline", "name": name, "text": body, "vertices": r.pick(&[0usize, 50, 200, 1 << 40])})
         }
-        35 => json!({"op": "fps", "fps": number(r)}),
+        35 => match r.below(2) {
+            0 => json!({"op": "fps", "fps": number(r)}),
+            _ => json!({"op": "loop_range", "range": [number(r), number(r)]}),
+        },
         36 => json!({"op": "scrub", "seq": r.below(100), "time": number(r)}),
         37 => json!({"op": "save", "name": text(r), "overwrite": r.below(2) == 0}),
         38 => json!({"op": "export", "format": text(r), "name": text(r),

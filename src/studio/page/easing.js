@@ -52,7 +52,8 @@ function drawCurve() {
   if (last) {
     g.fillStyle = faint;
     g.font = "11px system-ui";
-    g.fillText("no segment after the last keyframe", 12, H / 2);
+    g.fillText("the last keyframe:", 40, H / 2 - 8);
+    g.fillText("no segment after it to ease", 40, H / 2 + 8);
     return;
   }
   const p = points();

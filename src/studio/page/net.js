@@ -106,6 +106,7 @@ function onBinary(buffer) {
     asked.delete(`${k}:${rev}`);
     if (n !== S.n) return;
     S.ghosts.set(k, { rev, pos: new Float32Array(buffer, 16, 2 * n) });
+    S.ghostVersion = (S.ghostVersion || 0) + 1;
     redraw();
     return;
   }
@@ -137,17 +138,21 @@ function onBinary(buffer) {
   redraw();
 }
 
-// Keyframe poses this page lacks (or holds at an old revision) asked for, once each.
-const asked = new Set();
+// Keyframe poses this page lacks (or holds at an old revision) asked for, once each (again
+// after two seconds without an answer).
+const asked = new Map();
 export function needPoses(keyframes) {
   const st = S.state;
   if (!st || !S.connected) return;
   const missing = keyframes.filter((k) => {
     const key = st.keyframes[k], have = S.ghosts.get(k);
-    return key && (!have || have.rev !== key.rev) && !asked.has(`${k}:${key.rev}`);
+    const when = asked.get(`${k}:${key && key.rev}`);
+    return key && (!have || have.rev !== key.rev) && !(when && performance.now() - when < 2000);
   });
   if (!missing.length) return;
-  for (const k of missing) asked.add(`${k}:${st.keyframes[k].rev}`);
+  for (const k of missing) asked.set(`${k}:${st.keyframes[k].rev}`, performance.now());
+  if (asked.size > 1000) asked.clear();
+  setTimeout(redraw, 2100);
   send({ op: "ghosts", keyframes: missing.slice(0, 64) });
 }
 

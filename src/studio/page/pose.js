@@ -318,9 +318,10 @@ $("select-none").onclick = selectNone;
 // The pins panel.
 export function drawPinPanel() {
   const sel = selection();
-  $("pin-info").textContent = S.showing === "pose"
+  const text = S.showing === "pose"
     ? `${S.pins.length} pins on this keyframe, ${sel.length} selected` + (sel.length >= 2 ? ": drag one to move them together, the round handle rotates them, the square scales them" : "")
     : "a frame between keyframes: a click on a vertex makes it a keyframe with that pin";
+  if ($("pin-info").textContent !== text) $("pin-info").textContent = text;
 }
 
 // The method and its parameter.

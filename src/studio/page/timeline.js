@@ -15,7 +15,6 @@ const PAD = 26; // pixels of axis before 0 and after the end
 // The visible span of the axis: [start, start + span] seconds (fitted to the animation until
 // zoomed or scrolled).
 S.axis = { start: 0, span: null };
-S.loopRange = null;   // { from, to } seconds, or null: the whole animation
 S.localTime = 0;      // the playhead while playing or scrubbing here
 S.copied = null;      // { keyframe, rev } of the copied keyframe
 
@@ -23,7 +22,14 @@ function span() {
   const st = S.state;
   return S.axis.span || Math.max(st ? st.duration : 1, 0.5);
 }
-function width() { return Math.max(1, $("time").clientWidth - 2 * PAD); }
+// The axis's size, kept by an observer: reading it from the element would force a layout of
+// the page on every frame.
+let box = { w: 1, h: 1, rw: 1, rh: 1 };
+new ResizeObserver(() => {
+  box = { w: $("time").clientWidth, h: $("time").clientHeight, rw: $("ruler").clientWidth, rh: $("ruler").clientHeight };
+  if (S.state) drawTimeline();
+}).observe($("time"));
+function width() { return Math.max(1, box.w - 2 * PAD); }
 export function timeToX(t) { return PAD + ((t - S.axis.start) / span()) * width(); }
 export function xToTime(x) { return S.axis.start + ((x - PAD) / width()) * span(); }
 // For scripted tests: the page position of a time on the axis.
@@ -43,16 +49,22 @@ export function playheadTime() {
 // Kept for the exports' "still at the playhead".
 export const sliderTime = playheadTime;
 
+function setText(id, text) { const el = $(id); if (el.textContent !== text) el.textContent = text; }
 function readout(time) {
   const fps = S.state ? S.state.fps : 25;
-  $("time-readout").textContent = `${time.toFixed(2)} s`;
-  $("frame-readout").textContent = `frame ${Math.round(time * fps)}`;
+  setText("time-readout", `${time.toFixed(2)} s`);
+  setText("frame-readout", `frame ${Math.round(time * fps)}`);
 }
 
-// The ruler: a tick per frame when there is room, seconds labelled at a readable step.
+// The ruler: a tick per frame when there is room, seconds labelled at a readable step (drawn
+// again only when the axis, the duration, the frame rate, the size or the theme change).
+let rulerStamp = "";
 function drawRuler() {
   const c = $("ruler"), st = S.state;
-  const w = c.clientWidth, h = c.clientHeight;
+  const w = box.rw, h = box.rh;
+  const stamp = [S.axis.start, span(), st.duration, st.fps, w, h, S.theme, dpr()].join();
+  if (stamp === rulerStamp) return;
+  rulerStamp = stamp;
   if (c.width !== Math.round(w * dpr())) { c.width = Math.round(w * dpr()); c.height = Math.round(h * dpr()); }
   const g = c.getContext("2d");
   g.setTransform(dpr(), 0, 0, dpr(), 0, 0);
@@ -183,17 +195,26 @@ function drawPlayhead() {
   const st = S.state;
   if (!st) return;
   const t = playheadTime();
-  $("playhead").style.left = `${timeToX(t)}px`;
+  const left = `${timeToX(t)}px`;
+  if ($("playhead").style.left !== left) $("playhead").style.left = left;
   readout(t);
-  const range = S.loopRange, box = $("loop-range");
-  box.hidden = !range;
+  const range = st.loop_range, shade = $("loop-range");
+  if (shade.hidden !== !range) shade.hidden = !range;
   if (range) {
-    box.style.left = `${timeToX(range.from)}px`;
-    box.style.width = `${Math.max(0, timeToX(range.to) - timeToX(range.from))}px`;
+    shade.style.left = `${timeToX(range[0])}px`;
+    shade.style.width = `${Math.max(0, timeToX(range[1]) - timeToX(range[0]))}px`;
   }
   drawRuler();
 }
-onDraw(() => { if (S.state) drawTimeline(); });
+// Each redraw moves the playhead; the keys are laid out again only when the state, the poses
+// received, the theme or the axis changed.
+let keysFor = [];
+onDraw(() => {
+  if (!S.state) return;
+  const now = [S.state, S.ghostVersion, S.theme, S.axis.start, S.axis.span, S.copied];
+  if (now.some((x, i) => x !== keysFor[i])) { keysFor = now; drawTimeline(); }
+  drawPlayhead();
+});
 
 // A key dragged: its time (and with ripple the later keys' times, by the same shift).
 function keyDragTime(clientX) {
@@ -268,7 +289,7 @@ function zoomAxis(factor, aboutX) {
   S.axis.span = s;
   S.axis.start = t - ((aboutX - PAD) / width()) * s;
   clampAxis();
-  redraw();
+  drawTimeline();
 }
 function clampAxis() {
   const st = S.state, s = span();
@@ -277,11 +298,11 @@ function clampAxis() {
 function scrollAxis(dx) {
   S.axis.start += (dx / width()) * span();
   clampAxis();
-  redraw();
+  drawTimeline();
 }
 export function zoomIn() { zoomAxis(1 / 1.5, timeToX(playheadTime())); }
 export function zoomOut() { zoomAxis(1.5, timeToX(playheadTime())); }
-export function zoomFit() { S.axis = { start: 0, span: null }; redraw(); }
+export function zoomFit() { S.axis = { start: 0, span: null }; drawTimeline(); }
 $("time").addEventListener("wheel", (e) => {
   e.preventDefault();
   const r = $("time").getBoundingClientRect();
@@ -296,8 +317,10 @@ $("zoom-fit").onclick = zoomFit;
 // last one has come back (late frames are dropped, the clock is never slowed).
 let clock = null;
 function range() {
-  const st = S.state;
-  return S.loopRange && $("loop").checked ? S.loopRange : { from: 0, to: st.duration };
+  const st = S.state, r = st.loop_range;
+  if (!r || !$("loop").checked) return { from: 0, to: st.duration };
+  const to = Math.min(r[1], st.duration);
+  return to > r[0] ? { from: r[0], to } : { from: 0, to: st.duration };
 }
 function tick(now) {
   if (!S.playing) return;
@@ -385,6 +408,7 @@ export function copyKey() {
   if (!st) return;
   S.copied = { keyframe: st.current, rev: st.keyframes[st.current].rev };
   S.flash = { text: `keyframe ${nth(st.current)} copied`, until: performance.now() + 2500 };
+  drawTimeline();
   redraw();
 }
 export function pasteKey() {
@@ -408,12 +432,13 @@ export function deleteKey(ask = true) {
 export function setLoop(which) {
   const st = S.state;
   if (!st) return;
-  const t = playheadTime();
-  const r = S.loopRange || { from: 0, to: st.duration };
-  if (which === "from") S.loopRange = { from: Math.min(t, r.to - 1e-3), to: r.to };
-  else if (which === "to") S.loopRange = { from: r.from, to: Math.max(t, r.from + 1e-3) };
-  else S.loopRange = null;
-  redraw();
+  const t = Math.round(playheadTime() * 1000) / 1000;
+  const [from, to] = st.loop_range || [0, st.duration];
+  let range = null;
+  if (which === "from") range = t < to ? [t, to] : [t, Math.max(st.duration, t + 1 / st.fps)];
+  else if (which === "to") range = t > from ? [from, t] : [0, t];
+  if (range && !(range[1] > range[0])) { S.errors.push("the loop range needs some time between its ends"); redraw(); return; }
+  send({ op: "loop_range", range });
 }
 
 $("add-key").onclick = () => send({ op: "add_keyframe", time: lastPlusOne(), copy: 0 });

@@ -41,9 +41,12 @@ export const S = {
   playing: false,
   connected: false,
   errors: [],             // this page's refused requests, until dismissed
-  stats: { poseUpdates: 0, frameUpdates: 0, latencies: [], drawMs: [], sent: new Map(), handleMs: 0 },
+  stats: { perDrawer: [], poseUpdates: 0, frameUpdates: 0, latencies: [], drawMs: [], sent: new Map(), handleMs: 0 },
 };
 window.studio = S;
+// Script errors, kept for the scripted tests to report (and shown to nobody else).
+S.pageErrors = [];
+window.addEventListener("error", (e) => { S.pageErrors.push(String(e.message)); if (S.pageErrors.length > 20) S.pageErrors.shift(); });
 
 export const canvas = $("view");
 export const ctx = canvas.getContext("2d");
@@ -117,7 +120,11 @@ export function redraw() {
   requestAnimationFrame(() => {
     pending = false;
     const t0 = performance.now();
-    for (const f of drawers) f();
+    drawers.forEach((f, i) => {
+      const t = performance.now();
+      f();
+      S.stats.perDrawer[i] = (S.stats.perDrawer[i] || 0) + performance.now() - t;
+    });
     S.stats.drawMs.push(performance.now() - t0);
     if (S.stats.drawMs.length > 1000) S.stats.drawMs.shift();
   });

@@ -28,9 +28,17 @@ export function syncLayout() {
     $(`${m}-mode`).setAttribute("aria-selected", String(m === mode));
   }
   for (const id of ["key-panel", "pin-panel", "onion-panel"]) $(id).hidden = mode === "outline";
-  $("pin-panel").hidden = mode === "outline";
   document.body.dataset.mode = mode;
+  const help = HELP[mode];
+  if ($("help").textContent !== help) $("help").textContent = help;
 }
+
+// The line of help over the canvas, for the mode shown.
+const HELP = {
+  outline: "Drag a point to move it; click a segment to add one; right-click a point to remove it; New loop, then clicks, draws one. Wheel: zoom; middle button or Alt+drag: pan. ? lists every shortcut.",
+  pose: "Click a vertex to pin it and drag it; drag a pin to move it (Shift+click: pin without dragging or select); drag off the mesh to select pins; right-click a pin to remove it. ? lists every shortcut.",
+  animate: "Click or drag the timeline to scrub; drag a key to retime it (Alt: the later keys too); I inserts a key at the playhead; O shows onion skins. ? lists every shortcut.",
+};
 
 $("pose-mode").onclick = () => setMode("pose");
 $("animate-mode").onclick = () => setMode("animate");

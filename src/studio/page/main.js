@@ -70,6 +70,9 @@ on("close", (was) => connection(false, was));
 for (const id of ["edges", "colours", "texture", "overlay", "anchor", "pieces", "highlight"]) $(id).addEventListener("change", redraw);
 $("fit").onclick = fit;
 
-window.addEventListener("resize", resize);
+// The canvas follows its element's size, whatever changed it (the window, or panels whose
+// content changes the room left for it): a backing store of another size would be stretched,
+// and the mouse would miss what is drawn.
+new ResizeObserver(resize).observe($("view"));
 resize();
 connect();

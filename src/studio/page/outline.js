@@ -37,7 +37,7 @@ function nearestSegment(px, py, radius) {
 }
 
 canvas.addEventListener("mousedown", (e) => {
-  if (!outlining() || e.button !== 0 || e.shiftKey) return;
+  if (!outlining() || e.button !== 0 || e.altKey) return; // Alt+drag pans (pose.js)
   const [px, py] = eventCanvas(e);
   const hit = nearestPoint(px, py, 10 * dpr());
   const drawing = S.state.drawing;

@@ -1979,6 +1979,16 @@ fn check_every_shortcut(page: &PageTab, listed: &[String]) {
             10,
         );
     };
+    // A key that adds one keyframe: the count goes up by one, and Undo takes it back.
+    let adds_a_key = |key: &str, mods: &[ModifierKey]| {
+        let n = page.num("studio.state.keyframes.length");
+        press(key, mods);
+        page.wait(
+            &format!("studio.state.keyframes.length === {}", n + 1.0),
+            10,
+        );
+        page.undo();
+    };
     let mut checked = Vec::new();
     for id in listed {
         match id.as_str() {
@@ -2033,13 +2043,7 @@ fn check_every_shortcut(page: &PageTab, listed: &[String]) {
             "insert" => {
                 page.slide_to(0.1);
                 page.wait("studio.showing === 'frame' && !studio.busy()", 10);
-                let n = page.num("studio.state.keyframes.length");
-                press("i", &[]);
-                page.wait(
-                    &format!("studio.state.keyframes.length === {}", n + 1.0),
-                    10,
-                );
-                page.undo();
+                adds_a_key("i", &[]);
             }
             "copy" => {
                 select(2);
@@ -2049,23 +2053,11 @@ fn check_every_shortcut(page: &PageTab, listed: &[String]) {
             "paste" => {
                 page.slide_to(0.95);
                 page.wait("studio.showing === 'frame' && !studio.busy()", 10);
-                let n = page.num("studio.state.keyframes.length");
-                press("v", &[ModifierKey::Ctrl]);
-                page.wait(
-                    &format!("studio.state.keyframes.length === {}", n + 1.0),
-                    10,
-                );
-                page.undo();
+                adds_a_key("v", &[ModifierKey::Ctrl]);
             }
             "duplicate" => {
                 select(2);
-                let n = page.num("studio.state.keyframes.length");
-                press("d", &[ModifierKey::Ctrl]);
-                page.wait(
-                    &format!("studio.state.keyframes.length === {}", n + 1.0),
-                    10,
-                );
-                page.undo();
+                adds_a_key("d", &[ModifierKey::Ctrl]);
             }
             "delete" => {
                 select(2);

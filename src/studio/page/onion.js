@@ -10,7 +10,7 @@ import { S, $, ctx, dpr, redraw } from "./view.js";
 import { needPoses } from "./net.js";
 
 const BEFORE = [214, 39, 40], AFTER = [44, 160, 44];
-const paths = new Map(); // keyframe -> { pos, fill, edge }
+const paths = new Map(); // keyframe -> { pos, fill, loops }: each ghost's outline path
 
 // The keyframes ghosted now: up to `count` each side of the keyframe posed, or of the time shown.
 export function ghostKeys() {

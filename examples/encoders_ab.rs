@@ -98,6 +98,7 @@ fn main() {
                 corner_uv: None,
                 texture: None,
                 face_colours: None,
+                depth: None,
             };
             raster::render(&moved.positions, &drawing, &view, size)
         })

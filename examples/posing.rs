@@ -159,6 +159,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 corner_uv: None,
                 texture: None,
                 face_colours: Some(&colours),
+                depth: None,
             };
             raster::render(positions, &drawing, &view, size)
         })

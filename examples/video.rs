@@ -82,6 +82,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     corner_uv: (look == "textured").then_some(corner_uv.as_slice()),
                     texture: (look == "textured").then_some(&tex),
                     face_colours: (look == "distortion").then(|| shades[i].as_slice()),
+                    depth: None,
                 };
                 raster::render(&positions[i], &drawing, &view, size)
             })

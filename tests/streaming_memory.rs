@@ -147,6 +147,7 @@ impl Frames {
             corner_uv: None,
             texture: None,
             face_colours: None,
+            depth: None,
         };
         let size = ImageSize {
             width: SIDE,

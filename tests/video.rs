@@ -321,6 +321,7 @@ fn a_video_streamed_into_a_file_decodes_with_every_frame() {
             corner_uv: None,
             texture: None,
             face_colours: None,
+            depth: None,
         };
         raster::render(&moved.positions, &drawing, &view, size)
     };

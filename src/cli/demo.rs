@@ -160,6 +160,7 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
         corner_uv: Some(&corner_uv),
         texture: Some(&texture),
         face_colours: None,
+        depth: None,
     };
     let images: Vec<Image> = picks
         .iter()

@@ -3,6 +3,7 @@
 mod blend;
 mod compile;
 mod demo;
+mod export;
 mod geodesic;
 mod info;
 mod mesh;
@@ -12,7 +13,7 @@ mod param;
 
 use std::path::PathBuf;
 
-use bdmorph::render::ImageSize;
+use bdmorph::render::{Background, ImageSize};
 use bdmorph::Easing;
 use clap::{Args, Parser, Subcommand};
 
@@ -265,6 +266,62 @@ enum Command {
     ///   bdmorph studio wave.json --port 8300
     #[command(verbatim_doc_comment)]
     Studio(StudioArgs),
+    /// Export a project the studio saved: its animation as the studio's page exports it.
+    ///
+    /// The frames are the animation at the project's frame rate (its duration times the
+    /// rate, plus one), or --frames of them; --range keeps some. Pictures are framed on the
+    /// subject, in its own aspect (640 pixels on the longer side) unless --size says
+    /// otherwise, drawn with the project's picture and in the draw order painted on it, on
+    /// white, a colour or transparency (--background).
+    ///
+    /// The format follows the ending of -o (or --format): .gif, .mp4 (opaque), .apng or
+    /// .webp (animated, with transparency), .png with --sheet (a sprite sheet, and a .json
+    /// beside it with each frame's rectangle, the frame size and the fps, as game engines'
+    /// sprite-sheet importers read it), .html (a viewer), or a folder for PNG frames
+    /// (--format obj for OBJ frames).
+    ///
+    /// Examples:
+    ///   bdmorph export wave.json -o wave.mp4
+    ///   bdmorph export wave.json -o wave.webp --background transparent
+    ///   bdmorph export wave.json -o wave.apng --background transparent --size 800x600
+    ///   bdmorph export wave.json -o sheet.png --sheet --background transparent --size 256x256
+    ///   bdmorph export wave.json -o frames/ --background transparent --range 0-24
+    ///   bdmorph export wave.json -o wave.gif --background '#202020'
+    #[command(verbatim_doc_comment)]
+    Export(ExportArgs),
+}
+
+#[derive(Args, Debug)]
+struct ExportArgs {
+    /// The project (.json) the studio saved; its picture is read from beside it.
+    #[arg(value_name = "PROJECT")]
+    project: PathBuf,
+    /// The file (or folder, for frames) to write.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: PathBuf,
+    /// The format, instead of the ending of -o: gif, mp4, apng, webp, sheet, frames
+    /// (PNG), png (a strip of five frames coloured by distortion), html or obj.
+    #[arg(long, value_name = "FORMAT")]
+    format: Option<String>,
+    /// A sprite sheet: -o names its PNG; its JSON goes beside it.
+    #[arg(long)]
+    sheet: bool,
+    /// Picture size, WxH (default: the subject's aspect, 640 pixels on the longer side).
+    #[arg(long, value_name = "WxH")]
+    size: Option<ImageSize>,
+    /// The animation sampled at N frames (default: duration x fps + 1).
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
+    /// The frames kept, FIRST-LAST (0-based, inclusive), for example 0-24.
+    #[arg(long, value_name = "FIRST-LAST", value_parser = export::parse_range)]
+    range: Option<[usize; 2]>,
+    /// transparent (APNG, WebP, sprite sheets, PNG frames), or a colour: #rrggbb, #rgb,
+    /// white, black, grey, ... (default white).
+    #[arg(long, value_name = "transparent|COLOR", allow_hyphen_values = true)]
+    background: Option<Background>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -783,6 +840,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Export(args) => export::run(args),
         Command::Studio(args) => bdmorph::studio::run(bdmorph::studio::StudioOptions {
             file: args.file,
             port: args.port,

@@ -191,6 +191,7 @@ pub fn render(
         corner_uv: look.texture.map(|(_, uv)| uv),
         texture: look.texture.map(|(img, _)| img),
         face_colours: colours[i].as_deref(),
+        depth: None,
     };
     let name = |i: usize| {
         if plan.directory {

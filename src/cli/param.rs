@@ -369,6 +369,7 @@ fn picture(
         corner_uv: Some(&corner_uv),
         texture: Some(&texture),
         face_colours: None,
+        depth: None,
     };
     let view = Viewport::fit([uv]);
     let flat = raster::render(uv, &drawing, &view, size);

@@ -1,20 +1,23 @@
-//! Pictures of frames: rasterised PNG and GIF, H.264 MP4 video, SVG, and a self-contained HTML
-//! viewer.
+//! Pictures of frames: rasterised PNG and GIF, animated PNG and WebP with transparency,
+//! sprite sheets, H.264 MP4 video, SVG, and a self-contained HTML viewer.
 //!
 //! All renderers share the types here. A [`Viewport`] is fixed for a whole animation (fit to
 //! every frame), so frames line up; world `y` points up, image `y` down.
 
+pub mod apng;
 pub mod colour;
 pub mod html;
 pub mod raster;
+pub mod sheet;
 pub mod surface;
 pub mod svg;
 #[cfg(feature = "video")]
 pub mod video;
+pub mod webp;
 
 /// What to draw besides the positions: the triangles and, optionally, a texture mapped through
-/// per-corner texture coordinates.
-#[derive(Clone, Copy, Debug)]
+/// per-corner texture coordinates, per-face colours and a draw order.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Drawing<'a> {
     /// Triangles (vertex indices into the positions).
     pub faces: &'a [[u32; 3]],
@@ -27,6 +30,115 @@ pub struct Drawing<'a> {
     /// texture; ignored when its length differs from the number of faces. See
     /// [`colour`] for colouring by distortion.
     pub face_colours: Option<&'a [[u8; 3]]>,
+    /// A depth level per face (parallel to `faces`): faces of a higher level are drawn over
+    /// those of a lower one wherever the mesh overlaps itself; within a level, in face
+    /// order. Ignored when its length differs from the number of faces. See
+    /// [`depth_order`].
+    pub depth: Option<&'a [i8]>,
+}
+
+/// The order to draw faces in: by ascending depth level, stable (faces of one level keep
+/// their order). `None` when the levels are all equal, so the face order stands.
+///
+/// ```
+/// assert_eq!(bdmorph::render::depth_order(&[1, 0, -2, 0]), Some(vec![2, 1, 3, 0]));
+/// assert_eq!(bdmorph::render::depth_order(&[3, 3]), None);
+/// ```
+pub fn depth_order(depth: &[i8]) -> Option<Vec<usize>> {
+    let first = *depth.first()?;
+    if depth.iter().all(|&d| d == first) {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..depth.len()).collect();
+    order.sort_by_key(|&f| depth[f]);
+    Some(order)
+}
+
+/// What fills the picture behind the subject.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Background {
+    /// Nothing: pixels the subject does not cover have alpha 0.
+    Transparent,
+    /// An opaque colour (RGB).
+    Colour([u8; 3]),
+}
+
+impl Background {
+    /// Opaque white, the default of every picture.
+    pub const WHITE: Background = Background::Colour([255, 255, 255]);
+
+    /// Whether pictures on it have transparent pixels.
+    pub fn is_transparent(self) -> bool {
+        self == Background::Transparent
+    }
+}
+
+impl Default for Background {
+    fn default() -> Self {
+        Background::WHITE
+    }
+}
+
+impl std::fmt::Display for Background {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Background::Transparent => f.write_str("transparent"),
+            Background::Colour([r, g, b]) => write!(f, "#{r:02x}{g:02x}{b:02x}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Background {
+    type Err = String;
+    /// `transparent`, `#rrggbb`, `#rgb`, `rrggbb`, or one of `white`, `black`, `grey`/`gray`,
+    /// `red`, `green`, `blue`, `magenta` (the usual chroma key), case-insensitive.
+    ///
+    /// ```
+    /// use bdmorph::render::Background;
+    /// assert_eq!("transparent".parse(), Ok(Background::Transparent));
+    /// assert_eq!("#ff8000".parse(), Ok(Background::Colour([255, 128, 0])));
+    /// assert_eq!("#0f0".parse(), Ok(Background::Colour([0, 255, 0])));
+    /// assert!("teal-ish".parse::<Background>().is_err());
+    /// ```
+    fn from_str(s: &str) -> Result<Background, String> {
+        let t = s.trim().to_ascii_lowercase();
+        let named = match t.as_str() {
+            "transparent" | "none" => return Ok(Background::Transparent),
+            "white" => Some([255, 255, 255]),
+            "black" => Some([0, 0, 0]),
+            "grey" | "gray" => Some([128, 128, 128]),
+            "red" => Some([255, 0, 0]),
+            "green" => Some([0, 255, 0]),
+            "blue" => Some([0, 0, 255]),
+            "magenta" => Some([255, 0, 255]),
+            _ => None,
+        };
+        if let Some(rgb) = named {
+            return Ok(Background::Colour(rgb));
+        }
+        let hex = t.strip_prefix('#').unwrap_or(&t);
+        let bad = || {
+            format!(
+                "background '{s}' is not 'transparent', a colour name or a hex colour like #ffffff"
+            )
+        };
+        if !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return Err(bad());
+        }
+        let digit = |i: usize| u8::from_str_radix(&hex[i..i + 1], 16).map_err(|_| bad());
+        match hex.len() {
+            3 => Ok(Background::Colour([
+                digit(0)? * 17,
+                digit(1)? * 17,
+                digit(2)? * 17,
+            ])),
+            6 => {
+                let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).map_err(|_| bad());
+                Ok(Background::Colour([byte(0)?, byte(2)?, byte(4)?]))
+            }
+            _ => Err(bad()),
+        }
+    }
 }
 
 /// An RGBA8 image, rows top to bottom, not premultiplied.
@@ -87,6 +199,40 @@ pub struct Viewport {
     pub min: [f64; 2],
     /// Upper-right corner (world units).
     pub max: [f64; 2],
+}
+
+impl ImageSize {
+    /// The size whose longer side is `long_side` pixels and whose aspect is the viewport's
+    /// (each side at least 2 pixels and even, as H.264 needs), for pictures framed on the
+    /// subject rather than on a square.
+    ///
+    /// ```
+    /// use bdmorph::render::{ImageSize, Viewport};
+    /// let wide = Viewport { min: [0.0, 0.0], max: [4.0, 3.0] };
+    /// assert_eq!(ImageSize::fitting(&wide, 640), ImageSize { width: 640, height: 480 });
+    /// ```
+    pub fn fitting(view: &Viewport, long_side: u32) -> ImageSize {
+        let (dx, dy) = (view.max[0] - view.min[0], view.max[1] - view.min[1]);
+        let long = f64::from(long_side.clamp(2, 16384));
+        let even = |v: f64| ((v / 2.0).round() as u32 * 2).clamp(2, 16384);
+        if !(dx > 0.0 && dy > 0.0 && dx.is_finite() && dy.is_finite()) {
+            return ImageSize {
+                width: even(long),
+                height: even(long),
+            };
+        }
+        if dx >= dy {
+            ImageSize {
+                width: even(long),
+                height: even(long * dy / dx),
+            }
+        } else {
+            ImageSize {
+                width: even(long * dx / dy),
+                height: even(long),
+            }
+        }
+    }
 }
 
 impl Viewport {

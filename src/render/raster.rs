@@ -12,7 +12,7 @@
 //! use bdmorph::render::{raster, Drawing, ImageSize, Viewport};
 //!
 //! let mesh = generate::disk(4, 0.0);
-//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None };
+//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None, depth: None };
 //! let view = Viewport::fit([&mesh.positions[..]]);
 //! let size = ImageSize { width: 64, height: 48 };
 //! let image = raster::render(&mesh.positions, &drawing, &view, size);
@@ -22,7 +22,7 @@
 //! # Ok::<(), raster::RenderError>(())
 //! ```
 
-use super::{Drawing, Image, ImageSize, Viewport};
+use super::{depth_order, Background, Drawing, Image, ImageSize, Viewport};
 use rayon::prelude::*;
 use std::error::Error as StdError;
 use std::fmt;
@@ -271,8 +271,12 @@ fn fill_union<'a>(
 
 /// Fills the unflipped triangles with their face's colour, one path per colour (so
 /// neighbours of one colour leave no seams).
-fn fill_by_colour(pixmap: &mut Pixmap, triangles: &[PixelTriangle], colours: &[[u8; 3]]) {
-    let mut order: Vec<&PixelTriangle> = triangles.iter().filter(|t| !t.flipped).collect();
+fn fill_by_colour<'t>(
+    pixmap: &mut Pixmap,
+    triangles: impl Iterator<Item = &'t PixelTriangle>,
+    colours: &[[u8; 3]],
+) {
+    let mut order: Vec<&PixelTriangle> = triangles.filter(|t| !t.flipped).collect();
     order.sort_by_key(|t| colours[t.face]);
     for group in order.chunk_by(|a, b| colours[a.face] == colours[b.face]) {
         fill_union(pixmap, group.iter().copied(), colours[group[0].face]);
@@ -281,7 +285,7 @@ fn fill_by_colour(pixmap: &mut Pixmap, triangles: &[PixelTriangle], colours: &[[
 
 /// Strokes every edge once (shared edges are not drawn twice), 1 px wide and anti-aliased.
 /// When the mesh is so dense that edges would hide the fills, they fade.
-fn stroke_edges(pixmap: &mut Pixmap, triangles: &[PixelTriangle], faces: &[[u32; 3]]) {
+fn stroke_edges(pixmap: &mut Pixmap, triangles: &[&PixelTriangle], faces: &[[u32; 3]]) {
     let mut edges: Vec<(u32, u32, usize, usize)> = Vec::with_capacity(3 * triangles.len());
     for (ti, t) in triangles.iter().enumerate() {
         let f = faces[t.face];
@@ -321,9 +325,10 @@ fn stroke_edges(pixmap: &mut Pixmap, triangles: &[PixelTriangle], faces: &[[u32;
     }
 }
 
-/// The texture as an opaque tiny-skia pixmap (transparent parts composited over white), or
-/// `None` when it has no pixels or a malformed buffer.
-fn texture_pixmap(texture: &Image) -> Option<Pixmap> {
+/// The texture as a tiny-skia pixmap, or `None` when it has no pixels or a malformed
+/// buffer: composited over `under` (opaque) when given, else premultiplied with its
+/// transparency kept.
+fn texture_pixmap(texture: &Image, under: Option<[u8; 3]>) -> Option<Pixmap> {
     if texture.width == 0 || texture.height == 0 || check_buffer(texture).is_err() {
         return None;
     }
@@ -331,10 +336,19 @@ fn texture_pixmap(texture: &Image) -> Option<Pixmap> {
     let mut data = texture.rgba.clone();
     for px in data.chunks_exact_mut(4) {
         let a = u32::from(px[3]);
-        for c in &mut px[..3] {
-            *c = ((u32::from(*c) * a + 255 * (255 - a) + 127) / 255) as u8;
+        match under {
+            Some(rgb) => {
+                for (c, b) in px[..3].iter_mut().zip(rgb) {
+                    *c = ((u32::from(*c) * a + u32::from(b) * (255 - a) + 127) / 255) as u8;
+                }
+                px[3] = 255;
+            }
+            None => {
+                for c in &mut px[..3] {
+                    *c = ((u32::from(*c) * a + 127) / 255) as u8;
+                }
+            }
         }
-        px[3] = 255;
     }
     Pixmap::from_vec(data, size)
 }
@@ -395,16 +409,20 @@ fn texture_colour_at_centroid(texture: PixmapRef<'_>, uv: &[[f64; 2]; 3]) -> Col
 /// leave faint seams where both cover a pixel partially, so a second pass without
 /// anti-aliasing paints every pixel whose centre lies in a triangle opaquely: the seams
 /// vanish and only the outline keeps the first pass's smooth edge.
-fn fill_textured(
+///
+/// On a transparent background the texture keeps its transparency, and the second pass
+/// replaces pixels rather than blending over them (a half-transparent texel is not doubled).
+fn fill_textured<'t>(
     pixmap: &mut Pixmap,
-    triangles: &[PixelTriangle],
+    triangles: impl Iterator<Item = &'t PixelTriangle> + Clone,
     corner_uv: &[[[f64; 2]; 3]],
     texture: &Pixmap,
+    transparent: bool,
 ) {
     let (w, h) = (f64::from(texture.width()), f64::from(texture.height()));
     let mut pb = PathBuilder::new();
     for anti_alias in [true, false] {
-        for t in triangles.iter().filter(|t| !t.flipped) {
+        for t in triangles.clone().filter(|t| !t.flipped) {
             let uv = &corner_uv[t.face];
             let shader = match texture_transform(uv, &t.corners, w, h) {
                 Some(ts) => Pattern::new(
@@ -416,9 +434,15 @@ fn fill_textured(
                 ),
                 None => Shader::SolidColor(texture_colour_at_centroid(texture.as_ref(), uv)),
             };
+            let blend_mode = if transparent && !anti_alias {
+                tiny_skia::BlendMode::Source
+            } else {
+                tiny_skia::BlendMode::SourceOver
+            };
             let paint = Paint {
                 shader,
                 anti_alias,
+                blend_mode,
                 ..Paint::default()
             };
             add_triangle(&mut pb, &t.corners);
@@ -440,7 +464,7 @@ fn fill_textured(
 
 /// Draws the triangles of `drawing` at `positions` (world coordinates, `y` up) as an image
 /// of `size` on a white background, `view` mapped to the image as by
-/// [`Viewport::transform`].
+/// [`Viewport::transform`]: [`render_on`] with [`Background::WHITE`].
 ///
 /// With a texture and per-corner texture coordinates (one entry per face), each triangle is
 /// filled with the texture (bilinear sampling, transparency composited over white) through
@@ -459,35 +483,81 @@ pub fn render(
     view: &Viewport,
     size: ImageSize,
 ) -> Image {
-    let blank = || Image {
-        width: size.width,
-        height: size.height,
-        rgba: vec![255; size.width as usize * size.height as usize * 4],
+    render_on(positions, drawing, view, size, Background::WHITE)
+}
+
+/// As [`render`], on `background`: a colour, or transparency (pixels the subject does not
+/// cover have alpha 0, its anti-aliased outline partial alpha, and a texture keeps its own
+/// transparency). With a per-face depth ([`Drawing::depth`]), the faces are drawn a level
+/// at a time from the lowest, each level's fills, flips and edges over the levels below, so
+/// where the mesh overlaps itself the higher level is in front.
+///
+/// The image is not premultiplied.
+pub fn render_on(
+    positions: &[[f64; 2]],
+    drawing: &Drawing,
+    view: &Viewport,
+    size: ImageSize,
+    background: Background,
+) -> Image {
+    let (fill, under) = match background {
+        Background::Transparent => (Color::TRANSPARENT, None),
+        Background::Colour(rgb) => (colour(rgb), Some(rgb)),
+    };
+    let blank = || {
+        let px = match under {
+            Some([r, g, b]) => [r, g, b, 255],
+            None => [0; 4],
+        };
+        Image {
+            width: size.width,
+            height: size.height,
+            rgba: px.repeat(size.width as usize * size.height as usize),
+        }
     };
     let Some(mut pixmap) = Pixmap::new(size.width, size.height) else {
         return blank();
     };
-    pixmap.fill(Color::WHITE);
+    pixmap.fill(fill);
     let triangles: Vec<PixelTriangle> =
         pixel_triangles(positions, drawing.faces, view, size).collect();
 
     let textured = match (drawing.texture, drawing.corner_uv) {
         (Some(texture), Some(uv)) if uv.len() == drawing.faces.len() => {
-            texture_pixmap(texture).map(|t| (t, uv))
+            texture_pixmap(texture, under).map(|t| (t, uv))
         }
         _ => None,
     };
     let coloured = drawing
         .face_colours
         .filter(|c| c.len() == drawing.faces.len());
-    match (coloured, &textured) {
-        (Some(colours), _) => fill_by_colour(&mut pixmap, &triangles, colours),
-        (None, Some((texture, uv))) => fill_textured(&mut pixmap, &triangles, uv, texture),
-        (None, None) => fill_union(&mut pixmap, triangles.iter().filter(|t| !t.flipped), FILL),
-    }
-    fill_union(&mut pixmap, triangles.iter().filter(|t| t.flipped), FLIPPED);
-    if textured.is_none() || coloured.is_some() {
-        stroke_edges(&mut pixmap, &triangles, drawing.faces);
+    let levels = drawing
+        .depth
+        .filter(|d| d.len() == drawing.faces.len())
+        .and_then(|d| depth_order(d).map(|_| d));
+    let layer = |pixmap: &mut Pixmap, layer: &[&PixelTriangle]| {
+        let all = || layer.iter().copied();
+        match (coloured, &textured) {
+            (Some(colours), _) => fill_by_colour(pixmap, all(), colours),
+            (None, Some((texture, uv))) => {
+                fill_textured(pixmap, all(), uv, texture, under.is_none())
+            }
+            (None, None) => fill_union(pixmap, all().filter(|t| !t.flipped), FILL),
+        }
+        fill_union(pixmap, all().filter(|t| t.flipped), FLIPPED);
+        if textured.is_none() || coloured.is_some() {
+            stroke_edges(pixmap, layer, drawing.faces);
+        }
+    };
+    match levels {
+        None => layer(&mut pixmap, &triangles.iter().collect::<Vec<_>>()),
+        Some(depth) => {
+            let mut order: Vec<&PixelTriangle> = triangles.iter().collect();
+            order.sort_by_key(|t| depth[t.face]);
+            for group in order.chunk_by(|a, b| depth[a.face] == depth[b.face]) {
+                layer(&mut pixmap, group);
+            }
+        }
     }
     Image {
         width: size.width,
@@ -1135,6 +1205,7 @@ mod tests {
             corner_uv: None,
             texture: None,
             face_colours: None,
+            depth: None,
         }
     }
 
@@ -1252,6 +1323,7 @@ mod tests {
             corner_uv: Some(&uv),
             texture: Some(&texture),
             face_colours: None,
+            depth: None,
         };
         let img = render(&pos, &drawing, &VIEW, SIZE);
         for (p, rgb) in [
@@ -1281,6 +1353,7 @@ mod tests {
             corner_uv: Some(&uv),
             texture: Some(&grey),
             face_colours: None,
+            depth: None,
         };
         let img = render(&pos, &drawing, &VIEW, SIZE);
         // Every pixel with its centre inside the square, the diagonal included, is the

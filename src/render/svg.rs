@@ -10,7 +10,7 @@
 //! use bdmorph::render::{svg::svg, Drawing, ImageSize, Viewport};
 //!
 //! let mesh = generate::disk(2, 0.0);
-//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None };
+//! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None, depth: None };
 //! let view = Viewport::fit([&mesh.positions[..]]);
 //! let doc = svg(&mesh.positions, &drawing, &view, ImageSize { width: 120, height: 90 });
 //! assert!(doc.starts_with("<svg"));
@@ -63,19 +63,35 @@ pub fn svg(positions: &[[f64; 2]], drawing: &Drawing, view: &Viewport, size: Ima
     let coloured = drawing
         .face_colours
         .filter(|c| c.len() == drawing.faces.len());
-    // Groups of one fill: unflipped triangles by colour, then the flipped ones.
-    let mut groups: Vec<([u8; 3], Vec<&PixelTriangle>)> = Vec::new();
-    match coloured {
-        Some(colours) => {
-            let mut order: Vec<&PixelTriangle> = triangles.iter().filter(|t| !t.flipped).collect();
-            order.sort_by_key(|t| colours[t.face]);
-            for group in order.chunk_by(|a, b| colours[a.face] == colours[b.face]) {
-                groups.push((colours[group[0].face], group.to_vec()));
-            }
-        }
-        None => groups.push((FILL, triangles.iter().filter(|t| !t.flipped).collect())),
+    // Layers by depth (one when there is none), each in groups of one fill: unflipped
+    // triangles by colour, then the flipped ones.
+    let mut layers: Vec<Vec<&PixelTriangle>> = vec![triangles.iter().collect()];
+    if let Some(depth) = drawing.depth.filter(|d| d.len() == drawing.faces.len()) {
+        let mut order = layers.remove(0);
+        order.sort_by_key(|t| depth[t.face]);
+        layers = order
+            .chunk_by(|a, b| depth[a.face] == depth[b.face])
+            .map(<[_]>::to_vec)
+            .collect();
     }
-    groups.push((FLIPPED, triangles.iter().filter(|t| t.flipped).collect()));
+    let mut groups: Vec<([u8; 3], Vec<&PixelTriangle>)> = Vec::new();
+    for layer in &layers {
+        match coloured {
+            Some(colours) => {
+                let mut order: Vec<&PixelTriangle> =
+                    layer.iter().copied().filter(|t| !t.flipped).collect();
+                order.sort_by_key(|t| colours[t.face]);
+                for group in order.chunk_by(|a, b| colours[a.face] == colours[b.face]) {
+                    groups.push((colours[group[0].face], group.to_vec()));
+                }
+            }
+            None => groups.push((FILL, layer.iter().copied().filter(|t| !t.flipped).collect())),
+        }
+        groups.push((
+            FLIPPED,
+            layer.iter().copied().filter(|t| t.flipped).collect(),
+        ));
+    }
     for (fill, group) in groups {
         if group.is_empty() {
             continue;
@@ -140,6 +156,7 @@ mod tests {
             corner_uv: None,
             texture: None,
             face_colours: None,
+            depth: None,
         };
         let view = Viewport {
             min: [-0.25, -0.25],
@@ -191,6 +208,7 @@ mod tests {
             corner_uv: None,
             texture: None,
             face_colours: None,
+            depth: None,
         };
         let textured = Drawing {
             corner_uv: Some(&uv),

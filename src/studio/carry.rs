@@ -284,6 +284,24 @@ pub fn carry(old: &PlanarMesh, keyframes: &[Keyframe], new: &PlanarMesh) -> Carr
     }
 }
 
+/// For each triangle of `new`, the triangle of `old` holding its centroid (or the nearest
+/// one): how per-triangle paint (depth, stiffness) carries over to a new mesh.
+pub fn carry_faces(old: &PlanarMesh, new: &PlanarMesh) -> Vec<u32> {
+    let centroids: Vec<[f64; 2]> = new
+        .faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| new.positions[v as usize]);
+            [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0]
+        })
+        .collect();
+    locate(old, &centroids)
+        .0
+        .into_iter()
+        .map(|(f, _)| f)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -325,6 +343,28 @@ mod tests {
         let rim = new.positions[pins[1] as usize];
         let was = old.positions[old.positions.len() - 1];
         assert!((rim[0] - was[0]).hypot(rim[1] - was[1]) < 0.2);
+    }
+
+    #[test]
+    fn paint_carries_to_the_triangles_over_it() {
+        let old = generate::grid(5, 5, 0.0);
+        let new = generate::grid(9, 9, 0.0);
+        let map = carry_faces(&old, &new);
+        assert_eq!(map.len(), new.faces.len());
+        for (f, &o) in new.faces.iter().zip(&map) {
+            let c = f.map(|v| new.positions[v as usize]);
+            let centre = [
+                (c[0][0] + c[1][0] + c[2][0]) / 3.0,
+                (c[0][1] + c[1][1] + c[2][1]) / 3.0,
+            ];
+            let oc = old.faces[o as usize].map(|v| old.positions[v as usize]);
+            let (lo, hi) = bounds(oc.into_iter());
+            assert!(
+                centre[0] >= lo[0] - 1e-9 && centre[0] <= hi[0] + 1e-9,
+                "{centre:?} is not over old triangle {o}"
+            );
+            assert!(centre[1] >= lo[1] - 1e-9 && centre[1] <= hi[1] + 1e-9);
+        }
     }
 
     #[test]

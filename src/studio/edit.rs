@@ -11,8 +11,8 @@
 //! shows them.
 
 use super::project::{
-    check_limits, check_loop_range, check_outline, check_pins, Keyframe, MeshData, MethodData,
-    PictureSettings, Project,
+    check_depth, check_limits, check_loop_range, check_outline, check_pins, check_stiffness,
+    Keyframe, MeshData, MethodData, PictureSettings, Project,
 };
 
 /// One change to the document.
@@ -124,6 +124,10 @@ pub enum Edit {
     /// The whole document replaced (a new mesh with its keyframes carried over, a file
     /// opened, recovered work restored).
     Document(Box<Project>),
+    /// The draw order painted on the triangles (see [`Project::depth`]).
+    Depth(Option<Vec<i8>>),
+    /// The stiffness painted on the triangles (see [`Project::stiffness`]).
+    Stiffness(Option<Vec<f64>>),
     /// Several edits as one step, applied in order.
     Batch(Vec<Edit>),
 }
@@ -147,6 +151,8 @@ pub struct Touched {
     pub settings: bool,
     /// The texture.
     pub texture: bool,
+    /// The depth or stiffness painted on the triangles.
+    pub paint: bool,
 }
 
 impl Touched {
@@ -171,6 +177,7 @@ impl Touched {
             outline: self.outline || other.outline,
             settings: self.settings || other.settings,
             texture: self.texture || other.texture,
+            paint: self.paint || other.paint,
         }
     }
 }
@@ -206,6 +213,8 @@ impl Edit {
                     + p.keyframes.iter().map(keyframe).sum::<usize>()
             }
             Edit::Batch(edits) => edits.iter().map(Edit::bytes).sum(),
+            Edit::Depth(d) => d.as_ref().map_or(0, Vec::len),
+            Edit::Stiffness(w) => 8 * w.as_ref().map_or(0, Vec::len),
             _ => 0,
         }
     }
@@ -431,6 +440,29 @@ impl Edit {
                     },
                 )
             }
+            Edit::Depth(depth) => {
+                check_depth(depth.as_deref(), doc.mesh.faces.len())?;
+                let old = std::mem::replace(&mut doc.depth, depth);
+                (
+                    Edit::Depth(old),
+                    Touched {
+                        paint: true,
+                        ..touched
+                    },
+                )
+            }
+            Edit::Stiffness(weights) => {
+                check_stiffness(weights.as_deref(), doc.mesh.faces.len())?;
+                let old = std::mem::replace(&mut doc.stiffness, weights);
+                (
+                    Edit::Stiffness(old),
+                    Touched {
+                        paint: true,
+                        method: true,
+                        ..touched
+                    },
+                )
+            }
             Edit::LoopRange(range) => {
                 check_loop_range(range)?;
                 let old = std::mem::replace(&mut doc.loop_range, range);
@@ -601,6 +633,7 @@ impl Edit {
                         outline: true,
                         settings: true,
                         texture: true,
+                        paint: true,
                         ..touched
                     },
                 )

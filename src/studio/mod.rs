@@ -24,6 +24,7 @@
 pub mod carry;
 pub mod edit;
 pub mod engine;
+pub mod export;
 pub mod guard;
 pub mod history;
 pub mod jobs;

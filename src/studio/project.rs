@@ -79,6 +79,67 @@ pub struct Project {
     /// animation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loop_range: Option<[f64; 2]>,
+    /// The draw order: a depth level per triangle (from -[`MAX_DEPTH`] to [`MAX_DEPTH`]),
+    /// painted on the rest mesh; where a pose overlaps itself the higher level is drawn in
+    /// front. `None`: every triangle at level 0, drawn in triangle order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth: Option<Vec<i8>>,
+    /// Stiffness: a weight per triangle (1 normal, up to [`MAX_STIFFNESS`]), painted on the
+    /// rest mesh; stiff triangles keep their shape while the rest bends (see
+    /// [`crate::deform::Deformer::set_stiffness`]). `None`: all 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<Vec<f64>>,
+}
+
+/// The deepest depth level either way (levels run from `-MAX_DEPTH` to `MAX_DEPTH`).
+pub const MAX_DEPTH: i8 = 9;
+/// The largest stiffness weight.
+pub const MAX_STIFFNESS: f64 = 1e6;
+
+/// Whether `depth` has one level per triangle of `faces`, each within [`MAX_DEPTH`].
+pub fn check_depth(depth: Option<&[i8]>, faces: usize) -> Result<(), String> {
+    let Some(depth) = depth else { return Ok(()) };
+    if depth.len() != faces {
+        return Err(format!(
+            "{} depth levels for {faces} triangles",
+            depth.len()
+        ));
+    }
+    if let Some(f) = depth
+        .iter()
+        .position(|d| d.unsigned_abs() > MAX_DEPTH.unsigned_abs())
+    {
+        return Err(format!(
+            "triangle {}: depth level {} is not between -{MAX_DEPTH} and {MAX_DEPTH}",
+            f + 1,
+            depth[f]
+        ));
+    }
+    Ok(())
+}
+
+/// Whether `stiffness` has one weight per triangle of `faces`, each in `[1, MAX_STIFFNESS]`.
+pub fn check_stiffness(stiffness: Option<&[f64]>, faces: usize) -> Result<(), String> {
+    let Some(weights) = stiffness else {
+        return Ok(());
+    };
+    if weights.len() != faces {
+        return Err(format!(
+            "{} stiffness weights for {faces} triangles",
+            weights.len()
+        ));
+    }
+    if let Some(f) = weights
+        .iter()
+        .position(|w| !(1.0..=MAX_STIFFNESS).contains(w))
+    {
+        return Err(format!(
+            "triangle {}: stiffness {} is not between 1 and {MAX_STIFFNESS}",
+            f + 1,
+            weights[f]
+        ));
+    }
+    Ok(())
 }
 
 /// Whether a loop range is `[from, to]` with `0 <= from < to`, both finite.
@@ -286,6 +347,8 @@ impl Project {
                 pins: Vec::new(),
             }],
             loop_range: None,
+            depth: None,
+            stiffness: None,
         }
     }
 
@@ -379,6 +442,13 @@ impl Project {
             return damaged(format!("picture settings: {e}"));
         }
         if let Err(e) = check_loop_range(self.loop_range) {
+            return damaged(e);
+        }
+        let m = self.mesh.faces.len();
+        if let Err(e) = check_depth(self.depth.as_deref(), m) {
+            return damaged(e);
+        }
+        if let Err(e) = check_stiffness(self.stiffness.as_deref(), m) {
             return damaged(e);
         }
         let mut last = f64::NEG_INFINITY;

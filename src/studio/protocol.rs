@@ -23,6 +23,8 @@ pub mod kind {
     pub const FRAME: u32 = 3;
     /// A keyframe's pose, asked for by a page for its onion skins and key thumbnails.
     pub const GHOST: u32 = 4;
+    /// The depth and stiffness painted on the triangles.
+    pub const PAINT: u32 = 5;
     /// A file uploaded by the page (page to server).
     pub const UPLOAD: u32 = 10;
 }
@@ -220,6 +222,30 @@ pub enum Request {
         /// Frames per second, in (0, 240].
         fps: f64,
     },
+    /// Paint a depth level on triangles (one brush stroke: one undo step): `faces` (all of
+    /// them when `all`) go to `level` (-9 to 9; higher is drawn in front).
+    PaintDepth {
+        /// The triangles painted.
+        #[serde(default)]
+        faces: Vec<u32>,
+        /// Every triangle instead.
+        #[serde(default)]
+        all: bool,
+        /// The level.
+        level: i8,
+    },
+    /// Paint stiffness on triangles (one brush stroke: one undo step): `faces` (all of them
+    /// when `all`) get the weight `weight` (1 normal, up to 10^6).
+    PaintStiffness {
+        /// The triangles painted.
+        #[serde(default)]
+        faces: Vec<u32>,
+        /// Every triangle instead.
+        #[serde(default)]
+        all: bool,
+        /// The weight.
+        weight: f64,
+    },
     /// The range playback loops over, `[from, to]` seconds, or `null` for the whole animation.
     LoopRange {
         /// The range.
@@ -239,17 +265,29 @@ pub enum Request {
         /// Whether an existing file of that name may be replaced.
         overwrite: Option<bool>,
     },
-    /// Export the animation into the workspace (in the background): `gif`, `mp4`, `png` (a
-    /// strip), `html`, `obj` (a folder of frames) or `still` (one frame as PNG).
+    /// Export the animation into the workspace (in the background): `gif`, `mp4`, `apng`,
+    /// `webp`, `sheet` (a sprite sheet PNG and its JSON), `frames` (a folder of PNG frames),
+    /// `png` (a strip of five frames coloured by distortion), `html`, `obj` (a folder of
+    /// frames) or `still` (one frame as PNG).
     Export {
         /// The format.
         format: String,
-        /// A plain file (or folder, for `obj`) name.
+        /// A plain file (or folder, for `obj` and `frames`) name.
         name: String,
         /// Frames (default: the duration times the frame rate, plus one).
         frames: Option<u32>,
         /// For `still`: the animation's frame at this time (default: the keyframe shown).
         time: Option<f64>,
+        /// Picture size `[width, height]` (default: the subject's aspect, 640 pixels on its
+        /// longer side).
+        #[serde(default)]
+        size: Option<[u32; 2]>,
+        /// Frames `[first, last]` of the animation's frames (0-based, inclusive).
+        #[serde(default)]
+        range: Option<[u32; 2]>,
+        /// `transparent` or a colour (`#rrggbb`, `white`, ...); default white.
+        #[serde(default)]
+        background: Option<String>,
     },
     /// Cancel the work running in the background.
     Cancel,
@@ -402,6 +440,31 @@ pub fn mesh_bytes(
         for p in uv {
             out.extend_from_slice(&(p[0] as f32).to_le_bytes());
             out.extend_from_slice(&(p[1] as f32).to_le_bytes());
+        }
+    }
+    out
+}
+
+/// The painted depth and stiffness ([`kind::PAINT`]): header `[kind, m, has_depth,
+/// has_stiffness]`, then `m` i8 levels padded to a multiple of 4 bytes when there is a
+/// depth, then `m` f32 weights when there is a stiffness.
+pub fn paint_bytes(faces: usize, depth: Option<&[i8]>, stiffness: Option<&[f64]>) -> Vec<u8> {
+    let mut out = Vec::with_capacity(16 + 5 * faces);
+    for x in [
+        kind::PAINT,
+        faces as u32,
+        u32::from(depth.is_some()),
+        u32::from(stiffness.is_some()),
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    if let Some(d) = depth {
+        out.extend(d.iter().map(|&v| v as u8));
+        out.resize(16 + d.len().next_multiple_of(4), 0);
+    }
+    if let Some(w) = stiffness {
+        for v in w {
+            out.extend_from_slice(&(*v as f32).to_le_bytes());
         }
     }
     out

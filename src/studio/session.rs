@@ -18,16 +18,19 @@ use std::sync::Arc;
 
 use super::edit::{keyframe_at, Edit, Touched};
 use super::engine::{people, Engine};
+use super::export::{ExportFormat, ExportSettings};
 use super::history::History;
 use super::jobs::{ExportWork, MeshWork, OpenWork, Outcome, Progress, Work};
 use super::open::{
     fitted_uv, per_vertex_uv, read_named_texture, read_texture, OpenOptions, Texture,
 };
 use super::project::{Keyframe, PictureSettings, Project};
-use super::protocol::{frame_bytes, ghost_bytes, kind, mesh_bytes, upload, Request, MAX_GHOSTS};
+use super::protocol::{
+    frame_bytes, ghost_bytes, kind, mesh_bytes, paint_bytes, upload, Request, MAX_GHOSTS,
+};
 use super::workspace::{kind_of, read_regular, Recovered, Workspace, MAX_UPLOAD};
 use crate::mesh::PlanarMesh;
-use crate::render::{colour, raster, Drawing, ImageSize, Viewport};
+use crate::render::{colour, raster, Background, Drawing, ImageSize, Viewport};
 
 /// Why a session could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -87,6 +90,8 @@ pub struct Revs {
     pub shown: u64,
     /// The picture.
     pub texture: u64,
+    /// The depth and stiffness painted.
+    pub paint: u64,
 }
 
 /// A message for every page until dismissed.
@@ -383,6 +388,7 @@ impl Session {
             outline: t,
             shown: t,
             texture: t,
+            paint: t,
         };
         self.shown_cache = None;
     }
@@ -402,6 +408,9 @@ impl Session {
         }
         if touched.outline {
             self.revs.outline = self.next();
+        }
+        if touched.paint || touched.mesh {
+            self.revs.paint = self.next();
         }
         if touched.texture {
             self.revs.texture = self.next();
@@ -619,6 +628,84 @@ impl Session {
             format!("pin on keyframe {}", nth(k)),
             Edit::Pins { keyframe: k, pins },
         )
+    }
+
+    /// The triangles a brush stroke names, checked: all of them, or `faces` (each once).
+    fn stroke_faces(&self, faces: &[u32], all: bool) -> Result<Vec<usize>, String> {
+        let m = self.doc.mesh.faces.len();
+        if all {
+            return Ok((0..m).collect());
+        }
+        if faces.is_empty() {
+            return Err("the stroke painted no triangle".into());
+        }
+        if faces.len() > m {
+            return Err(format!("{} triangles named; the mesh has {m}", faces.len()));
+        }
+        let mut out: Vec<usize> = Vec::with_capacity(faces.len());
+        for &f in faces {
+            if f as usize >= m {
+                return Err(format!(
+                    "there is no triangle {} (the mesh has {m})",
+                    u64::from(f) + 1
+                ));
+            }
+            out.push(f as usize);
+        }
+        out.sort_unstable();
+        out.dedup();
+        Ok(out)
+    }
+
+    /// A depth brush stroke: `faces` (or all) to `level`, one undo step.
+    fn paint_depth(&mut self, faces: &[u32], all: bool, level: i8) -> Done {
+        let max = super::project::MAX_DEPTH;
+        if level.unsigned_abs() > max.unsigned_abs() {
+            return Err(format!(
+                "depth level {level}: give one from -{max} to {max}"
+            ));
+        }
+        let faces = self.stroke_faces(faces, all)?;
+        let m = self.doc.mesh.faces.len();
+        let mut depth = self.doc.depth.clone().unwrap_or_else(|| vec![0; m]);
+        for &f in &faces {
+            depth[f] = level;
+        }
+        let depth = (depth.iter().any(|&d| d != 0)).then_some(depth);
+        if depth == self.doc.depth {
+            return Ok(());
+        }
+        let label = if all {
+            format!("set every triangle's depth to {level}")
+        } else {
+            format!("paint depth {level} on {} triangles", faces.len())
+        };
+        self.commit(label, Edit::Depth(depth))
+    }
+
+    /// A stiffness brush stroke: `faces` (or all) get `weight`, one undo step.
+    fn paint_stiffness(&mut self, faces: &[u32], all: bool, weight: f64) -> Done {
+        let max = super::project::MAX_STIFFNESS;
+        if !(1.0..=max).contains(&weight) {
+            return Err(format!("stiffness {weight}: give a weight from 1 to {max}"));
+        }
+        let faces = self.stroke_faces(faces, all)?;
+        let m = self.doc.mesh.faces.len();
+        let mut weights = self.doc.stiffness.clone().unwrap_or_else(|| vec![1.0; m]);
+        for &f in &faces {
+            weights[f] = weight;
+        }
+        let weights = (weights.iter().any(|&w| w != 1.0)).then_some(weights);
+        if weights == self.doc.stiffness {
+            return Ok(());
+        }
+        let label = match (all, weight == 1.0) {
+            (true, true) => "clear the stiffness".to_owned(),
+            (true, false) => "make every triangle stiff".to_owned(),
+            (false, true) => format!("relax {} triangles", faces.len()),
+            (false, false) => format!("stiffen {} triangles", faces.len()),
+        };
+        self.commit(label, Edit::Stiffness(weights))
     }
 
     fn pin_move(&mut self, from: u32, to: u32) -> Done {
@@ -998,6 +1085,16 @@ impl Session {
         project.mesh = super::edit::mesh_data(&meshed.mesh, uv);
         project.outline = outline;
         project.keyframes = carried.keyframes;
+        // The depth and stiffness painted go to the new triangles over the old ones.
+        if project.depth.is_some() || project.stiffness.is_some() {
+            let map = super::carry::carry_faces(&self.engine.rest, &meshed.mesh);
+            project.depth = project
+                .depth
+                .map(|d| map.iter().map(|&f| d[f as usize]).collect());
+            project.stiffness = project
+                .stiffness
+                .map(|w| map.iter().map(|&f| w[f as usize]).collect());
+        }
         // The first keyframe is the rest shape of the new mesh.
         project.keyframes[0].positions = meshed.mesh.positions.clone();
         super::project::check_limits(project.keyframes.len(), n)?;
@@ -1097,57 +1194,67 @@ impl Session {
             .then(|| (self.doc.clone(), self.source.clone(), self.version))
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn export(
         &mut self,
         format: &str,
         name: &str,
         frames: Option<u32>,
         time: Option<f64>,
+        size: Option<[u32; 2]>,
+        range: Option<[u32; 2]>,
+        background: Option<&str>,
     ) -> Result<Option<Work>, String> {
-        let endings: &[&str] = match format {
-            "gif" => &[".gif"],
-            "mp4" => &[".mp4"],
-            "png" | "still" => &[".png"],
-            "html" => &[".html"],
-            "obj" => &[],
-            other => return Err(format!("unknown export format '{other}'")),
+        let background: Background = match background {
+            Some(b) => b.parse()?,
+            None => Background::WHITE,
         };
-        let path = if format == "obj" {
-            self.workspace.frame_folder(name)?
-        } else {
-            self.workspace.file(name, endings)?
+        let size = match size {
+            Some([w, h]) => Some(format!("{w}x{h}").parse::<ImageSize>()?),
+            None => None,
         };
         if format == "still" {
-            self.export_still(&path, time)?;
+            let path = self.workspace.file(name, &[".png"])?;
+            self.export_still(&path, time, size, background)?;
             self.note(format!("exported {}", path.display()), false);
             return Ok(None);
         }
+        let format: ExportFormat = format.parse()?;
+        let settings = ExportSettings {
+            format,
+            frames: frames.map(|f| f as usize),
+            range: range.map(|r| r.map(|v| v as usize)),
+            size,
+            background,
+        };
+        settings.check()?;
+        let path = if format.is_folder() {
+            self.workspace.frame_folder(name)?
+        } else {
+            self.workspace.file(name, format.endings())?
+        };
         if self.doc.keyframes.len() < 2 {
             return Err("add a second keyframe to export an animation".into());
         }
-        let count = match frames {
-            Some(f) => f as usize,
-            None => (self.duration() * self.doc.fps).round() as usize + 1,
-        };
-        if count > super::jobs::MAX_EXPORT_FRAMES {
-            return Err(format!(
-                "{count} frames: an export makes at most {}",
-                super::jobs::MAX_EXPORT_FRAMES
-            ));
-        }
+        super::export::frames_kept(&self.doc, &settings)?;
         Ok(Some(Work::Export(Box::new(ExportWork {
-            format: format.to_owned(),
+            settings,
             path,
-            frames: count.max(2),
             project: self.doc.clone(),
             texture: self.texture.as_ref().map(|t| Arc::new(t.image.clone())),
         }))))
     }
 
-    /// One frame as a PNG picture (800 pixels square): the animation at `time`, or the
-    /// keyframe shown; drawn with the picture when the project has one, else coloured by
-    /// distortion.
-    fn export_still(&mut self, path: &std::path::Path, time: Option<f64>) -> Done {
+    /// One frame as a PNG picture (of `size`, or the subject's aspect 800 pixels on its longer
+    /// side): the animation at `time`, or the keyframe shown; drawn with the picture when the
+    /// project has one, else coloured by distortion; in the painted draw order.
+    fn export_still(
+        &mut self,
+        path: &std::path::Path,
+        time: Option<f64>,
+        size: Option<ImageSize>,
+        background: Background,
+    ) -> Done {
         let positions = match time {
             Some(t) => {
                 if !(t.is_finite() && t >= 0.0) {
@@ -1184,13 +1291,11 @@ impl Session {
             corner_uv: corner_uv.as_deref(),
             texture,
             face_colours: shades.as_deref(),
+            depth: self.doc.depth.as_deref(),
         };
         let view = Viewport::fit(std::iter::once(positions.as_slice()));
-        let size = ImageSize {
-            width: 800,
-            height: 800,
-        };
-        let image = raster::render(&positions, &drawing, &view, size);
+        let size = size.unwrap_or_else(|| ImageSize::fitting(&view, 800));
+        let image = raster::render_on(&positions, &drawing, &view, size, background);
         let bytes = raster::encode_png(&image).map_err(|e| format!("export: {e}"))?;
         crate::io::write_bytes_atomic(path, &bytes).map_err(|e| format!("export: {e}"))
     }
@@ -1400,6 +1505,13 @@ impl Session {
         }
         if seen.state != now.state || seen.texture != now.texture {
             out.push(Answer::Text(self.state_json()));
+        }
+        if seen.paint != now.paint || seen.mesh != now.mesh {
+            out.push(Answer::Binary(paint_bytes(
+                self.doc.mesh.faces.len(),
+                self.doc.depth.as_deref(),
+                self.doc.stiffness.as_deref(),
+            )));
         }
         if seen.pins != now.pins || seen.mesh != now.mesh {
             out.push(Answer::Text(
@@ -1747,6 +1859,10 @@ impl Session {
                     self.commit("frame rate", Edit::Fps(fps))?;
                 }
             }
+            Request::PaintDepth { faces, all, level } => self.paint_depth(&faces, all, level)?,
+            Request::PaintStiffness { faces, all, weight } => {
+                self.paint_stiffness(&faces, all, weight)?
+            }
             Request::LoopRange { range } => {
                 if range == self.doc.loop_range {
                     return Ok(reply);
@@ -1767,8 +1883,20 @@ impl Session {
                 name,
                 frames,
                 time,
+                size,
+                range,
+                background,
             } => {
-                if let Some(work) = self.export(&format, &name, frames, time)? {
+                let work = self.export(
+                    &format,
+                    &name,
+                    frames,
+                    time,
+                    size,
+                    range,
+                    background.as_deref(),
+                )?;
+                if let Some(work) = work {
                     reply.work = Some(self.start(work)?);
                 }
             }

@@ -217,7 +217,7 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
 /// Whether `name` is the name of a frame an OBJ export writes (`frame_0000.obj`, ...).
 fn is_frame_name(name: &str) -> bool {
     name.strip_prefix("frame_")
-        .and_then(|r| r.strip_suffix(".obj"))
+        .and_then(|r| r.strip_suffix(".obj").or_else(|| r.strip_suffix(".png")))
         .is_some_and(|d| d.len() >= 4 && d.bytes().all(|b| b.is_ascii_digit()))
 }
 
@@ -383,7 +383,7 @@ impl Workspace {
         Ok(path)
     }
 
-    /// A folder of the workspace for an OBJ export's frames, by a plain name: not a link,
+    /// A folder of the workspace for an export's frames (OBJ or PNG), by a plain name: not a link,
     /// and new or holding only the frames of an earlier export (the export replaces it whole).
     pub fn frame_folder(&self, name: &str) -> Result<PathBuf, PathError> {
         let path = self.file(name, &[])?;

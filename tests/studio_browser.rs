@@ -1071,6 +1071,7 @@ fn defect_8_exports_run_in_the_background() {
     let page = PageTab::open(&browser, &studio.url, &dir);
     page.set_value("#export-format", "mp4");
     page.set_value("#export-name", "long.mp4");
+    page.click_on("#export-open");
     page.click_on("#export");
     page.wait("!!studio.state.job && studio.state.job.done > 0", 60);
     assert!(page.shown("#job") && page.shown("#job-cancel"));
@@ -1092,6 +1093,7 @@ fn defect_8_exports_run_in_the_background() {
     page.set_value("#export-name", "short.gif");
     page.set_value("#fps", "2");
     page.wait("studio.state.fps === 2", 10);
+    page.click_on("#export-open");
     page.click_on("#export");
     page.wait(
         "document.getElementById('notes').textContent.includes('exported')",
@@ -1348,6 +1350,7 @@ fn a_picture_becomes_a_posed_keyframed_exported_and_reopened_animation() {
     for (format, name) in [("gif", "anim.gif"), ("mp4", "anim.mp4")] {
         page.set_value("#export-format", format);
         page.set_value("#export-name", name);
+        page.click_on("#export-open");
         page.click_on("#export");
         page.wait(
             &format!("document.getElementById('notes').textContent.includes('{name}')"),
@@ -2270,4 +2273,203 @@ fn readme_walkthrough_pictures() {
         std::fs::copy(dir.join(name), docs.join(name)).expect("copy");
     }
     eprintln!("README pictures written to {}", docs.display());
+}
+
+/// A body (a square, blue in the picture) and a limb (a strip, red), two pieces of one mesh;
+/// at the second keyframe the limb lies across the body. The limb's triangles come first, so
+/// without a painted depth the body is drawn over it.
+fn limb_and_body(dir: &Path) -> (Project, usize) {
+    let body = generate::grid(7, 7, 0.0); // [0, 6]^2
+    let limb = generate::grid(11, 3, 0.0); // [0, 10] x [0, 2]
+    let limb_at = |p: [f64; 2]| [p[0] + 8.0, p[1] + 2.0]; // [8, 18] x [2, 4]
+    let mut positions: Vec<[f64; 2]> = limb.positions.iter().map(|&p| limb_at(p)).collect();
+    let nl = positions.len() as u32;
+    positions.extend(body.positions.iter().copied());
+    let mut faces = limb.faces.clone();
+    faces.extend(body.faces.iter().map(|f| f.map(|v| v + nl)));
+    let limb_faces = limb.faces.len();
+    let mesh = bdmorph::PlanarMesh { positions, faces };
+    // Texture coordinates: the limb in the picture's red right half, the body in its blue left.
+    let uv: Vec<[f64; 2]> = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(v, p)| {
+            if (v as u32) < nl {
+                [
+                    0.55 + 0.4 * (p[0] - 8.0) / 10.0,
+                    0.1 + 0.8 * (p[1] - 2.0) / 2.0,
+                ]
+            } else {
+                [0.05 + 0.4 * p[0] / 6.0, 0.1 + 0.8 * p[1] / 6.0]
+            }
+        })
+        .collect();
+    let mut picture = bdmorph::render::Image {
+        width: 40,
+        height: 20,
+        rgba: Vec::new(),
+    };
+    for _ in 0..20 {
+        for x in 0..40 {
+            picture.rgba.extend_from_slice(if x < 20 {
+                &[30, 60, 230, 255]
+            } else {
+                &[230, 30, 30, 255]
+            });
+        }
+    }
+    write_png(&dir.join("paint.png"), &picture);
+    let mut project = Project::new(&mesh, Some(uv));
+    project.texture = Some("paint.png".into());
+    let mut crossed = mesh.positions.clone();
+    for p in &mut crossed[..nl as usize] {
+        p[0] -= 10.0; // the limb over [-2, 8] x [2, 4], across the body
+    }
+    project.keyframes.push(Keyframe {
+        time: 1.0,
+        easing: "linear".into(),
+        positions: crossed,
+        pins: Vec::new(),
+    });
+    (project, limb_faces)
+}
+
+fn red(p: [u8; 3]) -> bool {
+    p[0] > 170 && p[1] < 90 && p[2] < 90
+}
+fn blue(p: [u8; 3]) -> bool {
+    p[2] > 170 && p[0] < 90 && p[1] < 120
+}
+
+/// Depth: the limb is drawn behind the body until the depth brush paints it in front (on
+/// the rest pose, where the limb is apart), then behind again when painted back; each stroke
+/// is one undo step. The page's export and the command line's on the saved project make the
+/// same sprite sheet, pixel for pixel.
+#[test]
+fn the_depth_brush_decides_which_part_is_in_front() {
+    let Some(browser) = browser() else { return };
+    let dir = scratch("41-depth");
+    let (project, limb_faces) = limb_and_body(&dir);
+    project.write(&dir.join("limb.json")).expect("write");
+    let studio = Studio::start(&dir, Some("limb.json"));
+    let page = PageTab::open(&browser, &studio.url, &dir);
+    page.wait("!!studio.texture", 20);
+    if page.eval("document.getElementById('texture').checked") != true {
+        page.click_on("#texture");
+    }
+    page.eval("(document.getElementById('edges').checked = false, true)");
+    let at = |x: f64, y: f64| {
+        let p = page.eval(&format!("studio.toPage({x}, {y})"));
+        [p[0].as_f64().expect("x"), p[1].as_f64().expect("y")]
+    };
+    // The crossing, at the second keyframe: the middle of the limb over the body.
+    let crossing_colour = |name: &str| {
+        page.key("End", &[]);
+        page.wait(
+            "studio.state.current === 1 && studio.showing === 'pose'",
+            20,
+        );
+        page.settle();
+        let shot = page.shot(name);
+        let c = at(3.0, 3.0);
+        let (r, b) = (shot.count_near(c, 6.0, red), shot.count_near(c, 6.0, blue));
+        page.key("Home", &[]);
+        page.wait("studio.state.current === 0", 20);
+        page.settle();
+        (r, b)
+    };
+    let (r, b) = crossing_colour("41-depth-0-plain.png");
+    assert!(
+        b > 100 && r == 0,
+        "the body over the limb: {r} red, {b} blue"
+    );
+
+    // Paint the limb in front, on the rest pose (the limb apart, right of the body).
+    page.click_on("#tool-depth");
+    assert!(page.shown("#brush-tools") && page.shown("#depth-level-label"));
+    page.set_value("#brush-size", "30");
+    page.drag(at(8.3, 3.0), at(17.7, 3.0), 30);
+    page.wait(
+        &format!("!!studio.depth && studio.depth.filter((d) => d === 1).length === {limb_faces}"),
+        20,
+    );
+    assert_eq!(
+        page.num("studio.depth.filter((d) => d !== 0).length"),
+        limb_faces as f64,
+        "the limb's triangles only"
+    );
+    page.shot("41-depth-1-painted-rest.png");
+    let (r, b) = crossing_colour("41-depth-2-limb-in-front.png");
+    assert!(r > 100 && b == 0, "the limb in front: {r} red, {b} blue");
+    assert!(page
+        .eval("studio.state.undo")
+        .as_str()
+        .unwrap_or("")
+        .contains("paint depth 1"));
+
+    // And behind again: the level below the body's.
+    page.set_value("#depth-level", "-1");
+    page.drag(at(8.3, 3.0), at(17.7, 3.0), 30);
+    page.wait(
+        &format!("!!studio.depth && studio.depth.filter((d) => d === -1).length === {limb_faces}"),
+        20,
+    );
+    let (r, b) = crossing_colour("41-depth-3-limb-behind.png");
+    assert!(b > 100 && r == 0, "the limb behind: {r} red, {b} blue");
+    page.undo();
+    let (r, b) = crossing_colour("41-depth-4-undone.png");
+    assert!(
+        r > 100 && b == 0,
+        "undone: in front again: {r} red, {b} blue"
+    );
+
+    // The page's sprite sheet (transparent) and the command line's on the saved project.
+    page.click_on("#export-open");
+    page.set_value("#export-format", "sheet");
+    page.set_value("#export-name", "page-sheet.png");
+    page.set_value("#export-background", "transparent");
+    page.set_value("#export-width", "160");
+    page.set_value("#export-height", "90");
+    page.click_on("#export");
+    page.wait(
+        "document.getElementById('notes').textContent.includes('exported')",
+        120,
+    );
+    document(&studio, &dir, "saved.json");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+        .current_dir(&dir)
+        .args(["export", "saved.json", "-o", "cli-sheet.png", "--sheet"])
+        .args(["--background", "transparent", "--size", "160x90"])
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page_sheet = raster::read_image(dir.join("page-sheet.png")).expect("page's sheet");
+    let cli_sheet = raster::read_image(dir.join("cli-sheet.png")).expect("command line's");
+    assert_eq!(
+        (page_sheet.width, page_sheet.height),
+        (cli_sheet.width, cli_sheet.height)
+    );
+    assert!(
+        page_sheet.rgba == cli_sheet.rgba,
+        "the same frames, pixel for pixel"
+    );
+    let page_json = std::fs::read_to_string(dir.join("page-sheet.json")).expect("json");
+    let cli_json = std::fs::read_to_string(dir.join("cli-sheet.json")).expect("json");
+    assert_eq!(
+        page_json,
+        cli_json.replace("cli-sheet.png", "page-sheet.png"),
+        "the same JSON but for the sheet's name"
+    );
+    // The last frame has the limb in front, with transparency around.
+    let frame = page_sheet
+        .rgba
+        .chunks_exact(4)
+        .filter(|p| p[3] == 0)
+        .count();
+    assert!(frame > 1000, "transparent background");
 }

@@ -56,6 +56,7 @@ const FILES: &[(&str, &str, &str)] = &[
         "text/javascript",
     ),
     ("pose.js", include_str!("page/pose.js"), "text/javascript"),
+    ("paint.js", include_str!("page/paint.js"), "text/javascript"),
     (
         "outline.js",
         include_str!("page/outline.js"),

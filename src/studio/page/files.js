@@ -3,7 +3,7 @@
 // or drawn on the mesh), exports in the background, the unsaved-changes mark, and a warning
 // before closing the page while changes are unsaved.
 
-import { S, $ } from "./view.js";
+import { S, $, redraw } from "./view.js";
 import { send, upload, on } from "./net.js";
 import { confirmDialog, promptDialog } from "./panels.js";
 import { sliderTime } from "./timeline.js";
@@ -106,15 +106,65 @@ $("attach-file").addEventListener("change", async () => {
   $("attach-file").value = "";
 });
 
+// The export dialog: format, name, size (empty: the subject's aspect), frames (empty: all, or
+// the loop range), background (transparent for the formats that keep it).
+const ALPHA = new Set(["apng", "webp", "sheet", "frames", "still"]);
+function syncExport() {
+  const f = $("export-format").value;
+  const alpha = ALPHA.has(f);
+  const transparent = $("export-background").querySelector('option[value="transparent"]');
+  transparent.disabled = !alpha;
+  if (!alpha && $("export-background").value === "transparent") $("export-background").value = "white";
+  $("export-colour").hidden = $("export-background").value !== "colour";
+  const total = S.state ? Math.round(S.state.duration * S.state.fps) + 1 : 0;
+  $("export-count").textContent = total ? `of 0 to ${total - 1}` : "";
+  $("export-hint").textContent = {
+    gif: "an animated GIF, opaque", mp4: "H.264 video, opaque",
+    apng: "lossless, with transparency: browsers, FFmpeg, editors",
+    webp: "lossless, with transparency: browsers, game engines",
+    sheet: "one PNG of every frame on a grid, and a JSON beside it (frame rectangles, size, fps) for game engines",
+    frames: "a folder of PNG frames (frame_0000.png, ...)",
+    png: "five frames coloured by distortion", html: "a self-contained viewer", obj: "a folder of OBJ meshes",
+    still: "the frame shown, as a PNG",
+  }[f] || "";
+}
 $("export-format").addEventListener("change", () => {
   const f = $("export-format").value;
-  const ext = { gif: ".gif", mp4: ".mp4", png: ".png", html: ".html", obj: "", still: ".png" }[f];
-  $("export-name").value = f === "still" ? "frame.png" : "animation" + (f === "obj" ? "-frames" : ext);
+  const ext = { gif: ".gif", mp4: ".mp4", apng: ".apng", webp: ".webp", sheet: ".png", png: ".png", html: ".html", obj: "", frames: "", still: ".png" }[f];
+  $("export-name").value = f === "still" ? "frame.png" : f === "sheet" ? "sheet.png" : "animation" + (f === "obj" || f === "frames" ? "-frames" : ext);
+  syncExport();
 });
+$("export-background").addEventListener("change", syncExport);
+$("export-open").onclick = () => {
+  // The loop range, when there is one, is what is exported by default.
+  const range = S.state && S.state.loop_range;
+  if (range && $("export-first").value === "" && $("export-last").value === "") {
+    $("export-first").placeholder = String(Math.round(range[0] * S.state.fps));
+    $("export-last").placeholder = String(Math.round(range[1] * S.state.fps));
+  } else {
+    $("export-first").placeholder = "first";
+    $("export-last").placeholder = "last";
+  }
+  syncExport();
+  $("export-dialog").showModal();
+};
+$("export-close").onclick = () => $("export-dialog").close();
 $("export").onclick = () => {
   const format = $("export-format").value;
   const request = { op: "export", format, name: $("export-name").value };
   // A screenshot is of what is shown: the scrubbed frame, or the keyframe shown.
   if (format === "still" && S.showing === "frame") request.time = sliderTime();
+  const w = $("export-width").value, h = $("export-height").value;
+  if (w !== "" || h !== "") {
+    if (w === "" || h === "") { S.errors.push("give both the width and the height, or neither"); redraw(); return; }
+    request.size = [Number(w), Number(h)];
+  }
+  const num = (el) => (el.value !== "" ? Number(el.value) : el.placeholder !== "" && !isNaN(Number(el.placeholder)) ? Number(el.placeholder) : null);
+  const first = num($("export-first")), last = num($("export-last"));
+  const total = S.state ? Math.round(S.state.duration * S.state.fps) + 1 : 0;
+  if (first !== null || last !== null) request.range = [first ?? 0, last ?? total - 1];
+  const bg = $("export-background").value;
+  request.background = bg === "colour" ? $("export-colour").value : bg;
   send(request);
+  $("export-dialog").close();
 };

@@ -89,10 +89,13 @@ function make() {
     gl.enableVertexAttribArray(l);
     gl.vertexAttribPointer(l, size, gl.FLOAT, false, 0, 0);
   };
+  // Corner c of the expanded triangles is corner c % 3 of triangle faceOf(c): the triangles
+  // in the painted draw order (by depth, as every export draws them), later ones on top.
+  const faceOf = (c) => (S.order ? S.order[(c / 3) | 0] : (c / 3) | 0);
+  const vertexOf = (c) => S.faces[3 * faceOf(c) + (c % 3)];
   const expand = (src, out) => {
-    const F = S.faces;
     for (let c = 0; c < corners; c++) {
-      const v = F[c];
+      const v = vertexOf(c);
       out[2 * c] = src[2 * v];
       out[2 * c + 1] = src[2 * v + 1];
     }
@@ -101,6 +104,7 @@ function make() {
     kind: "webgl2",
     ready: () => corners > 0,
     setMesh() {
+      if (S.order && S.order.length !== S.m) S.order = null;
       corners = 3 * S.m;
       pos = new Float32Array(2 * corners);
       dis = new Float32Array(corners);
@@ -112,7 +116,7 @@ function make() {
       const uv = new Float32Array(2 * corners);
       if (S.uv) {
         for (let c = 0; c < corners; c++) {
-          const v = S.faces[c];
+          const v = vertexOf(c);
           uv[2 * c] = S.uv[2 * v];
           uv[2 * c + 1] = 1 - S.uv[2 * v + 1];
         }
@@ -169,7 +173,7 @@ function make() {
       // In outline mode the rest mesh is shown: the outline is edited in its frame.
       const outlining = S.state && S.state.mode === "outline";
       expand(outlining ? S.rest : S.pose, pos);
-      for (let c = 0; c < corners; c++) dis[c] = outlining ? 1 : S.dist[(c / 3) | 0];
+      for (let c = 0; c < corners; c++) dis[c] = outlining ? 1 : S.dist[faceOf(c)];
       gl.bindBuffer(gl.ARRAY_BUFFER, buffers.position);
       gl.bufferData(gl.ARRAY_BUFFER, pos, gl.DYNAMIC_DRAW);
       attrib(buffers.position, "position", 2);

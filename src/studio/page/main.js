@@ -12,6 +12,12 @@ import { connection } from "./panels.js";
 import { syncLayout } from "./layout.js";
 import { drawKeyPanel } from "./easing.js";
 import "./shortcuts.js";
+import { setPaint } from "./paint.js";
+
+on("paint", ({ depth, stiffness }) => {
+  setPaint(depth, stiffness);
+  GL.setMesh();
+});
 
 let firstMesh = true;
 on("mesh", () => {

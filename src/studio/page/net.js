@@ -3,10 +3,10 @@
 // same folder listens on the same port with the same token, and the page picks up its
 // document as it is.
 
-import { S, KIND_MESH, KIND_POSE, KIND_FRAME, KIND_GHOST, KIND_UPLOAD, redraw } from "./view.js";
+import { S, KIND_MESH, KIND_POSE, KIND_FRAME, KIND_GHOST, KIND_PAINT, KIND_UPLOAD, redraw } from "./view.js";
 
 const token = new URLSearchParams(location.search).get("token") || "";
-const handlers = { state: [], pins: [], outline: [], files: [], error: [], mesh: [], frame: [], open: [], close: [] };
+const handlers = { state: [], pins: [], outline: [], files: [], error: [], mesh: [], paint: [], frame: [], open: [], close: [] };
 export const on = (type, f) => handlers[type].push(f);
 const emit = (type, ...args) => { for (const f of handlers[type]) f(...args); };
 
@@ -98,6 +98,15 @@ function onBinary(buffer) {
     S.ghosts.clear();
     asked.clear();
     emit("mesh");
+    redraw();
+    return;
+  }
+  if (kind === KIND_PAINT) {
+    const m = head.getUint32(4, true), hasDepth = head.getUint32(8, true), hasStiff = head.getUint32(12, true);
+    const depth = hasDepth ? new Int8Array(buffer, 16, m) : null;
+    const at = 16 + (hasDepth ? Math.ceil(m / 4) * 4 : 0);
+    const stiffness = hasStiff ? new Float32Array(buffer, at, m) : null;
+    emit("paint", { depth, stiffness });
     redraw();
     return;
   }

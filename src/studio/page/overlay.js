@@ -6,6 +6,7 @@ import { S, $, ctx, canvas, dpr, toCanvas, onDraw } from "./view.js";
 import { GL } from "./gl.js";
 import { drawGhosts } from "./onion.js";
 import { drawPins, drawAids, drawPinPanel } from "./pose.js";
+import { drawPaint } from "./paint.js";
 
 const PIECE_COLOURS = ["#1f77b4", "#e6550d", "#31a354", "#756bb1", "#d62728", "#8c564b", "#e377c2", "#17becf"];
 
@@ -47,7 +48,8 @@ export function computePieces() {
 function strokeEdges(P) {
   const F = S.faces;
   ctx.beginPath();
-  for (let f = 0; f < S.m; f++) {
+  for (let i = 0; i < S.m; i++) {
+    const f = S.order ? S.order[i] : i;
     const [ax, ay] = toCanvas(P[2 * F[3 * f]], P[2 * F[3 * f] + 1]);
     const [bx, by] = toCanvas(P[2 * F[3 * f + 1]], P[2 * F[3 * f + 1] + 1]);
     const [cx, cy] = toCanvas(P[2 * F[3 * f + 2]], P[2 * F[3 * f + 2] + 1]);
@@ -160,6 +162,7 @@ onDraw(() => {
   if (!GL.ready() && S.state && S.state.mode !== "outline") drawMesh2d();
   if (S.state && S.state.mode === "outline") { drawOutline(); return; }
   drawGhosts();
+  drawPaint();
   drawPieces();
   drawFlips();
   drawAnchors();

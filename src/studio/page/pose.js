@@ -1,4 +1,4 @@
-// Posing with the mouse. Two tools:
+// Posing with the mouse. Two tools (and the depth and stiffness brushes of paint.js):
 // - Drag (D): a click on a vertex pins it and drags it (a frame between keyframes, when one is
 //   shown, becomes a keyframe with that pin: the click acts on what is shown); dragging a pin
 //   moves it, and every selected pin with it; Shift+click on a vertex pins it without dragging.
@@ -106,6 +106,8 @@ canvas.addEventListener("mousedown", (e) => {
     return;
   }
   if (!posing() || e.button !== 0 || !S.pose) return;
+  // The brushes paint (paint.js).
+  if (S.tool === "depth" || S.tool === "stiff") return;
   const shown = S.showing === "pose";
   // The selection's handles.
   const frame = shown ? selectionFrame() : null;
@@ -305,11 +307,18 @@ export function setTool(tool) {
   S.tool = tool;
   $("tool-drag").classList.toggle("on", tool === "drag");
   $("tool-pins").classList.toggle("on", tool === "pins");
+  $("tool-depth").classList.toggle("on", tool === "depth");
+  $("tool-stiff").classList.toggle("on", tool === "stiff");
+  $("brush-tools").hidden = tool !== "depth" && tool !== "stiff";
+  $("depth-level-label").hidden = tool !== "depth";
   canvas.classList.toggle("pins-tool", tool === "pins");
+  canvas.classList.toggle("brush-tool", tool === "depth" || tool === "stiff");
   redraw();
 }
 $("tool-drag").onclick = () => setTool("drag");
 $("tool-pins").onclick = () => setTool("pins");
+$("tool-depth").onclick = () => setTool("depth");
+$("tool-stiff").onclick = () => setTool("stiff");
 export function selectAllPins() { if (S.showing === "pose") for (const v of S.pins) S.selected.add(v); redraw(); }
 export function selectNone() { S.selected.clear(); redraw(); }
 $("select-all-pins").onclick = selectAllPins;

@@ -4,7 +4,7 @@
 
 export const $ = (id) => document.getElementById(id);
 
-export const KIND_POSE = 1, KIND_MESH = 2, KIND_FRAME = 3, KIND_GHOST = 4, KIND_UPLOAD = 10;
+export const KIND_POSE = 1, KIND_MESH = 2, KIND_FRAME = 3, KIND_GHOST = 4, KIND_PAINT = 5, KIND_UPLOAD = 10;
 
 export const S = {
   state: null,            // the last state message
@@ -31,7 +31,12 @@ export const S = {
   keyDrag: null,
   ghosts: new Map(),      // keyframe -> { rev, pos }: keyframe poses (onion skins, thumbnails)
   selected: new Set(),    // the selected pins (vertex numbers) of the keyframe shown
-  tool: "drag",           // "drag" (pin and pose) or "pins" (place pins, the mesh stays)
+  tool: "drag",           // "drag" (pin and pose), "pins" (place pins, the mesh stays), "depth" or "stiff" (brushes)
+  depth: null,            // Int8Array m: the depth level painted on each triangle, or null
+  stiffness: null,        // Float32Array m: each triangle's stiffness weight, or null
+  order: null,            // Int32Array m: the draw order (by depth), or null for triangle order
+  stroke: null,           // a brush stroke in progress
+  pendingStroke: null,    // a stroke sent, shown until the server's paint message
   ui: "pose",             // the tab shown: "outline", "pose" or "animate"
   hover: null,            // { v, f } under the cursor, when highlighted
   box: null,              // a selection box being dragged (canvas pixels)

@@ -456,3 +456,87 @@ fn the_draw_order_painted_in_the_project_decides_the_overlap() {
     assert_eq!(colour_at_overlap(&last_frame("blue-in-front")), [0, 0, 255]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn morph_writes_the_same_production_formats_and_takes_a_depth_file() {
+    let dir = scratch("morph");
+    let a = generate::grid(9, 3, 0.0);
+    let b = generate::bend(&a, 0.6);
+    for (name, m) in [("a.obj", &a), ("b.obj", &b)] {
+        bdmorph::io::write_obj_2d(&dir.join(name), &m.positions, &m.faces, &[]).expect("obj");
+    }
+    let morph = |args: &[&str]| {
+        let out = bdmorph()
+            .current_dir(&dir)
+            .args([
+                "morph", "a.obj", "b.obj", "--frames", "6", "--size", "120x60",
+            ])
+            .args(args)
+            .output()
+            .expect("runs");
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    for args in [
+        &["-o", "m.apng", "--background", "transparent"][..],
+        &["-o", "m.webp", "--background", "transparent"],
+        &["-o", "sheet.png", "--sheet", "--background", "transparent"],
+        &[
+            "-o",
+            "frames",
+            "--format",
+            "png",
+            "--background",
+            "transparent",
+        ],
+    ] {
+        let (ok, err) = morph(args);
+        assert!(ok, "{args:?}: {err}");
+    }
+    let frames = frames_in(&dir.join("frames"));
+    assert_eq!(frames.len(), 6);
+    let sheet = read_png(&dir.join("sheet.png"));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("sheet.json")).expect("json"))
+            .expect("JSON");
+    for (i, entry) in json["frames"]
+        .as_array()
+        .expect("frames")
+        .iter()
+        .enumerate()
+    {
+        let r = &entry["frame"];
+        let [x, y, w, h] = ["x", "y", "w", "h"].map(|k| r[k].as_u64().expect("number") as u32);
+        assert_eq!((w, h), (120, 60));
+        for row in 0..h {
+            let start = (((y + row) * sheet.width + x) * 4) as usize;
+            assert!(
+                sheet.rgba[start..start + (w * 4) as usize]
+                    == frames[i].rgba[(row * w * 4) as usize..((row + 1) * w * 4) as usize]
+            );
+        }
+    }
+    let webp = std::fs::read(dir.join("m.webp")).expect("webp");
+    let decoded: Vec<_> = webp_animation::Decoder::new(&webp)
+        .expect("decodes")
+        .into_iter()
+        .collect();
+    assert_eq!(decoded.len(), 6);
+    for (f, png) in decoded.iter().zip(&frames) {
+        assert!(f.data() == png.rgba.as_slice());
+    }
+    // A depth file: one level per face, or per vertex; wrong counts and levels are refused.
+    std::fs::write(dir.join("depth.txt"), "1\n".repeat(a.positions.len())).expect("write");
+    assert!(morph(&["-o", "d.gif", "--depth", "depth.txt"]).0);
+    std::fs::write(dir.join("bad.txt"), "1 2 3").expect("write");
+    let (ok, err) = morph(&["-o", "d.gif", "--depth", "bad.txt"]);
+    assert!(!ok && err.contains("one per face"), "{err}");
+    std::fs::write(dir.join("deep.txt"), "12\n".repeat(a.faces.len())).expect("write");
+    let (ok, err) = morph(&["-o", "d.gif", "--depth", "deep.txt"]);
+    assert!(!ok && err.contains("between -9 and 9"), "{err}");
+    let (ok, err) = morph(&["-o", "m.mp4", "--background", "transparent"]);
+    assert!(!ok && err.contains("no transparency"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -547,6 +547,19 @@ proptest! {
         outline(&corrupt(VALID_SVG, &edits), check::OutlineFormat::Svg);
         outline(&corrupt(VALID_POLY, &edits), check::OutlineFormat::Poly);
     }
+
+    #[test]
+    fn fuzz_depth_reader_arbitrary_bytes(bytes in vec(any::<u8>(), 0..200)) {
+        check::depth_reader(&bytes);
+    }
+
+    #[test]
+    fn fuzz_depth_reader_numbers(words in vec(
+        prop_oneof![Just("1"), Just("-9"), Just("10"), Just("#"), Just("\n"), Just("0x3"), Just("99999999999999999999"), Just(" ")],
+        0..12,
+    )) {
+        check::depth_reader(words.concat().as_bytes());
+    }
 }
 
 #[test]

@@ -140,6 +140,8 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
         size: args.size,
         fps: 25,
         title,
+        background: bdmorph::render::Background::WHITE,
+        depth: None,
     };
     let mut files = Vec::new();
     for (name, format) in [

@@ -132,6 +132,8 @@ pub(super) fn run(args: MeshArgs) -> Result<(), String> {
             size: args.size,
             fps: 25,
             title: &title,
+            background: bdmorph::render::Background::WHITE,
+            depth: None,
         };
         let frames = [output::Frame {
             index: 0,

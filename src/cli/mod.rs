@@ -400,9 +400,23 @@ struct OutputArgs {
         value_name = "WHAT"
     )]
     color_by: Option<ColorBy>,
-    /// Frames per second of GIF, MP4 and HTML playback.
+    /// Frames per second of GIF, MP4, APNG, WebP and HTML playback (and of a sprite sheet's
+    /// JSON).
     #[arg(long, value_name = "FPS", default_value_t = 25)]
     fps: u32,
+    /// What is behind the subject in PNG, APNG, WebP, GIF and MP4 pictures: transparent
+    /// (PNG, APNG, WebP) or a colour: #rrggbb, #rgb, white, black, grey, ... (default white).
+    #[arg(long, value_name = "transparent|COLOR", allow_hyphen_values = true)]
+    background: Option<Background>,
+    /// With --frames and -o NAME.png: every frame in one sprite sheet, and NAME.json beside it
+    /// with each frame's rectangle, the frame size and the fps.
+    #[arg(long)]
+    sheet: bool,
+    /// The draw order where a pose overlaps itself: a text file of levels (-9 to 9, higher in
+    /// front), one per face of the first mesh or one per vertex (a face takes its highest
+    /// corner's).
+    #[arg(long, value_name = "FILE")]
+    depth: Option<PathBuf>,
     /// Print one JSON object of statistics per frame on stdout.
     #[arg(long)]
     stats: bool,

@@ -73,8 +73,15 @@ pub(super) fn check_options(out: &OutputArgs, solver: &SolverArgs) -> Result<(),
     Ok(())
 }
 
-/// Checks that the output can hold pictures of `--size`, and says when they will be padded.
+/// Checks that the output can hold pictures of `--size` (and `--background`), and says when
+/// they will be padded.
 pub(super) fn check_size(plan: Option<&Plan>, out: &OutputArgs) -> Result<(), String> {
+    if let (Some(plan), Some(background)) = (plan, out.background) {
+        plan.check_background(background)?;
+    }
+    if out.sheet && plan.is_none() {
+        return Err("--sheet needs -o NAME.png".into());
+    }
     if let Some(note) = plan.map(|p| p.check_size(out.size)).transpose()?.flatten() {
         if !out.quiet {
             eprintln!("bdmorph: note: {note}");
@@ -113,12 +120,23 @@ pub(super) fn read_inputs(
     if out.color_by.is_some() && !draws && !out.quiet {
         eprintln!("bdmorph: warning: --color-by only affects PNG, GIF, MP4, SVG and HTML output");
     }
+    let depth = match &out.depth {
+        Some(path) => {
+            let first = &keyframes[0];
+            Some(read_depth(path, first.positions.len(), &first.faces)?)
+        }
+        None => None,
+    };
+    if depth.is_some() && !draws && !out.quiet {
+        eprintln!("bdmorph: warning: --depth only affects pictures (PNG, GIF, MP4, APNG, WebP, SVG, HTML)");
+    }
     Ok(Inputs {
         paths: meshes.to_vec(),
         keyframes,
         lines,
         texcoords,
         texture,
+        depth,
     })
 }
 
@@ -134,6 +152,29 @@ pub(super) struct Inputs {
     pub texcoords: Option<TexCoords>,
     /// The texture image.
     pub texture: Option<Image>,
+    /// The draw order (`--depth`): a level per face of the first mesh.
+    pub depth: Option<Vec<i8>>,
+}
+
+/// Reads a depth file (`--depth`) for a mesh of `vertices` vertices and `faces`.
+pub(super) fn read_depth(
+    path: &std::path::Path,
+    vertices: usize,
+    faces: &[[u32; 3]],
+) -> Result<Vec<i8>, String> {
+    use bdmorph::render::depth::{parse_depth, MAX_DEPTH_FILE_BYTES};
+    let shown = path.display();
+    let size = std::fs::metadata(path)
+        .map_err(|e| format!("{shown}: cannot read: {e}"))?
+        .len();
+    if size > MAX_DEPTH_FILE_BYTES {
+        return Err(format!(
+            "{shown}: {size} bytes: a depth file holds at most {MAX_DEPTH_FILE_BYTES}"
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| format!("{shown}: cannot read: {e}"))?;
+    parse_depth(&String::from_utf8_lossy(&bytes), vertices, faces)
+        .map_err(|e| format!("{shown}: {e}"))
 }
 
 /// The solver's options from the command line.
@@ -258,7 +299,12 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         ));
     }
     let plan = match &args.out.output {
-        Some(path) => Some(Plan::new(path, args.out.format, times.len())?),
+        Some(path) => Some(Plan::with_sheet(
+            path,
+            args.out.format,
+            times.len(),
+            args.out.sheet,
+        )?),
         None => None,
     };
     check_size(plan.as_ref(), &args.out)?;
@@ -591,6 +637,15 @@ fn write_files(
     if frames.is_empty() {
         return Ok(0);
     }
+    if let Some(depth) = &inputs.depth {
+        if depth.len() != faces.len() {
+            return Err(format!(
+                "--depth: {} levels for the {} triangles drawn",
+                depth.len(),
+                faces.len()
+            ));
+        }
+    }
     let corner_uv = inputs.texture.as_ref().map(|_| {
         inputs
             .texcoords
@@ -605,6 +660,8 @@ fn write_files(
         size: out.size,
         fps: out.fps,
         title,
+        background: out.background.unwrap_or_default(),
+        depth: inputs.depth.as_deref(),
     };
     let bar = progress_bar(frames.len(), out.quiet, "rendering");
     let files = output::render(plan, &look, frames, || bar.inc(1))?;

@@ -4,7 +4,10 @@ use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use bdmorph::io::{self, TexCoords};
-use bdmorph::render::{colour, html, raster, svg, video, Drawing, Image, ImageSize, Viewport};
+use bdmorph::render::{
+    apng, colour, depth_order, html, raster, sheet, svg, video, webp, Background, Drawing, Image,
+    ImageSize, Viewport,
+};
 use rayon::prelude::*;
 
 /// An output format.
@@ -22,6 +25,10 @@ pub enum Format {
     Mp4,
     /// HTML: a self-contained viewer with a slider and play/pause.
     Html,
+    /// APNG: an animated PNG of all frames, lossless, with transparency.
+    Apng,
+    /// WebP: an animated WebP of all frames, lossless, with transparency.
+    Webp,
 }
 
 impl Format {
@@ -35,8 +42,10 @@ impl Format {
             "gif" => Ok(Format::Gif),
             "mp4" => Ok(Format::Mp4),
             "html" | "htm" => Ok(Format::Html),
+            "apng" => Ok(Format::Apng),
+            "webp" => Ok(Format::Webp),
             other => Err(format!(
-                "{}: unknown output extension '.{other}' (use .obj, .svg, .png, .gif, .mp4 or .html, or --format)",
+                "{}: unknown output extension '.{other}' (use .obj, .svg, .png, .gif, .mp4, .apng, .webp or .html, or --format)",
                 path.display()
             )),
         })
@@ -44,7 +53,15 @@ impl Format {
 
     /// Whether one file holds every frame.
     pub fn is_animation(self) -> bool {
-        matches!(self, Format::Gif | Format::Mp4 | Format::Html)
+        matches!(
+            self,
+            Format::Gif | Format::Mp4 | Format::Html | Format::Apng | Format::Webp
+        )
+    }
+
+    /// Whether its pictures can be transparent.
+    pub fn has_alpha(self) -> bool {
+        matches!(self, Format::Png | Format::Apng | Format::Webp)
     }
 
     fn extension(self) -> &'static str {
@@ -55,6 +72,8 @@ impl Format {
             Format::Gif => "gif",
             Format::Mp4 => "mp4",
             Format::Html => "html",
+            Format::Apng => "apng",
+            Format::Webp => "webp",
         }
     }
 }
@@ -68,13 +87,39 @@ pub struct Plan {
     pub format: Format,
     /// Per-frame files in a directory.
     pub directory: bool,
+    /// Every frame in one PNG sprite sheet, with a JSON file beside it.
+    pub sheet: bool,
 }
 
 impl Plan {
     /// Decides the output from `-o`, `--format` and the number of frames.
     pub fn new(path: &Path, format: Option<Format>, frames: usize) -> Result<Plan, String> {
+        Plan::with_sheet(path, format, frames, false)
+    }
+
+    /// As [`Plan::new`], with `--sheet`: every frame in one PNG sprite sheet (`-o` a .png).
+    pub fn with_sheet(
+        path: &Path,
+        format: Option<Format>,
+        frames: usize,
+        sheet: bool,
+    ) -> Result<Plan, String> {
         let from_ext = Format::from_extension(path).transpose()?;
         let format = format.or(from_ext).unwrap_or(Format::Obj);
+        if sheet {
+            if format != Format::Png {
+                return Err(format!(
+                    "{}: a sprite sheet (--sheet) is a .png file",
+                    path.display()
+                ));
+            }
+            return Ok(Plan {
+                path: path.to_path_buf(),
+                format,
+                directory: false,
+                sheet: true,
+            });
+        }
         let directory = frames > 1 && !format.is_animation();
         if directory && from_ext.is_some() {
             return Err(format!(
@@ -89,6 +134,7 @@ impl Plan {
             path: path.to_path_buf(),
             format,
             directory,
+            sheet: false,
         })
     }
 
@@ -114,6 +160,18 @@ impl Plan {
         }))
     }
 
+    /// Checks that the format can show `background` (transparency needs PNG, APNG or WebP).
+    pub fn check_background(&self, background: Background) -> Result<(), String> {
+        if background.is_transparent() && !self.format.has_alpha() {
+            return Err(format!(
+                "{}: {} has no transparency: give a background colour, or write .png, .apng or .webp",
+                self.path.display(),
+                self.format.extension().to_ascii_uppercase()
+            ));
+        }
+        Ok(())
+    }
+
     /// Whether the format draws pictures (and so can use a texture).
     pub fn draws(&self) -> bool {
         self.format != Format::Obj
@@ -134,6 +192,10 @@ pub struct Look<'a> {
     pub fps: u32,
     /// A title or header line.
     pub title: &'a str,
+    /// What is behind the subject in pictures.
+    pub background: Background,
+    /// The draw order: a depth level per face (higher in front), if any.
+    pub depth: Option<&'a [i8]>,
 }
 
 /// One computed frame.
@@ -191,7 +253,7 @@ pub fn render(
         corner_uv: look.texture.map(|(_, uv)| uv),
         texture: look.texture.map(|(img, _)| img),
         face_colours: colours[i].as_deref(),
-        depth: None,
+        depth: look.depth,
     };
     let name = |i: usize| {
         if plan.directory {
@@ -215,7 +277,7 @@ pub fn render(
             .collect::<Result<Vec<_>, String>>()
     };
     let picture = |i: usize, f: &Frame| {
-        let img = raster::render(&f.positions, &drawing(i), &view, look.size);
+        let img = raster::render_on(&f.positions, &drawing(i), &view, look.size, look.background);
         progress();
         img
     };
@@ -246,11 +308,62 @@ pub fn render(
                 Ok((name(f.index), svg.into_bytes()))
             })?;
         }
+        Format::Png if plan.sheet => {
+            let (w, h) = (look.size.width, look.size.height);
+            let layout = sheet::SheetLayout::new(frames.len() as u32, w, h).map_err(err)?;
+            let mut picture_sheet = layout.blank();
+            let mut k = 0;
+            in_batches(frames, &picture, &mut |images| {
+                for img in images {
+                    layout.place(&mut picture_sheet, k, img);
+                    k += 1;
+                }
+                Ok(())
+            })?;
+            let json_name = plan.path.with_extension("json");
+            let image_name = plan
+                .path
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            files.push((
+                plan.path.clone(),
+                raster::encode_png(&picture_sheet).map_err(err)?,
+            ));
+            files.push((json_name, layout.json(&image_name, look.fps).into_bytes()));
+        }
         Format::Png => {
             files = each(&|i, f| {
-                let img = raster::render(&f.positions, &drawing(i), &view, look.size);
+                let img =
+                    raster::render_on(&f.positions, &drawing(i), &view, look.size, look.background);
                 Ok((name(f.index), raster::encode_png(&img).map_err(err)?))
             })?;
+        }
+        Format::Apng => {
+            let (w, h) = (look.size.width, look.size.height);
+            let mut bytes = Vec::new();
+            let mut apng = apng::ApngEncoder::new(&mut bytes, w, h, frames.len() as u32, look.fps)
+                .map_err(err)?;
+            in_batches(frames, &picture, &mut |images| {
+                images
+                    .iter()
+                    .try_for_each(|img| apng.push(img))
+                    .map_err(err)
+            })?;
+            apng.finish().map_err(err)?;
+            files.push((name(0), bytes));
+        }
+        Format::Webp => {
+            let (w, h) = (look.size.width, look.size.height);
+            let mut webp = webp::WebpEncoder::new(w, h, look.fps).map_err(err)?;
+            let mut pushed = Vec::new();
+            in_batches(frames, &picture, &mut |images| {
+                pushed.extend_from_slice(images);
+                Ok(())
+            })?;
+            for img in &pushed {
+                webp.push(img).map_err(err)?;
+            }
+            files.push((name(0), webp.finish().map_err(err)?));
         }
         Format::Gif => {
             let delay = (100 / look.fps.clamp(1, 100)) as u16;
@@ -283,16 +396,46 @@ pub fn render(
                 .iter()
                 .map(|f| (f.t, f.positions.as_slice()))
                 .collect();
+            // The viewer draws triangles in their order: the painted one.
+            let order = look.depth.and_then(depth_order);
+            let ordered_faces: Vec<[u32; 3]>;
+            let ordered_uv: Vec<[[f64; 2]; 3]>;
+            let mut faces = look.faces;
+            let mut corner_uv = look.texture.map(|(_, uv)| uv);
+            if let Some(order) = &order {
+                ordered_faces = order.iter().map(|&f| look.faces[f]).collect();
+                faces = &ordered_faces;
+                if let Some(uv) = corner_uv {
+                    ordered_uv = order.iter().map(|&f| uv[f]).collect();
+                    corner_uv = Some(&ordered_uv);
+                }
+            }
             let shading = shading.as_ref().map(|(shades, max)| html::Shading {
                 shades,
                 label: "conformal distortion",
                 max: *max,
             });
+            let reordered_shades: Option<Vec<Vec<u8>>> = match (&order, &shading) {
+                (Some(order), Some(s)) => Some(
+                    s.shades
+                        .iter()
+                        .map(|frame| order.iter().map(|&f| frame[f]).collect())
+                        .collect(),
+                ),
+                _ => None,
+            };
+            let shading = match (&reordered_shades, shading) {
+                (Some(shades), Some(s)) => Some(html::Shading {
+                    shades: shades.as_slice(),
+                    ..s
+                }),
+                (_, s) => s,
+            };
             let page = html::html_shaded(
                 look.title,
                 &refs,
-                look.faces,
-                look.texture.map(|(_, uv)| uv),
+                faces,
+                corner_uv,
                 texture_png.as_deref(),
                 shading.as_ref(),
                 &view,

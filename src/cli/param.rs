@@ -594,6 +594,8 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
             size: args.size,
             fps: 25,
             title: &title,
+            background: bdmorph::render::Background::WHITE,
+            depth: None,
         };
         let frames = [output::Frame {
             index: 0,

@@ -6,6 +6,7 @@
 
 pub mod apng;
 pub mod colour;
+pub mod depth;
 pub mod html;
 pub mod raster;
 pub mod sheet;

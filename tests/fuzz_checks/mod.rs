@@ -812,3 +812,17 @@ pub fn picture_mesher(bytes: &[u8]) {
         }
     }
 }
+
+/// A depth file (arbitrary bytes, lossy UTF-8) for a small mesh: levels within bounds, one per
+/// face, or a one-line error.
+pub fn depth_reader(bytes: &[u8]) {
+    let text = String::from_utf8_lossy(bytes);
+    let faces: Vec<[u32; 3]> = vec![[0, 1, 2], [0, 2, 3], [1, 3, 2]];
+    match bdmorph::render::depth::parse_depth(&text, 4, &faces) {
+        Ok(levels) => {
+            assert_eq!(levels.len(), faces.len());
+            assert!(levels.iter().all(|l| l.unsigned_abs() <= 9));
+        }
+        Err(e) => one_line(&e.to_string()),
+    }
+}

@@ -463,7 +463,7 @@ fn morph_writes_the_same_production_formats_and_takes_a_depth_file() {
     let a = generate::grid(9, 3, 0.0);
     let b = generate::bend(&a, 0.6);
     for (name, m) in [("a.obj", &a), ("b.obj", &b)] {
-        bdmorph::io::write_obj_2d(&dir.join(name), &m.positions, &m.faces, &[]).expect("obj");
+        bdmorph::io::write_obj_2d(dir.join(name), &m.positions, &m.faces, &[]).expect("obj");
     }
     let morph = |args: &[&str]| {
         let out = bdmorph()

@@ -2473,3 +2473,143 @@ fn the_depth_brush_decides_which_part_is_in_front() {
         .count();
     assert!(frame > 1000, "transparent background");
 }
+
+/// The singular values of each triangle's map from `rest` to `pose`.
+fn singular_values(rest: &[[f64; 2]], pose: &[f64], faces: &[[u32; 3]]) -> Vec<[f64; 2]> {
+    faces
+        .iter()
+        .map(|f| {
+            let r = f.map(|v| rest[v as usize]);
+            let p = f.map(|v| [pose[2 * v as usize], pose[2 * v as usize + 1]]);
+            let (a, b) = (
+                [r[1][0] - r[0][0], r[1][1] - r[0][1]],
+                [r[2][0] - r[0][0], r[2][1] - r[0][1]],
+            );
+            let (c, d) = (
+                [p[1][0] - p[0][0], p[1][1] - p[0][1]],
+                [p[2][0] - p[0][0], p[2][1] - p[0][1]],
+            );
+            let det = a[0] * b[1] - a[1] * b[0];
+            // J = [c d] [a b]^-1.
+            let inv = [[b[1] / det, -b[0] / det], [-a[1] / det, a[0] / det]];
+            let j = [
+                [
+                    c[0] * inv[0][0] + d[0] * inv[1][0],
+                    c[0] * inv[0][1] + d[0] * inv[1][1],
+                ],
+                [
+                    c[1] * inv[0][0] + d[1] * inv[1][0],
+                    c[1] * inv[0][1] + d[1] * inv[1][1],
+                ],
+            ];
+            // σ₁,₂ of a 2x2 matrix from its similarity and anti-similarity parts.
+            let q = 0.5 * ((j[0][0] + j[1][1]).powi(2) + (j[1][0] - j[0][1]).powi(2)).sqrt();
+            let s = 0.5 * ((j[0][0] - j[1][1]).powi(2) + (j[1][0] + j[0][1]).powi(2)).sqrt();
+            [q + s, q - s]
+        })
+        .collect()
+}
+
+/// Stiffness: a region painted stiff keeps its shape (singular values within 1% of 1) while
+/// the rest of the strip bends under the same drag, for each posing method.
+#[test]
+fn a_stiff_region_keeps_its_shape_under_every_method() {
+    let Some(browser) = browser() else { return };
+    let dir = scratch("41-stiff");
+    let grid = generate::grid(21, 5, 0.0);
+    let rest: Vec<[f64; 2]> = grid
+        .positions
+        .iter()
+        .map(|p| [0.5 * p[0], 0.5 * p[1]])
+        .collect();
+    let mesh = bdmorph::PlanarMesh {
+        positions: rest.clone(),
+        faces: grid.faces.clone(),
+    };
+    Project::new(&mesh, None)
+        .write(&dir.join("strip.json"))
+        .expect("write");
+    let nearest = |x: f64, y: f64| {
+        (0..rest.len())
+            .min_by(|&a, &b| {
+                let d = |v: usize| (rest[v][0] - x).hypot(rest[v][1] - y);
+                d(a).total_cmp(&d(b))
+            })
+            .expect("a vertex")
+    };
+    let studio = Studio::start(&dir, Some("strip.json"));
+    let page = PageTab::open(&browser, &studio.url, &dir);
+    let at = |x: f64, y: f64| {
+        let p = page.eval(&format!("studio.toPage({x}, {y})"));
+        [p[0].as_f64().expect("x"), p[1].as_f64().expect("y")]
+    };
+    // Paint the left third stiff.
+    page.click_on("#tool-stiff");
+    assert!(page.shown("#brush-tools") && !page.shown("#depth-level-label"));
+    page.set_value("#brush-size", "40");
+    page.drag(at(0.2, 1.0), at(3.0, 1.0), 30);
+    page.wait(
+        "!!studio.stiffness && studio.stiffness.some((w) => w > 1)",
+        20,
+    );
+    page.shot("41-stiff-0-painted.png");
+    let stiff: Vec<bool> = page
+        .eval("Array.from(studio.stiffness, (w) => w > 1)")
+        .as_array()
+        .expect("weights")
+        .iter()
+        .map(|b| b == true)
+        .collect();
+    let painted = stiff.iter().filter(|&&s| s).count();
+    assert!(painted > 20 && painted < stiff.len() / 2, "{painted} stiff");
+    page.click_on("#tool-drag");
+    let (left_low, left_high, tip) = (nearest(0.0, 0.0), nearest(0.0, 2.0), nearest(10.0, 1.0));
+    for method in ["kvf", "arap", "bounded"] {
+        page.set_value("#method", method);
+        page.wait(&format!("studio.state.method.name === '{method}'"), 20);
+        page.settle();
+        for v in [left_low, left_high] {
+            let p = page.vertex(v);
+            page.move_to(p, false);
+            // Shift+click: a pin, without a drag (8: Shift).
+            for (kind, buttons) in [
+                (Input::DispatchMouseEventTypeOption::MousePressed, 1),
+                (Input::DispatchMouseEventTypeOption::MouseReleased, 0),
+            ] {
+                page.mouse(kind, p, Some(Input::MouseButton::Left), buttons, Some(8));
+            }
+            page.settle();
+        }
+        page.wait("studio.pins.length === 2", 20);
+        page.drag(page.vertex(tip), at(7.0, 5.0), 40);
+        page.settle();
+        page.shot(&format!("41-stiff-1-{method}.png"));
+        let sv = singular_values(&rest, &page.pose(), &mesh.faces);
+        let off = |s: &[f64; 2]| (s[0] - 1.0).abs().max((s[1] - 1.0).abs());
+        let worst_stiff = sv
+            .iter()
+            .zip(&stiff)
+            .filter(|(_, &s)| s)
+            .map(|(s, _)| off(s))
+            .fold(0.0, f64::max);
+        let worst_rest = sv
+            .iter()
+            .zip(&stiff)
+            .filter(|(_, &s)| !s)
+            .map(|(s, _)| off(s))
+            .fold(0.0, f64::max);
+        println!("{method}: stiff triangles within {worst_stiff:.5} of rigid; the rest up to {worst_rest:.3}");
+        assert!(
+            worst_stiff <= 0.01,
+            "{method}: a stiff triangle is off by {worst_stiff}"
+        );
+        assert!(
+            worst_rest > 0.05,
+            "{method}: the rest did not bend ({worst_rest})"
+        );
+        page.click_on("#unpin");
+        page.click_on("#reset");
+        page.wait("studio.pins.length === 0", 20);
+        page.settle();
+    }
+}

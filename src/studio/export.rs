@@ -268,7 +268,7 @@ impl Animation {
     }
 
     /// Frame `i` into `frame`; its time in seconds.
-    fn frame(&mut self, i: usize, frame: &mut Vec<[f64; 2]>) -> Result<f64, String> {
+    fn frame(&mut self, i: usize, frame: &mut [[f64; 2]]) -> Result<f64, String> {
         let t = i as f64 / (self.count - 1) as f64;
         self.path.frame_into(t, frame).map_err(|e| e.to_string())?;
         Ok(t * self.duration)

@@ -1,7 +1,7 @@
 //! `Deformer`: posing a planar mesh by handles (kvf, arap, bounded), factored once per set
 //! of pins, each drag warm-started from the last pose.
 
-use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -34,7 +34,7 @@ pub struct Deformer {
 #[pymethods]
 impl Deformer {
     #[new]
-    #[pyo3(signature = (v, f, method="kvf", weight=None, max_distortion=None, iterations=None, tolerance=None))]
+    #[pyo3(signature = (v, f, method="kvf", weight=None, max_distortion=None, iterations=None, tolerance=None, stiffness=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -45,6 +45,7 @@ impl Deformer {
         max_distortion: Option<f64>,
         iterations: Option<u32>,
         tolerance: Option<f64>,
+        stiffness: Option<PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<Deformer> {
         let mesh = arrays::planar(&v, &f, "V", false)?;
         if weight.is_some() && method != "kvf" {
@@ -123,8 +124,11 @@ impl Deformer {
             }
         };
         let n = mesh.positions.len();
+        let stiffness = stiffness.map(|w| w.as_array().to_vec());
         let inner = py
-            .detach(|| bdmorph::deform::Deformer::new(&mesh, method))
+            .detach(|| {
+                bdmorph::deform::Deformer::new(&mesh, method)?.with_stiffness(stiffness.as_deref())
+            })
             .map_err(errors::deform)?;
         Ok(Deformer {
             inner,
@@ -160,6 +164,25 @@ impl Deformer {
         let inner = &mut self.inner;
         py.detach(|| inner.set_weight(weight))
             .map_err(errors::deform)
+    }
+
+    /// Each triangle's stiffness (a 1-D array, one weight per triangle, each finite and
+    /// >= 1; None: all 1); refactors when pins are set (the pins and the pose stay).
+    fn set_stiffness(
+        &mut self,
+        py: Python<'_>,
+        weights: Option<PyReadonlyArray1<'_, f64>>,
+    ) -> PyResult<()> {
+        let weights = weights.map(|w| w.as_array().to_vec());
+        let inner = &mut self.inner;
+        py.detach(|| inner.set_stiffness(weights.as_deref()))
+            .map_err(errors::deform)
+    }
+
+    /// The stiffness set (one weight per triangle), or None (all 1).
+    #[getter]
+    fn stiffness<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner.stiffness().map(|w| arrays::out1(py, w.to_vec()))
     }
 
     /// Puts the pose back to the rest shape.

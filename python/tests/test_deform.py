@@ -118,3 +118,57 @@ def test_errors(plate):
         d.drag([[0, 0], [np.inf, 0]])
     with pytest.raises(bdmorph.DeformError, match="weight"):
         bdmorph.Deformer(V, F).set_weight(-1)
+
+
+def test_stiffness_keeps_a_painted_region_rigid_and_is_checked(plate):
+    V, F = plate
+    F = np.asarray(F)
+    pins, targets = pins_of(V)
+    centroid_x = V[F][:, :, 0].mean(axis=1)
+    painted = centroid_x < 2.0
+    weights = np.where(painted, 1000.0, 1.0)
+
+    def worst_painted(P):
+        # Each painted triangle's singular values against 1.
+        out = 0.0
+        for f in F[painted]:
+            dm = np.column_stack([V[f[1]] - V[f[0]], V[f[2]] - V[f[0]]])
+            ds = np.column_stack([P[f[1]] - P[f[0]], P[f[2]] - P[f[0]]])
+            s = np.linalg.svd(ds @ np.linalg.inv(dm), compute_uv=False)
+            out = max(out, np.abs(s - 1).max())
+        return out
+
+    for method, extra in [("kvf", {}), ("arap", {}), ("bounded", {"max_distortion": 3.0})]:
+        plain = bdmorph.Deformer(V, F, method, **extra)
+        stiff = bdmorph.Deformer(V, F, method, stiffness=weights, **extra)
+        later = bdmorph.Deformer(V, F, method, **extra)
+        for d in (plain, stiff, later):
+            d.set_pins(pins)
+        later.set_stiffness(weights)            # after the pins: refactors
+        assert np.array_equal(stiff.stiffness, weights) and plain.stiffness is None
+        for k in range(1, 11):
+            goal = V[pins] + (np.array(targets) - V[pins]) * k / 10
+            P0, P1, P2 = plain.drag(goal), stiff.drag(goal), later.drag(goal)
+        for _ in range(50):
+            P1, P2 = stiff.drag(goal), later.drag(goal)
+        assert np.array_equal(P1, P2), method
+        assert worst_painted(P1) <= 0.01 < worst_painted(P0), method
+        later.set_stiffness(None)
+        assert later.stiffness is None
+
+    d = bdmorph.Deformer(V, F, "arap")
+    with pytest.raises(bdmorph.DeformError, match=f"{len(F) - 1} stiffness weights given for "
+                                                  f"{len(F)} triangles"):
+        d.set_stiffness(weights[1:])
+    bad = weights.copy()
+    bad[5] = 0.5
+    with pytest.raises(bdmorph.DeformError, match="stiffness of triangle 5 .* >= 1"):
+        bdmorph.Deformer(V, F, "kvf", stiffness=bad)
+    bad[5] = np.nan
+    with pytest.raises(bdmorph.DeformError, match="triangle 5"):
+        d.set_stiffness(bad)
+    with pytest.raises(bdmorph.DeformError, match="1-D array of numbers"):
+        d.set_stiffness(np.ones((len(F), 1)))
+    with pytest.raises(bdmorph.DeformError, match="1-D array of numbers"):
+        d.set_stiffness(["stiff"] * len(F))
+    assert d.stiffness is None                  # nothing changed

@@ -7,6 +7,11 @@
 //! solve with two right-hand sides. The energy never rises from one iteration to the next
 //! (each step minimises it over its own variables), and a rigid motion of every pin is
 //! reproduced exactly: rotating every triangle by one rotation is then the minimum.
+//!
+//! With per-triangle stiffness ([`super::Deformer::set_stiffness`]) each triangle's term of
+//! the energy, `A_f |J_f − R_f|²`, is multiplied by its weight: each of the triangle's
+//! cotangent weights, in the matrix and the right-hand side alike. The local step is
+//! unchanged (each rotation is its own triangle's best fit, whatever the weight).
 
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -61,9 +66,11 @@ pub(crate) struct Arap {
     rhs: Vec<f64>,
     /// Per triangle, its fitted rotation (rows).
     l: Vec<[[f64; 2]; 2]>,
-    /// Per triangle and edge `(b, c), (c, a), (a, b)`: its cotangent weight times its vector
-    /// in the triangle's rest layout.
+    /// Per triangle and edge `(b, c), (c, a), (a, b)`: its cotangent weight (times the
+    /// triangle's stiffness) times its vector in the triangle's rest layout.
     wdx: Vec<[[f64; 2]; 3]>,
+    /// Per triangle, the factor of its term in the energy (`None`: all 1).
+    stiffness: Option<Vec<f64>>,
 }
 
 impl Arap {
@@ -72,7 +79,7 @@ impl Arap {
     }
 
     pub(crate) fn new(frames: &Frames, n: usize, options: ArapOptions) -> Arap {
-        let wdx = weighted_edges(frames);
+        let wdx = weighted_edges(frames, None);
         Arap {
             options,
             index: vec![NONE; n],
@@ -81,7 +88,22 @@ impl Arap {
             rhs: Vec::new(),
             l: vec![[[1.0, 0.0], [0.0, 1.0]]; frames.len()],
             wdx,
+            stiffness: None,
         }
+    }
+
+    /// Sets each triangle's factor in the energy (checked by the caller: one per triangle,
+    /// each finite and at least 1), the matrix and right-hand side both; the next
+    /// [`Arap::set_pins`] factors with it. The local step's rotations do not depend on it
+    /// (each is its own triangle's best fit, whatever the triangle's factor).
+    pub(crate) fn set_stiffness(&mut self, frames: &Frames, stiffness: Option<&[f64]>) {
+        self.wdx = weighted_edges(frames, stiffness);
+        self.stiffness = stiffness.map(<[f64]>::to_vec);
+    }
+
+    /// Each triangle's factor in the energy, as [`Arap::set_stiffness`] set it.
+    pub(crate) fn stiffness(&self) -> Option<&[f64]> {
+        self.stiffness.as_deref()
     }
 
     /// Numbers the free vertices and factors their cotangent Laplacian.
@@ -99,7 +121,12 @@ impl Arap {
             }
         }
         self.chol = if k > 0 {
-            Some(free_laplacian(frames, &self.index, k)?)
+            Some(free_laplacian(
+                frames,
+                self.stiffness.as_deref(),
+                &self.index,
+                k,
+            )?)
         } else {
             None
         };
@@ -127,7 +154,15 @@ impl Arap {
             let Some(chol) = self.chol.as_mut() else {
                 break;
             };
-            global_rhs(frames, &self.l, &self.wdx, &self.index, uv, &mut self.rhs);
+            global_rhs(
+                frames,
+                self.stiffness.as_deref(),
+                &self.l,
+                &self.wdx,
+                &self.index,
+                uv,
+                &mut self.rhs,
+            );
             chol.solve_in_place(&mut self.rhs, 2)?;
             last_change = 0.0f64;
             for (v, out) in uv.iter_mut().enumerate() {

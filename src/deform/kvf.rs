@@ -27,6 +27,11 @@
 //!   stop, and dragging a handle away and back leaves the shape changed. With it, a step
 //!   that moves nothing is a stationary pose of ARAP energy plus the handles' springs.
 //!
+//! With per-triangle stiffness ([`super::Deformer::set_stiffness`]) each triangle's term of
+//! the first sum, `A_f |…|²`, is multiplied by its weight: the `v` step's matrix and
+//! right-hand side (each of the triangle's cotangent weights), not the `ω` step, which is per
+//! triangle. The handles' `w` stays relative to the unweighted Laplacian.
+//!
 //! `v` and `ω` are found by alternating (each step minimises over its own variables): the
 //! `ω` step is closed-form per triangle, the `v` step one solve with two right-hand sides.
 //! Integrating along log spirals (per edge, the spiral the field's similarity along the
@@ -116,6 +121,8 @@ pub(crate) struct Kvf {
     gradient: Vec<[[f64; 2]; 2]>,
     omega: Vec<f64>,
     wdx: Vec<[[f64; 2]; 3]>,
+    /// Per triangle, the factor of its term of the field's energy (`None`: all 1).
+    face_stiffness: Option<Vec<f64>>,
     /// Each edge once, with how many triangles hold it (1 on the boundary, 2 inside).
     edges: Vec<(u32, u32, f64)>,
     /// Per vertex, the sum of its edges' spiral images (each counted once per triangle
@@ -163,7 +170,8 @@ impl Kvf {
             target: vec![[[1.0, 0.0], [0.0, 1.0]]; m],
             gradient: vec![[[1.0, 0.0], [0.0, 1.0]]; m],
             omega: vec![0.0; m],
-            wdx: weighted_edges(frames),
+            wdx: weighted_edges(frames, None),
+            face_stiffness: None,
             edges,
             sum: vec![[0.0; 2]; n],
             count,
@@ -172,6 +180,15 @@ impl Kvf {
 
     pub(crate) fn options(&self) -> KvfOptions {
         self.options
+    }
+
+    /// Sets each triangle's factor in the field's energy (checked by the caller), its whole
+    /// term `A_f |∇v − ω J R − (R − F)|²`: the Killing part and the strain part alike. The
+    /// next [`Kvf::set_pins`] factors with it; the handles' weight stays relative to the
+    /// unweighted Laplacian, so painting a region does not change how hard the handles pull.
+    pub(crate) fn set_stiffness(&mut self, frames: &Frames, stiffness: Option<&[f64]>) {
+        self.wdx = weighted_edges(frames, stiffness);
+        self.face_stiffness = stiffness.map(<[f64]>::to_vec);
     }
 
     /// Factors the rest Laplacian plus the handles' weight on their rows.
@@ -183,7 +200,13 @@ impl Kvf {
         self.stiffness = weight * self.mean_diagonal;
         let extra: Vec<(u32, f64)> = pins.iter().map(|&p| (p, self.stiffness)).collect();
         let n = self.index.len() as u32;
-        self.chol = Some(free_laplacian_plus(frames, &self.index, n, &extra)?);
+        self.chol = Some(free_laplacian_plus(
+            frames,
+            self.face_stiffness.as_deref(),
+            &self.index,
+            n,
+            &extra,
+        )?);
         self.pins = pins.to_vec();
         Ok(())
     }
@@ -273,6 +296,7 @@ impl Kvf {
             }
             global_rhs(
                 frames,
+                self.face_stiffness.as_deref(),
                 &self.target,
                 &self.wdx,
                 &self.index,

@@ -18,6 +18,9 @@
 //! energy, largest conformal distortion, flipped triangles, the handles' residual.
 //! Meshes of several pieces, with holes, pose as well: every piece needs a handle.
 //!
+//! Regions painted stiff ([`Deformer::set_stiffness`], one weight per triangle, After Effects'
+//! "starch") keep their shape up to a rotation while the rest bends, under every method.
+//!
 //! A pose left with flipped triangles (a quick KVF drag on a thin limb, say) is repaired by
 //! [`untangle`]: the bounded-distortion projections on the region around the flips only.
 //!
@@ -171,6 +174,24 @@ pub enum DeformError {
     /// The bounded-distortion solver failed.
     #[error(transparent)]
     Bounded(crate::param::ParamError),
+    /// [`Deformer::set_stiffness`] with another number of weights than triangles.
+    #[error("{got} stiffness weights given for {expected} triangles (one per triangle)")]
+    StiffnessCount {
+        /// Triangles of the mesh.
+        expected: usize,
+        /// Weights given.
+        got: usize,
+    },
+    /// A stiffness weight that is not a finite number at least 1.
+    #[error(
+        "the stiffness of triangle {index} (0-based) is {value}; each must be a finite number >= 1"
+    )]
+    BadStiffness {
+        /// The triangle.
+        index: usize,
+        /// Its weight.
+        value: f64,
+    },
 }
 
 /// What a drag did, and the pose it left, measured the same way for every method.
@@ -205,6 +226,8 @@ pub struct Deformer {
     positions: Vec<[f64; 2]>,
     pins: Vec<u32>,
     solver: Solver,
+    /// Per triangle, its stiffness ([`Deformer::set_stiffness`]; `None`: all 1).
+    stiffness: Option<Vec<f64>>,
 }
 
 impl std::fmt::Debug for Deformer {
@@ -243,6 +266,7 @@ impl Deformer {
             rest: mesh.clone(),
             frames,
             pins: Vec::new(),
+            stiffness: None,
         })
     }
 
@@ -296,6 +320,100 @@ impl Deformer {
         Ok(())
     }
 
+    /// Sets each triangle's stiffness, one weight per triangle in the mesh's order, each a
+    /// finite number at least 1: 1 is the mesh's own stiffness, larger holds the triangle
+    /// closer to its rest shape (up to a rotation) while the rest of the mesh bends (After
+    /// Effects' "starch"). `None` puts every triangle back to 1. Refactors when pins are set
+    /// (the pins and the pose stay); before [`Deformer::set_pins`] it only takes effect there.
+    ///
+    /// For every method, a triangle of weight `w`:
+    ///
+    /// - [`PoseMethod::Arap`]: its term of the ARAP energy, `A |J − R|²`, is multiplied by
+    ///   `w` (the global step's matrix and right-hand side both).
+    /// - [`PoseMethod::Kvf`]: its term of the field's energy (the Killing term and the strain
+    ///   term) is multiplied by `w`; the handles' weight stays relative to the unweighted mesh.
+    /// - [`PoseMethod::Bounded`]: its bound is `K_t = 1 + (K − 1) / w` (the ARAP iterations
+    ///   before the projections weighted as for ARAP), and
+    ///   [`DragReport::bound_met`] checks each triangle against its own bound.
+    ///
+    /// A weight of exactly 1 everywhere gives the same poses, bit for bit, as no weights.
+    /// On an error nothing changes.
+    ///
+    /// ```
+    /// use bdmorph::deform::{DeformError, Deformer, PoseMethod};
+    /// use bdmorph::generate;
+    /// let rest = generate::grid(10, 4, 0.0);                // 9 x 3 units, 54 triangles
+    /// let mut pose = Deformer::new(&rest, PoseMethod::arap())?;
+    /// // The left third stiff: triangles whose centroid has x < 3.
+    /// let stiff: Vec<f64> = rest
+    ///     .faces
+    ///     .iter()
+    ///     .map(|f| {
+    ///         let x = f.iter().map(|&v| rest.positions[v as usize][0]).sum::<f64>() / 3.0;
+    ///         if x < 3.0 { 1000.0 } else { 1.0 }
+    ///     })
+    ///     .collect();
+    /// pose.set_stiffness(Some(&stiff))?;                    // before or after the pins
+    /// pose.set_pins(&[0, 9])?;
+    /// pose.drag(&[rest.positions[0], [8.0, 3.0]])?;
+    /// assert_eq!(pose.stiffness(), Some(&stiff[..]));
+    /// // One weight per triangle, each finite and at least 1.
+    /// assert!(matches!(
+    ///     pose.set_stiffness(Some(&[1.0; 3])),
+    ///     Err(DeformError::StiffnessCount { expected: 54, got: 3 })
+    /// ));
+    /// let mut bad = stiff.clone();
+    /// bad[7] = 0.5;
+    /// assert!(matches!(
+    ///     pose.set_stiffness(Some(&bad)),
+    ///     Err(DeformError::BadStiffness { index: 7, .. })
+    /// ));
+    /// pose.set_stiffness(None)?;                            // all 1 again
+    /// assert_eq!(pose.stiffness(), None);
+    /// # Ok::<(), DeformError>(())
+    /// ```
+    pub fn set_stiffness(&mut self, weights: Option<&[f64]>) -> Result<(), DeformError> {
+        if let Some(w) = weights {
+            check_stiffness(w, self.frames.len())?;
+        }
+        let old = self.stiffness.take();
+        self.apply_stiffness(weights);
+        if self.pins.is_empty() {
+            return Ok(());
+        }
+        let pool = self.pool.clone();
+        let pins = self.pins.clone();
+        let result = pool.run(|| self.set_pins_here(&pins));
+        if result.is_err() {
+            // Back to the weights before, and their factors.
+            self.apply_stiffness(old.as_deref());
+            let _ = pool.run(|| self.set_pins_here(&pins));
+        }
+        result
+    }
+
+    /// [`Deformer::new`] and [`Deformer::set_stiffness`] in one.
+    pub fn with_stiffness(mut self, weights: Option<&[f64]>) -> Result<Deformer, DeformError> {
+        self.set_stiffness(weights)?;
+        Ok(self)
+    }
+
+    /// Each triangle's stiffness, as [`Deformer::set_stiffness`] set it (`None`: all 1).
+    pub fn stiffness(&self) -> Option<&[f64]> {
+        self.stiffness.as_deref()
+    }
+
+    /// Stores checked weights and hands them to the method (no factoring).
+    fn apply_stiffness(&mut self, weights: Option<&[f64]>) {
+        let frames = &self.frames;
+        match &mut self.solver {
+            Solver::Kvf(s) => s.set_stiffness(frames, weights),
+            Solver::Arap(s) => s.set_stiffness(frames, weights),
+            Solver::Bounded(s) => s.set_stiffness(frames, weights),
+        }
+        self.stiffness = weights.map(<[f64]>::to_vec);
+    }
+
     /// Sets [`PoseMethod::Kvf`]'s handle weight and refactors; the pins stay.
     pub fn set_weight(&mut self, weight: f64) -> Result<(), DeformError> {
         let (pool, frames) = (&self.pool, &self.frames);
@@ -340,6 +458,12 @@ impl Deformer {
     /// Fills the report's measures of the pose: energy, distortion, flips, pin residual.
     fn measure(&self, targets: &[[f64; 2]], report: &mut DragReport) {
         let (mut energy, mut worst, mut flipped) = (0.0, 1.0f64, 0);
+        // For the bounded method, whether a triangle is over its own bound.
+        let bounded = match &self.solver {
+            Solver::Bounded(s) => Some((s, 1.0 + s.options().tolerance)),
+            _ => None,
+        };
+        let mut over = false;
         for f in 0..self.frames.len() {
             let (q, r) = similarity_parts(self.frames.gradient(f, &self.positions));
             energy += self.frames.area[f] * (2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r * r);
@@ -347,7 +471,11 @@ impl Deformer {
             if q - r <= 0.0 {
                 flipped += 1;
             } else {
-                worst = worst.max((q + r) / (q - r));
+                let d = (q + r) / (q - r);
+                worst = worst.max(d);
+                if let Some((s, slack)) = bounded {
+                    over |= d > s.bound_of(f) * slack;
+                }
             }
         }
         report.energy = energy / self.frames.total_area;
@@ -362,10 +490,8 @@ impl Deformer {
                 (u[0] - t[0]).hypot(u[1] - t[1])
             })
             .fold(0.0, f64::max);
-        if let Solver::Bounded(s) = &self.solver {
-            let o = s.options();
-            report.bound_met =
-                Some(flipped == 0 && worst <= o.max_distortion * (1.0 + o.tolerance));
+        if bounded.is_some() {
+            report.bound_met = Some(flipped == 0 && !over);
         }
     }
 
@@ -421,6 +547,23 @@ fn planar_frames(mesh: &PlanarMesh) -> Result<Frames, DeformError> {
         face,
         area: mesh.signed_area(&mesh.faces[face]),
     })?)
+}
+
+/// Refuses stiffness weights that are not one per triangle (`m`), each finite and >= 1.
+fn check_stiffness(weights: &[f64], m: usize) -> Result<(), DeformError> {
+    if weights.len() != m {
+        return Err(DeformError::StiffnessCount {
+            expected: m,
+            got: weights.len(),
+        });
+    }
+    match weights.iter().position(|&w| !(w.is_finite() && w >= 1.0)) {
+        Some(index) => Err(DeformError::BadStiffness {
+            index,
+            value: weights[index],
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Whether each of `n` vertices is pinned, the pins checked: in range, none twice.

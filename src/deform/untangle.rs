@@ -346,6 +346,7 @@ pub fn untangle(
             region.vertices.len(),
             &held,
             bounded,
+            None,
         )
         .map_err(DeformError::Bounded)?;
         solver.set_targets(&targets);

@@ -188,6 +188,9 @@ pub struct BoundedDistortion {
     /// The half-space row before its solve.
     eta: Vec<f64>,
     projected: Vec<[[f64; 2]; 2]>,
+    /// Per triangle, its own bound in place of `options.max_distortion` (posing with
+    /// stiffness: tighter bounds where the mesh is painted stiff).
+    face_bounds: Option<Vec<f64>>,
 }
 
 impl std::fmt::Debug for BoundedDistortion {
@@ -242,14 +245,28 @@ impl BoundedDistortion {
     /// The solver for the handles `pins` (vertices, each checked in range, at least one),
     /// their targets to come with [`BoundedDistortion::set_targets`]: posing, where the
     /// handles move and the factor stays.
+    ///
+    /// With `stiffness` (one factor per triangle, each finite and at least 1, checked by the
+    /// caller), each triangle's term of the least-squares step, `A_t |J_t − P_t|²`, is
+    /// multiplied by its factor: a stiff triangle keeps closer to its projection, its
+    /// neighbours give way.
     pub(crate) fn for_handles(
         frames: Frames,
         n: usize,
         pins: &[u32],
         options: BoundedOptions,
+        stiffness: Option<&[f64]>,
     ) -> Result<BoundedDistortion, ParamError> {
         check_bounds(&options)?;
         let pins: Vec<(u32, [f64; 2])> = pins.iter().map(|&v| (v, [0.0; 2])).collect();
+        let mut frames = frames;
+        if let Some(w) = stiffness {
+            // The areas are the least-squares weights (of the factor and of each step), and
+            // only that: the measures here are per triangle, unweighted.
+            for (a, w) in frames.area.iter_mut().zip(w) {
+                *a *= w;
+            }
+        }
         BoundedDistortion::with_frames(frames, n, &pins, 0, options)
     }
 
@@ -314,7 +331,39 @@ impl BoundedDistortion {
             row: vec![0.0; 2 * k as usize],
             eta: vec![0.0; 2 * k as usize],
             projected: vec![[[0.0; 2]; 2]; m],
+            face_bounds: None,
         })
+    }
+
+    /// Gives each triangle its own bound (one per triangle, each finite and at least 1,
+    /// checked by the caller), in place of `max_distortion`: the projections use it, and
+    /// [`BoundedDistortion::measure_excess`] measures against it. `inverted_bound` still caps
+    /// an inverted triangle's.
+    pub(crate) fn set_face_bounds(&mut self, bounds: Option<Vec<f64>>) {
+        self.face_bounds = bounds;
+    }
+
+    /// Triangle `f`'s bound.
+    fn bound_of(&self, f: usize) -> f64 {
+        self.face_bounds
+            .as_ref()
+            .map_or(self.options.max_distortion, |b| b[f])
+    }
+
+    /// The largest ratio of a triangle's distortion to its own bound (at most 1 when every
+    /// triangle is within its bound; infinite with an inverted one) and the number of
+    /// inverted triangles of `uv`.
+    pub(crate) fn measure_excess(&self, uv: &[[f64; 2]]) -> (f64, usize) {
+        let mut worst: f64 = 0.0;
+        let mut inverted = 0;
+        for f in 0..self.frames.len() {
+            let d = distortion(self.frames.gradient(f, uv));
+            if d.is_infinite() {
+                inverted += 1;
+            }
+            worst = worst.max(d / self.bound_of(f));
+        }
+        (worst, inverted)
     }
 
     /// Iterates from the map `uv` (one point per vertex) until every triangle is within the
@@ -444,7 +493,14 @@ impl BoundedDistortion {
         for f in 0..self.frames.len() {
             let z = self.frames.gradient(f, uv);
             let inverted = z[0][0] * z[1][1] - z[0][1] * z[1][0] <= 0.0;
-            let p = project(z, if inverted { k_inverted } else { kb });
+            let p = match &self.face_bounds {
+                None => project(z, if inverted { k_inverted } else { kb }),
+                Some(bounds) => {
+                    let k = bounds[f];
+                    let ki = self.options.inverted_bound.map_or(k, |i| i.min(k));
+                    project(z, if inverted { ki } else { k })
+                }
+            };
             self.projected[f] = p;
             let nrm = [
                 [z[0][0] - p[0][0], z[0][1] - p[0][1]],

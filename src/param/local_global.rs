@@ -65,8 +65,8 @@ impl LocalGlobal {
                 k += 1;
             }
         }
-        let chol = free_laplacian(frames, &index, k).map_err(err)?;
-        let wdx = weighted_edges(frames);
+        let chol = free_laplacian(frames, None, &index, k).map_err(err)?;
+        let wdx = weighted_edges(frames, None);
         Ok(LocalGlobal {
             fit,
             index,
@@ -102,7 +102,15 @@ impl LocalGlobal {
         };
         // Global: Σ_j w_ij (u_i - u_j) = Σ w_ij L (x_i - x_j), the pinned vertex moved right.
         let k = self.rhs.len() / 2;
-        global_rhs(frames, &self.l, &self.wdx, &self.index, uv, &mut self.rhs);
+        global_rhs(
+            frames,
+            None,
+            &self.l,
+            &self.wdx,
+            &self.index,
+            uv,
+            &mut self.rhs,
+        );
         self.chol
             .solve_in_place(&mut self.rhs, 2)
             .map_err(|source| ParamError::Solver {
@@ -121,15 +129,24 @@ impl LocalGlobal {
     }
 }
 
-/// Per triangle and edge `(b, c), (c, a), (a, b)`: its cotangent weight times its vector in
-/// the triangle's isometric layout.
-pub(crate) fn weighted_edges(frames: &Frames) -> Vec<[[f64; 2]; 3]> {
+/// Triangle `f`'s factor in the energy: its entry of `stiffness`, 1 without one. Every
+/// cotangent weight of the triangle is multiplied by it, which multiplies the triangle's
+/// term `A_f |J_f − L_f|²` of the energy (a factor of exactly 1 changes no bit).
+fn stiffness_of(stiffness: Option<&[f64]>, f: usize) -> f64 {
+    stiffness.map_or(1.0, |s| s[f])
+}
+
+/// Per triangle and edge `(b, c), (c, a), (a, b)`: its cotangent weight (times the
+/// triangle's stiffness, when given: one factor per triangle) times its vector in the
+/// triangle's isometric layout.
+pub(crate) fn weighted_edges(frames: &Frames, stiffness: Option<&[f64]>) -> Vec<[[f64; 2]; 3]> {
     (0..frames.len())
         .map(|f| {
             let x = frames.local[f];
+            let s = stiffness_of(stiffness, f);
             let mut out = [[0.0; 2]; 3];
             for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
-                let w = frames.cot[f][corner];
+                let w = frames.cot[f][corner] * s;
                 out[corner] = [w * (x[i][0] - x[j][0]), w * (x[i][1] - x[j][1])];
             }
             out
@@ -138,18 +155,21 @@ pub(crate) fn weighted_edges(frames: &Frames) -> Vec<[[f64; 2]; 3]> {
 }
 
 /// The cotangent Laplacian of the free vertices (`index[v]` their row, [`NONE`] for pinned
-/// ones; `k` of them), factored for solves with two right-hand sides.
+/// ones; `k` of them), each triangle's weights times its stiffness when given, factored for
+/// solves with two right-hand sides.
 pub(crate) fn free_laplacian(
     frames: &Frames,
+    stiffness: Option<&[f64]>,
     index: &[u32],
     k: u32,
 ) -> Result<Cholesky, bdmorph_cholesky::CholeskyError> {
-    free_laplacian_plus(frames, index, k, &[])
+    free_laplacian_plus(frames, stiffness, index, k, &[])
 }
 
 /// As [`free_laplacian`], with `extra` `(row, value)` added to the diagonal (soft pins).
 pub(crate) fn free_laplacian_plus(
     frames: &Frames,
+    stiffness: Option<&[f64]>,
     index: &[u32],
     k: u32,
     extra: &[(u32, f64)],
@@ -160,8 +180,9 @@ pub(crate) fn free_laplacian_plus(
         vals[row as usize] += value;
     }
     for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
+        let s = stiffness_of(stiffness, f);
         for (corner, (i, j)) in [(b, c), (c, a), (a, b)].into_iter().enumerate() {
-            let w = frames.cot[f][corner];
+            let w = frames.cot[f][corner] * s;
             let (ii, jj) = (index[i as usize], index[j as usize]);
             if ii != NONE {
                 pairs.push((ii, ii));
@@ -211,9 +232,11 @@ pub(crate) fn fit_each(frames: &Frames, uv: &[[f64; 2]], fit: Fit, l: &mut [[[f6
 }
 
 /// The global step's right-hand sides (x then y, one row per free vertex):
-/// `Σ w_ij L (x_i − x_j)` plus, for each pinned neighbour `j`, `w_ij u_j`.
+/// `Σ w_ij L (x_i − x_j)` plus, for each pinned neighbour `j`, `w_ij u_j`; `wdx` from
+/// [`weighted_edges`] with the same `stiffness`.
 pub(crate) fn global_rhs(
     frames: &Frames,
+    stiffness: Option<&[f64]>,
     l: &[[[f64; 2]; 2]],
     wdx: &[[[f64; 2]; 3]],
     index: &[u32],
@@ -225,9 +248,10 @@ pub(crate) fn global_rhs(
     for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
         let l = l[f];
         let vs = [a, b, c];
+        let s = stiffness_of(stiffness, f);
         for (corner, (i, j)) in [(1usize, 2usize), (2, 0), (0, 1)].into_iter().enumerate() {
             let wdx = wdx[f][corner];
-            let w = frames.cot[f][corner];
+            let w = frames.cot[f][corner] * s;
             let ldx = [
                 l[0][0] * wdx[0] + l[0][1] * wdx[1],
                 l[1][0] * wdx[0] + l[1][1] * wdx[1],

@@ -152,7 +152,7 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
         }
     };
     let pins = doc.keyframes[s.view().current].pins.clone();
-    match rng.below(30) {
+    match rng.below(31) {
         0 => Request::Select { keyframe: k(rng) },
         1..=3 => Request::PinAdd {
             vertex: vertex(rng),
@@ -281,6 +281,25 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
         28 => Request::Repair {
             keyframe: Some(k(rng)),
         },
+        29 => {
+            let m = doc.mesh.faces.len() as u32;
+            let faces: Vec<u32> = (0..rng.below(6))
+                .map(|_| rng.below(m as usize + 2) as u32)
+                .collect();
+            if rng.below(2) == 0 {
+                Request::PaintDepth {
+                    faces,
+                    all: rng.below(5) == 0,
+                    level: [1, -2, 0, 9, 10, -128][rng.below(6)],
+                }
+            } else {
+                Request::PaintStiffness {
+                    faces,
+                    all: rng.below(5) == 0,
+                    weight: [1000.0, 1.0, 0.5, f64::NAN, 1e7, 30.0][rng.below(6)],
+                }
+            }
+        }
         _ => Request::Mode {
             mode: rng.pick(&["pose", "outline", "sideways"]).to_owned(),
         },

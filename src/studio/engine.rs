@@ -150,7 +150,11 @@ impl Engine {
     /// The caches of `doc`, posing keyframe `current`.
     pub fn new(doc: &Project, current: usize) -> Result<Engine, String> {
         let rest = doc.rest();
-        let deformer = Deformer::new(&rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+        let mut deformer =
+            Deformer::new(&rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+        deformer
+            .set_stiffness(doc.stiffness.as_deref())
+            .map_err(|e| e.to_string())?;
         let anchors = KeyframePath::new(&[rest.clone(), rest.clone()])
             .map_err(|e| e.to_string())?
             .structure()
@@ -250,6 +254,9 @@ impl Engine {
         if touched.method {
             let mut deformer =
                 Deformer::new(&self.rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+            deformer
+                .set_stiffness(doc.stiffness.as_deref())
+                .map_err(|e| e.to_string())?;
             deformer
                 .set_positions(&doc.keyframes[current].positions)
                 .map_err(|e| e.to_string())?;

@@ -200,14 +200,26 @@ fn message(r: &mut Rng) -> Value {
             let (name, body) = file_text(r);
             json!({"op": "import_outline", "name": name, "text": body, "vertices": r.pick(&[0usize, 50, 200, 1 << 40])})
         }
-        35 => match r.below(2) {
+        35 => match r.below(4) {
             0 => json!({"op": "fps", "fps": number(r)}),
+            1 => {
+                let faces: Vec<Value> = (0..r.below(5)).map(|_| index(r)).collect();
+                json!({"op": "paint_depth", "faces": faces, "all": r.below(4) == 0, "level": number(r)})
+            }
+            2 => {
+                let faces: Vec<Value> = (0..r.below(5)).map(|_| index(r)).collect();
+                json!({"op": "paint_stiffness", "faces": faces, "all": r.below(4) == 0, "weight": number(r)})
+            }
             _ => json!({"op": "loop_range", "range": [number(r), number(r)]}),
         },
         36 => json!({"op": "scrub", "seq": r.below(100), "time": number(r)}),
         37 => json!({"op": "save", "name": text(r), "overwrite": r.below(2) == 0}),
-        38 => json!({"op": "export", "format": text(r), "name": text(r),
-                     "frames": r.pick(&[0u64, 2, 3, 4_294_967_295]), "time": number(r)}),
+        38 => {
+            json!({"op": "export", "format": r.pick(&["gif", "apng", "webp", "sheet", "frames", "mp4"]).to_owned(), "name": text(r),
+                     "frames": r.pick(&[0u64, 2, 3, 4_294_967_295]), "time": number(r),
+                     "size": [index(r), index(r)], "range": [index(r), index(r)],
+                     "background": r.pick(&["transparent", "#fff", "nonsense", "#12345"]).to_owned()})
+        }
         _ => {
             json!({"op": r.pick(&["open", "attach_picture", "recover", "discard"]), "name": text(r)})
         }

@@ -14,6 +14,7 @@ pub mod surface;
 pub mod svg;
 #[cfg(feature = "video")]
 pub mod video;
+#[cfg(feature = "webp")]
 pub mod webp;
 
 /// What to draw besides the positions: the triangles and, optionally, a texture mapped through

@@ -6,12 +6,12 @@
 //! ```
 //! use bdmorph::render::{sheet::SheetLayout, Image};
 //! let layout = SheetLayout::new(5, 30, 20)?;            // 5 frames of 30 x 20 pixels
-//! assert_eq!((layout.columns, layout.rows), (3, 2));
+//! assert_eq!((layout.columns, layout.rows), (2, 3));    // 60 x 60, the squarest grid
 //! let mut picture = layout.blank();
 //! layout.place(&mut picture, 4, &Image { width: 30, height: 20, rgba: vec![255; 2400] });
-//! assert_eq!(layout.rect(4), [30, 20, 30, 20]);
+//! assert_eq!(layout.rect(4), [0, 40, 30, 20]);
 //! let json = layout.json("sheet.png", 25);
-//! assert!(json.contains("\"frame\":{\"x\":30,\"y\":20,\"w\":30,\"h\":20}"));
+//! assert!(json.contains("\"frame\":{\"x\":0,\"y\":40,\"w\":30,\"h\":20}"));
 //! # Ok::<(), bdmorph::render::raster::RenderError>(())
 //! ```
 

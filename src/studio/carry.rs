@@ -347,8 +347,11 @@ mod tests {
 
     #[test]
     fn paint_carries_to_the_triangles_over_it() {
-        let old = generate::grid(5, 5, 0.0);
-        let new = generate::grid(9, 9, 0.0);
+        let old = generate::grid(5, 5, 0.0); // [0, 4]^2
+        let mut new = generate::grid(9, 9, 0.0);
+        for p in &mut new.positions {
+            *p = [0.5 * p[0], 0.5 * p[1]]; // [0, 4]^2, finer
+        }
         let map = carry_faces(&old, &new);
         assert_eq!(map.len(), new.faces.len());
         for (f, &o) in new.faces.iter().zip(&map) {

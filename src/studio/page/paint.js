@@ -10,8 +10,9 @@
 import { S, $, canvas, ctx, dpr, eventCanvas, toCanvas, redraw } from "./view.js";
 import { send } from "./net.js";
 
-// The weight a stiff triangle gets: chosen on one mesh so that a stiff region keeps its
-// shape within 1% under every posing method, and checked on others (BENCHMARKS.md).
+// The weight a stiff triangle gets: the smallest round weight that kept a painted region
+// within 1% of rigid under every posing method on two meshes (100 did on one only;
+// BENCHMARKS.md, "Stiff parts").
 export const STIFF_WEIGHT = 1000;
 
 const brushing = () => S.state && S.state.mode === "pose" && (S.tool === "depth" || S.tool === "stiff");

@@ -62,6 +62,7 @@ pub mod meshing;
 pub mod morph;
 pub use morph::{blend, path};
 pub mod param;
+pub mod parts;
 pub mod reference;
 pub mod render;
 #[cfg(feature = "studio")]

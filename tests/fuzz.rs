@@ -16,6 +16,7 @@
 //! Inputs that once failed are kept at the end as `fuzz_*_regression_*` tests.
 
 mod fuzz_checks;
+mod layered;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -370,8 +371,29 @@ fn byte_edits() -> impl Strategy<Value = Vec<(usize, u8, u8)>> {
     vec((any::<usize>(), byte, 0u8..3), 1..8)
 }
 
+/// The test figure's layers.
+static FIGURE: std::sync::LazyLock<Vec<layered::TestLayer>> =
+    std::sync::LazyLock::new(layered::figure);
+
+/// A small valid PSD and OpenRaster file (the test figure's six layers), to corrupt.
+static VALID_PSD: std::sync::LazyLock<Vec<u8>> =
+    std::sync::LazyLock::new(|| layered::write_psd(&layered::figure()));
+static VALID_ORA: std::sync::LazyLock<Vec<u8>> =
+    std::sync::LazyLock::new(|| layered::write_ora(&layered::figure(), 2));
+
+/// A layered picture read within its memory budget: no allocation beyond the file's
+/// [`bdmorph::parts::LayerBudget`].
+fn layered(bytes: &[u8]) {
+    let budget = bdmorph::parts::LayerBudget::of(bytes.len()) as usize;
+    bounded_allocation_beyond(bytes.len(), budget, || check::layered_reader(bytes));
+}
+
 fn corrupt(text: &str, edits: &[(usize, u8, u8)]) -> Vec<u8> {
-    let mut bytes = text.as_bytes().to_vec();
+    corrupt_bytes(text.as_bytes(), edits)
+}
+
+fn corrupt_bytes(bytes: &[u8], edits: &[(usize, u8, u8)]) -> Vec<u8> {
+    let mut bytes = bytes.to_vec();
     for &(at, byte, kind) in edits {
         let at = at % (bytes.len() + 1);
         match kind {
@@ -546,6 +568,44 @@ proptest! {
     fn fuzz_outline_readers_corrupted_valid_files(edits in byte_edits()) {
         outline(&corrupt(VALID_SVG, &edits), check::OutlineFormat::Svg);
         outline(&corrupt(VALID_POLY, &edits), check::OutlineFormat::Poly);
+    }
+
+    #[test]
+    fn fuzz_layered_readers_corrupted_valid_files(
+        edits in byte_edits(),
+        header_edits in byte_edits(),
+        cut in proptest::option::weighted(0.25, any::<usize>()),
+    ) {
+        for valid in [&*VALID_PSD, &*VALID_ORA] {
+            // Edits anywhere, and edits within the first kilobyte (headers, records, the zip's
+            // first entries), where they change the structure rather than pixels.
+            let mut bytes = corrupt_bytes(valid, &edits);
+            let head = header_edits.iter().map(|&(at, b, k)| (at % 1024, b, k)).collect::<Vec<_>>();
+            bytes = corrupt_bytes(&bytes, &head);
+            if let Some(cut) = cut {
+                bytes.truncate(cut % (bytes.len() + 1));
+            }
+            layered(&bytes);
+        }
+    }
+
+    #[test]
+    fn fuzz_layered_readers_structured(xml_edits in byte_edits(), record_edits in vec((any::<usize>(), any::<u8>()), 1..6)) {
+        // OpenRaster: a valid zip around a corrupted stack.xml.
+        let figure = &*FIGURE;
+        let stack = layered::ora_stack(figure, 2);
+        layered(&layered::ora_with_stack(figure, &corrupt(&stack, &xml_edits)));
+        // PSD: bytes replaced (lengths kept) in the header and the layer records.
+        let mut psd = VALID_PSD.clone();
+        for &(at, b) in &record_edits {
+            psd[at % 700] = b;
+        }
+        layered(&psd);
+    }
+
+    #[test]
+    fn fuzz_layered_readers_arbitrary_bytes(head in prop_oneof![Just(b"8BPS".to_vec()), Just(b"PK\x03\x04".to_vec())], bytes in vec(any::<u8>(), 0..400)) {
+        layered(&[head, bytes].concat());
     }
 
     #[test]
@@ -899,4 +959,12 @@ fn fuzz_outline_readers_regression_quoted_text() {
     outline(svg.as_bytes(), check::OutlineFormat::Svg);
     let poly = format!("{}\u{e}\n", "x".repeat(400));
     outline(poly.as_bytes(), check::OutlineFormat::Poly);
+}
+
+#[test]
+fn the_layered_seeds_read() {
+    for valid in [&*VALID_PSD, &*VALID_ORA] {
+        let l = bdmorph::parts::read_layered(valid).expect("a valid seed");
+        assert_eq!(l.layers.len(), 6);
+    }
 }

@@ -62,6 +62,9 @@ fn plural(n: usize, one: &str, many: &str) -> String {
 }
 
 pub(super) fn run(args: MeshArgs) -> Result<(), String> {
+    if super::layered::is_layered(&args.input) {
+        return super::layered::run(&args);
+    }
     let plan = match &args.output {
         Some(path) => Some(output::Plan::new(path, None, 1)?),
         None if args.stats => None,

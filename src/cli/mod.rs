@@ -6,6 +6,7 @@ mod demo;
 mod export;
 mod geodesic;
 mod info;
+mod layered;
 mod mesh;
 mod morph;
 mod output;
@@ -200,6 +201,13 @@ enum Command {
     /// width and height), else the outline's bounding box as a square. .svg or .png draw the
     /// mesh (a picture's mesh textured by it).
     ///
+    /// A layered picture (.psd: 8-bit RGB; .ora: OpenRaster, as Krita, GIMP and MyPaint
+    /// write it) makes a character in parts: every visible layer a part (groups flattened,
+    /// hidden layers skipped with a note) meshed from its own transparency, the vertices shared
+    /// out by area, stacked in the file's order, with a joint wherever two layers overlap.
+    /// -o OUT.json writes a studio project (its picture: the layered file); -o OUT.obj writes
+    /// one group and one material per part, OUT.mtl and the parts' texture OUT.png beside it.
+    ///
     /// Errors (nothing is written): a picture that is fully transparent or holds no subject,
     /// outlines that cross or touch themselves or each other (the segments and where), an
     /// outline too small for the tolerance, a .poly segment naming a missing vertex.
@@ -211,6 +219,8 @@ enum Command {
     ///   bdmorph mesh drawing.png --threshold 0.5 --stats -o drawing.obj
     ///   bdmorph mesh logo.svg --vertices 3000 -o logo.obj
     ///   bdmorph mesh part.poly --min-angle 30 -o part.obj
+    ///   bdmorph mesh character.psd -o character.json     (a character in parts, for the studio)
+    ///   bdmorph mesh character.ora -o character.obj      (a group and a material per part)
     ///   then, with vertex numbers read from cat.obj:
     ///   bdmorph deform cat.obj --pin 12:40,300 --pin 815:420,360 --max-distortion 3 -o posed.obj
     ///   bdmorph morph cat.obj posed.obj --frames 30 --texture cat.png -o cat.gif
@@ -289,6 +299,15 @@ enum Command {
     ///   bdmorph export wave.json -o wave.gif --background '#202020'
     #[command(verbatim_doc_comment)]
     Export(ExportArgs),
+    /// Render a saved project's animation: the same as `export` (any project, of one mesh or
+    /// of a character in parts), for batch rendering without the page.
+    ///
+    /// Examples:
+    ///   bdmorph render character.json -o walk.mp4
+    ///   bdmorph render character.json -o walk.apng --background transparent
+    ///   bdmorph render character.json -o frames/
+    #[command(verbatim_doc_comment)]
+    Render(ExportArgs),
 }
 
 #[derive(Args, Debug)]
@@ -854,7 +873,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Compile(args) => compile::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),
-        Command::Export(args) => export::run(args),
+        Command::Export(args) | Command::Render(args) => export::run(args),
         Command::Studio(args) => bdmorph::studio::run(bdmorph::studio::StudioOptions {
             file: args.file,
             port: args.port,

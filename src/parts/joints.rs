@@ -430,3 +430,148 @@ mod tests {
         assert_eq!(out, rest.positions);
     }
 }
+
+/// A [`crate::deform::Deformer`] on a mesh whose joints are welded ([`Weld`]): it takes and
+/// gives the whole mesh's vertices, so a caller poses a character as one mesh and every joint
+/// holds exactly. With no joints it is the deformer itself (the same poses, bit for bit).
+///
+/// Two pins on the vertices of one joint are one handle: the first one's target is used.
+#[derive(Debug)]
+pub struct JointedDeformer {
+    deformer: crate::deform::Deformer,
+    weld: Weld,
+    /// The pose, one point per vertex of the whole mesh.
+    full: Vec<[f64; 2]>,
+    /// Per pin given, its handle in the welded deformer.
+    handle_of: Vec<usize>,
+    /// Per handle, the first pin given for it.
+    first_pin: Vec<usize>,
+    /// Scratch: the welded pose or targets.
+    scratch: Vec<[f64; 2]>,
+}
+
+impl JointedDeformer {
+    /// A deformer of `rest` by `method` with `joints` welded.
+    ///
+    /// # Errors
+    /// Those of [`crate::deform::Deformer::new`].
+    pub fn new(
+        rest: &PlanarMesh,
+        joints: &[[u32; 2]],
+        method: crate::deform::PoseMethod,
+    ) -> Result<JointedDeformer, crate::deform::DeformError> {
+        let weld = Weld::new(rest, joints);
+        let deformer = crate::deform::Deformer::new(&weld.mesh, method)?;
+        Ok(JointedDeformer {
+            deformer,
+            weld,
+            full: rest.positions.clone(),
+            handle_of: Vec::new(),
+            first_pin: Vec::new(),
+            scratch: Vec::new(),
+        })
+    }
+
+    /// The weld.
+    pub fn weld(&self) -> &Weld {
+        &self.weld
+    }
+
+    /// The method and its options.
+    pub fn method(&self) -> crate::deform::PoseMethod {
+        self.deformer.method()
+    }
+
+    /// See [`crate::deform::Deformer::set_stiffness`] (one weight per triangle).
+    ///
+    /// # Errors
+    /// Those of [`crate::deform::Deformer::set_stiffness`].
+    pub fn set_stiffness(
+        &mut self,
+        weights: Option<&[f64]>,
+    ) -> Result<(), crate::deform::DeformError> {
+        self.deformer.set_stiffness(weights)
+    }
+
+    /// Sets the pinned vertices (of the whole mesh) and factors the system.
+    ///
+    /// # Errors
+    /// Those of [`crate::deform::Deformer::set_pins`], and a pin beyond the mesh.
+    pub fn set_pins(&mut self, pins: &[u32]) -> Result<(), crate::deform::DeformError> {
+        let n = self.weld.of.len();
+        let mut handles: Vec<u32> = Vec::with_capacity(pins.len());
+        self.handle_of.clear();
+        self.first_pin.clear();
+        for (i, &p) in pins.iter().enumerate() {
+            let w =
+                *self
+                    .weld
+                    .of
+                    .get(p as usize)
+                    .ok_or(crate::deform::DeformError::PinOutOfRange {
+                        pin: i,
+                        vertex: p,
+                        n_vertices: n,
+                    })?;
+            if pins[..i].contains(&p) {
+                return Err(crate::deform::DeformError::PinnedTwice { vertex: p });
+            }
+            match handles.iter().position(|&h| h == w) {
+                Some(k) => self.handle_of.push(k),
+                None => {
+                    self.handle_of.push(handles.len());
+                    self.first_pin.push(i);
+                    handles.push(w);
+                }
+            }
+        }
+        self.deformer.set_pins(&handles)
+    }
+
+    /// Moves the pins to `targets` (one per pin given) and updates the pose.
+    ///
+    /// # Errors
+    /// Those of [`crate::deform::Deformer::drag`].
+    pub fn drag(
+        &mut self,
+        targets: &[[f64; 2]],
+    ) -> Result<crate::deform::DragReport, crate::deform::DeformError> {
+        if targets.len() != self.handle_of.len() {
+            return Err(crate::deform::DeformError::TargetCount {
+                pins: self.handle_of.len(),
+                got: targets.len(),
+            });
+        }
+        self.scratch.clear();
+        self.scratch
+            .extend(self.first_pin.iter().map(|&i| targets[i]));
+        let report = self.deformer.drag(&self.scratch)?;
+        self.weld.scatter(self.deformer.positions(), &mut self.full);
+        Ok(report)
+    }
+
+    /// The pose, one point per vertex of the whole mesh.
+    pub fn positions(&self) -> &[[f64; 2]] {
+        &self.full
+    }
+
+    /// Replaces the pose (each joint takes its first vertex's point).
+    ///
+    /// # Errors
+    /// Those of [`crate::deform::Deformer::set_positions`].
+    pub fn set_positions(
+        &mut self,
+        positions: &[[f64; 2]],
+    ) -> Result<(), crate::deform::DeformError> {
+        if positions.len() != self.full.len() {
+            return Err(crate::deform::DeformError::PositionCount {
+                expected: self.full.len(),
+                got: positions.len(),
+            });
+        }
+        self.weld.gather(positions, &mut self.scratch);
+        self.deformer.set_positions(&self.scratch)?;
+        self.weld.scatter(self.deformer.positions(), &mut self.full);
+        Ok(())
+    }
+}

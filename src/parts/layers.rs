@@ -185,6 +185,22 @@ pub(crate) fn crop(
     ))
 }
 
+/// Another library's message as one short line: whitespace runs (newlines included) made one
+/// space, at most 160 characters.
+pub(crate) fn one_line(text: &str) -> String {
+    let mut out = String::new();
+    for word in text.split_whitespace() {
+        if !out.is_empty() {
+            out.push(' ');
+        }
+        out.push_str(word);
+    }
+    if out.chars().count() > 160 {
+        out = out.chars().take(157).collect::<String>() + "...";
+    }
+    out
+}
+
 /// Multiplies alpha by `opacity` (0 to 255).
 pub(crate) fn apply_opacity(rgba: &mut [u8], opacity: u8) {
     if opacity == 255 {

@@ -51,7 +51,7 @@ pub use character::{
     atlas, character, AtlasPlaces, Character, CharacterError, CharacterOptions, Joint, Part,
     MAX_ATLAS_SIDE,
 };
-pub use joints::{pieces_of, Placement, PlacementReport, Weld};
+pub use joints::{pieces_of, JointedDeformer, Placement, PlacementReport, Weld};
 pub use layers::{is_layered_path, layered_format, Layer, LayerBudget, Layered, LayersError};
 #[cfg(feature = "layers")]
 pub use layers::{read_layered, read_layered_file};

@@ -4,7 +4,7 @@
 
 use std::io::{Cursor, Read};
 
-use super::layers::{apply_opacity, crop, Layer, Layered, LayersError, Spend};
+use super::layers::{apply_opacity, crop, one_line, Layer, Layered, LayersError, Spend};
 use crate::render::raster;
 
 const FORMAT: &str = "ORA";
@@ -17,7 +17,7 @@ const MAX_DEPTH: usize = 64;
 fn damaged(why: impl Into<String>) -> LayersError {
     LayersError::Damaged {
         format: FORMAT,
-        why: why.into(),
+        why: one_line(&why.into()),
     }
 }
 

@@ -10,14 +10,14 @@
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use super::layers::{apply_opacity, crop, Layer, Layered, LayersError, Spend};
+use super::layers::{apply_opacity, crop, one_line, Layer, Layered, LayersError, Spend};
 
 const FORMAT: &str = "PSD";
 
 fn damaged(why: impl Into<String>) -> LayersError {
     LayersError::Damaged {
         format: FORMAT,
-        why: why.into(),
+        why: one_line(&why.into()),
     }
 }
 
@@ -71,6 +71,54 @@ fn header(bytes: &[u8]) -> Result<(u32, u32), LayersError> {
     Ok((width, height))
 }
 
+/// Checks that the four sections after the header (colour mode data, image resources, layers
+/// and masks, image data) lie within the file, as their lengths say.
+fn sections(bytes: &[u8]) -> Result<(), LayersError> {
+    let mut at = 26usize;
+    for name in [
+        "colour mode data",
+        "image resources",
+        "layer and mask information",
+    ] {
+        let len = bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]) as usize)
+            .ok_or_else(|| damaged(format!("the file ends before its {name}")))?;
+        at = at
+            .checked_add(4 + len)
+            .filter(|&end| end <= bytes.len())
+            .ok_or_else(|| damaged(format!("its {name} run past the end of the file")))?;
+    }
+    if bytes.len() < at + 2 {
+        return Err(damaged("the file ends before its image data"));
+    }
+    Ok(())
+}
+
+thread_local! {
+    /// Set while the `psd` crate runs on this thread: its panics are reported as damage, not
+    /// printed.
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with the `psd` crate's panics caught and not printed (other threads' panics are
+/// printed as before: the hook installed once defers to the previous one).
+fn quietly<T>(f: impl FnOnce() -> T) -> std::thread::Result<T> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    QUIET.with(|q| q.set(true));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    QUIET.with(|q| q.set(false));
+    result
+}
+
 /// What the `psd` crate's panic said, if anything.
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     payload
@@ -88,11 +136,12 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
 /// file's [`super::LayerBudget`].
 pub fn read_psd(bytes: &[u8]) -> Result<Layered, LayersError> {
     let (width, height) = header(bytes)?;
+    sections(bytes)?;
     let mut spend = Spend::new(bytes.len());
     let canvas = u64::from(width) * u64::from(height) * 4;
     // The crate decodes a layer to the whole canvas at a time.
     spend.take(canvas, true)?;
-    let psd = catch_unwind(AssertUnwindSafe(|| psd::Psd::from_bytes(bytes)))
+    let psd = quietly(|| psd::Psd::from_bytes(bytes))
         .map_err(|p| damaged(panic_text(p.as_ref())))?
         .map_err(|e| damaged(e.to_string()))?;
     let groups = psd.groups();
@@ -151,7 +200,7 @@ pub fn read_psd(bytes: &[u8]) -> Result<Layered, LayersError> {
                 "layer '{name}' blends by {mode}: drawn over the layers below as normal"
             ));
         }
-        let mut rgba = catch_unwind(AssertUnwindSafe(|| layer.rgba()))
+        let mut rgba = quietly(|| layer.rgba())
             .map_err(|p| damaged(format!("layer '{name}': {}", panic_text(p.as_ref()))))?;
         apply_opacity(&mut rgba, layer.opacity());
         match crop(&rgba, width, height, 0, 0) {

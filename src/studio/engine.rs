@@ -7,12 +7,17 @@
 //! Pieces: a pin may go on any piece of the mesh; a piece without a pin keeps its place (every
 //! one of its vertices held where the keyframe has it), so a mesh of several pieces poses as
 //! soon as one piece has a pin.
+//!
+//! Characters in parts: the document's joints are welded for posing ([`JointedDeformer`]:
+//! pieces tied by joints are one piece, and each joint holds exactly), and the animation's
+//! frames place each piece so that its joints meet ([`Placement`]).
 
 use super::edit::Touched;
 use super::project::{MethodData, Project};
-use crate::deform::{Deformer, DragReport, KvfOptions, PoseMethod};
+use crate::deform::{DragReport, KvfOptions, PoseMethod};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
+use crate::parts::{JointedDeformer, Placement, Weld};
 use crate::{Easing, KeyframePath, MorphOptions, PathOptions};
 
 /// How much larger than the rest mesh a pose may spread before a drag is refused.
@@ -38,6 +43,26 @@ pub struct Pieces {
 }
 
 impl Pieces {
+    /// The pieces of `mesh` with the vertices of each joint of `weld` as one: pieces tied by
+    /// joints are one piece.
+    pub fn welded(mesh: &PlanarMesh, weld: &Weld) -> Pieces {
+        let first = |v: u32| weld.first[weld.of[v as usize] as usize];
+        let joined = PlanarMesh {
+            positions: mesh.positions.clone(),
+            faces: mesh.faces.iter().map(|f| f.map(first)).collect(),
+        };
+        let mut pieces = Pieces::of(&joined);
+        for v in 0..mesh.positions.len() as u32 {
+            let f = first(v);
+            if f != v && pieces.of[v as usize] == u32::MAX && pieces.of[f as usize] != u32::MAX {
+                let p = pieces.of[f as usize];
+                pieces.of[v as usize] = p;
+                pieces.vertices[p as usize].push(v);
+            }
+        }
+        pieces
+    }
+
     /// The pieces of `mesh`, numbered in the order of their first triangle.
     pub fn of(mesh: &PlanarMesh) -> Pieces {
         let n = mesh.positions.len();
@@ -112,7 +137,9 @@ pub struct Engine {
     /// The rest mesh.
     pub rest: PlanarMesh,
     shape: RestShape,
-    deformer: Deformer,
+    deformer: JointedDeformer,
+    /// Where the animation's pieces go so that their joints meet (`None`: no joints).
+    placement: Option<Placement>,
     /// The keyframe and pins the deformer holds (`None`: no pins set).
     loaded: Option<(usize, Vec<u32>)>,
     /// Why the keyframe's pins could not be set, if they could not.
@@ -150,8 +177,11 @@ impl Engine {
     /// The caches of `doc`, posing keyframe `current`.
     pub fn new(doc: &Project, current: usize) -> Result<Engine, String> {
         let rest = doc.rest();
-        let mut deformer =
-            Deformer::new(&rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+        let joints = doc.joints.as_deref().unwrap_or(&[]);
+        let mut deformer = JointedDeformer::new(&rest, joints, method_of(&doc.method)?)
+            .map_err(|e| e.to_string())?;
+        let placement = (!joints.is_empty()).then(|| Placement::new(&rest, joints));
+        let pieces = Pieces::welded(&rest, deformer.weld());
         deformer
             .set_stiffness(doc.stiffness.as_deref())
             .map_err(|e| e.to_string())?;
@@ -165,7 +195,8 @@ impl Engine {
         let (n, m) = (rest.positions.len(), rest.faces.len());
         let mut engine = Engine {
             shape: RestShape::new(&rest.positions, &rest.faces),
-            pieces: Pieces::of(&rest),
+            pieces,
+            placement,
             frame: rest.positions.clone(),
             distortion: vec![1.0; m],
             rest,
@@ -252,8 +283,12 @@ impl Engine {
             return Ok(());
         }
         if touched.method {
-            let mut deformer =
-                Deformer::new(&self.rest, method_of(&doc.method)?).map_err(|e| e.to_string())?;
+            let mut deformer = JointedDeformer::new(
+                &self.rest,
+                doc.joints.as_deref().unwrap_or(&[]),
+                method_of(&doc.method)?,
+            )
+            .map_err(|e| e.to_string())?;
             deformer
                 .set_stiffness(doc.stiffness.as_deref())
                 .map_err(|e| e.to_string())?;
@@ -369,6 +404,9 @@ impl Engine {
         let result = self
             .path(doc)
             .and_then(|p| p.frame_into(t, &mut frame).map_err(|e| e.to_string()));
+        if let (Ok(_), Some(placement)) = (&result, self.placement.as_mut()) {
+            placement.apply(&mut frame);
+        }
         self.frame = frame;
         result?;
         Ok(time)

@@ -242,6 +242,8 @@ pub fn frames_kept(
 /// The frames of a project's animation, computed one at a time.
 struct Animation {
     path: crate::KeyframePath,
+    /// A character's joints kept together (`None`: no joints).
+    placement: Option<crate::parts::Placement>,
     count: usize,
     duration: f64,
 }
@@ -260,8 +262,14 @@ impl Animation {
                 faces: faces.clone(),
             })
             .collect();
+        let placement = project
+            .joints
+            .as_deref()
+            .filter(|j| !j.is_empty())
+            .map(|j| crate::parts::Placement::new(&project.rest(), j));
         Ok(Animation {
             path: path_of(project, &meshes)?,
+            placement,
             count,
             duration: project.keyframes.last().map_or(0.0, |k| k.time),
         })
@@ -271,6 +279,9 @@ impl Animation {
     fn frame(&mut self, i: usize, frame: &mut [[f64; 2]]) -> Result<f64, String> {
         let t = i as f64 / (self.count - 1) as f64;
         self.path.frame_into(t, frame).map_err(|e| e.to_string())?;
+        if let Some(placement) = self.placement.as_mut() {
+            placement.apply(frame);
+        }
         Ok(t * self.duration)
     }
 }

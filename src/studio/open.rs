@@ -50,6 +50,14 @@ pub enum TextureError {
         /// Why.
         source: crate::render::raster::RenderError,
     },
+    /// A layered picture (PSD, ORA) that does not read.
+    #[error("{}: {why}", .path.display())]
+    Layered {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        why: String,
+    },
     /// Outside the workspace (named by a project from the page).
     #[error("{} is outside the workspace {}: the studio reads a project's picture only inside its folder", .path.display(), .workspace.display())]
     Outside {
@@ -70,6 +78,9 @@ impl From<TextureError> for String {
 /// [`MAX_PICTURE_BYTES`].
 pub fn read_texture(path: &Path, name: &str) -> Result<Texture, TextureError> {
     let bytes = read_regular(path, MAX_PICTURE_BYTES)?;
+    if crate::parts::layered_format(&bytes).is_some() {
+        return layered_texture(path, name, &bytes);
+    }
     let image = raster::decode_image(&bytes).map_err(|source| TextureError::Decode {
         path: path.to_path_buf(),
         source,
@@ -84,6 +95,31 @@ pub fn read_texture(path: &Path, name: &str) -> Result<Texture, TextureError> {
         image,
         bytes,
         content_type,
+    })
+}
+
+/// A layered picture's texture: its layers packed into one picture as
+/// [`crate::parts::atlas`] packs them (the same file always gives the same atlas).
+fn layered_texture(path: &Path, name: &str, bytes: &[u8]) -> Result<Texture, TextureError> {
+    let layered = || -> Result<Image, String> {
+        let layered = crate::parts::read_layered(bytes).map_err(|e| e.to_string())?;
+        Ok(crate::parts::atlas(&layered.layers)
+            .map_err(|e| e.to_string())?
+            .0)
+    };
+    let image = layered().map_err(|why| TextureError::Layered {
+        path: path.to_path_buf(),
+        why,
+    })?;
+    let bytes = raster::encode_png(&image).map_err(|source| TextureError::Decode {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(Texture {
+        name: name.to_owned(),
+        image,
+        bytes,
+        content_type: "image/png",
     })
 }
 
@@ -353,8 +389,68 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
                 notes,
             })
         }
+        "psd" | "ora" => {
+            let name = name_in(workspace, file);
+            let bytes = read_regular(file, MAX_PICTURE_BYTES).map_err(|e| e.to_string())?;
+            let (project, texture, layered_notes) =
+                layered_project(&bytes, name).map_err(|e| format!("{shown}: {e}"))?;
+            notes.extend(layered_notes);
+            Ok(Opened {
+                project,
+                texture: Some(Arc::new(texture)),
+                project_file: None,
+                notes,
+            })
+        }
         _ => Err(format!(
-            "{shown}: the studio opens a project (.json), a mesh (.obj, .off) or a picture (.png, .jpg)"
+            "{shown}: the studio opens a project (.json), a mesh (.obj, .off), a picture (.png, .jpg) or a layered picture (.psd, .ora)"
         )),
     }
+}
+
+/// A project of a character in parts from a layered picture's bytes (see [`crate::parts`]):
+/// one part per visible layer, its texture the layers' atlas (named `name`, the layered file),
+/// joints where the layers overlap. Also what was left out, in words.
+///
+/// # Errors
+/// The layered picture's or the character's, in one line.
+pub fn layered_project(
+    bytes: &[u8],
+    name: String,
+) -> Result<(Project, Texture, Vec<String>), String> {
+    let layered = crate::parts::read_layered(bytes).map_err(|e| e.to_string())?;
+    let c = crate::parts::character(&layered, &crate::parts::CharacterOptions::default())
+        .map_err(|e| e.to_string())?;
+    let mut project = Project::new(&c.mesh, Some(c.texcoords.clone()));
+    project.texture = Some(name.clone());
+    project.parts = Some(
+        c.parts
+            .iter()
+            .map(|p| super::project::PartData {
+                name: p.name.clone(),
+                vertices: p.vertices,
+                faces: p.faces,
+            })
+            .collect(),
+    );
+    if !c.joints.is_empty() {
+        project.joints = Some(c.joints.iter().map(|j| j.vertices).collect());
+    }
+    let png = raster::encode_png(&c.atlas).map_err(|e| e.to_string())?;
+    let mut notes = c.notes;
+    notes.push(format!(
+        "{} parts and {} joints from the layers",
+        c.parts.len(),
+        c.joints.len()
+    ));
+    Ok((
+        project,
+        Texture {
+            name,
+            image: c.atlas,
+            bytes: png,
+            content_type: "image/png",
+        },
+        notes,
+    ))
 }

@@ -89,6 +89,64 @@ pub struct Project {
     /// [`crate::deform::Deformer::set_stiffness`]). `None`: all 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<Vec<f64>>,
+    /// A character's parts (one per layer of the layered picture it was made from), bottom
+    /// first: each a range of vertices and of triangles. `None`: one mesh, no parts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parts: Option<Vec<PartData>>,
+    /// Joints: pairs of vertices (of different pieces) that stay together. Posing treats them
+    /// as one vertex; the animation places each piece so that they meet (see
+    /// [`crate::parts`]). `None`: no joints.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joints: Option<Vec<[u32; 2]>>,
+}
+
+/// A part of a character: a layer's mesh within the project's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartData {
+    /// The layer's name.
+    pub name: String,
+    /// Its vertices, `[first, end)`.
+    pub vertices: [u32; 2],
+    /// Its triangles, `[first, end)` (parts are drawn in triangle order).
+    pub faces: [u32; 2],
+}
+
+/// Whether `parts` are in order, within `n` vertices and `m` triangles, and do not overlap.
+pub fn check_parts(parts: Option<&[PartData]>, n: usize, m: usize) -> Result<(), String> {
+    let Some(parts) = parts else { return Ok(()) };
+    let (mut v, mut f) = (0u32, 0u32);
+    for p in parts {
+        if p.name.len() > 1000 {
+            return Err("a part's name is longer than 1000 bytes".into());
+        }
+        let ok = p.vertices[0] >= v
+            && p.vertices[0] <= p.vertices[1]
+            && p.vertices[1] as usize <= n
+            && p.faces[0] >= f
+            && p.faces[0] <= p.faces[1]
+            && p.faces[1] as usize <= m;
+        if !ok {
+            return Err(format!(
+                "part '{}': its vertices or triangles are out of order or beyond the mesh's",
+                p.name
+            ));
+        }
+        (v, f) = (p.vertices[1], p.faces[1]);
+    }
+    Ok(())
+}
+
+/// Whether `joints` name two different vertices each, within `n`.
+pub fn check_joints(joints: Option<&[[u32; 2]]>, n: usize) -> Result<(), String> {
+    let Some(joints) = joints else { return Ok(()) };
+    for &[a, b] in joints {
+        if a as usize >= n || b as usize >= n || a == b {
+            return Err(format!(
+                "a joint ties vertices {a} and {b}: two different vertices of the {n} are needed"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The deepest depth level either way (levels run from `-MAX_DEPTH` to `MAX_DEPTH`).
@@ -349,6 +407,8 @@ impl Project {
             loop_range: None,
             depth: None,
             stiffness: None,
+            parts: None,
+            joints: None,
         }
     }
 
@@ -449,6 +509,12 @@ impl Project {
             return damaged(e);
         }
         if let Err(e) = check_stiffness(self.stiffness.as_deref(), m) {
+            return damaged(e);
+        }
+        if let Err(e) = check_parts(self.parts.as_deref(), n, m) {
+            return damaged(e);
+        }
+        if let Err(e) = check_joints(self.joints.as_deref(), n) {
             return damaged(e);
         }
         let mut last = f64::NEG_INFINITY;

@@ -1085,6 +1085,10 @@ impl Session {
         project.mesh = super::edit::mesh_data(&meshed.mesh, uv);
         project.outline = outline;
         project.keyframes = carried.keyframes;
+        // A mesh made again from an outline is one mesh: a character's parts and joints do not
+        // carry over to it.
+        project.parts = None;
+        project.joints = None;
         // The depth and stiffness painted go to the new triangles over the old ones.
         if project.depth.is_some() || project.stiffness.is_some() {
             let map = super::carry::carry_faces(&self.engine.rest, &meshed.mesh);
@@ -1303,7 +1307,7 @@ impl Session {
     fn open_work(&self, name: &str) -> Result<Work, String> {
         if kind_of(name).is_none() {
             return Err(format!(
-                "{name}: the studio opens pictures (.png, .jpg), meshes (.obj, .off), outlines (.svg, .poly) and projects (.json)"
+                "{name}: the studio opens pictures (.png, .jpg), layered pictures (.psd, .ora), meshes (.obj, .off), outlines (.svg, .poly) and projects (.json)"
             ));
         }
         let path = self.workspace.file(name, &[])?;

@@ -272,6 +272,7 @@ pub fn kind_of(name: &str) -> Option<&'static str> {
     let ext = lower.rsplit_once('.').map(|(_, e)| e)?;
     Some(match ext {
         "png" | "jpg" | "jpeg" => "picture",
+        "psd" | "ora" => "layered picture",
         "obj" | "off" => "mesh",
         "svg" | "poly" => "outline",
         "json" => "project",

@@ -826,3 +826,20 @@ pub fn depth_reader(bytes: &[u8]) {
         Err(e) => one_line(&e.to_string()),
     }
 }
+
+/// A layered picture (PSD or OpenRaster, arbitrary bytes): layers with whole pixel buffers
+/// within the canvas's reach, or a one-line error.
+pub fn layered_reader(bytes: &[u8]) {
+    match bdmorph::parts::read_layered(bytes) {
+        Ok(l) => {
+            assert!(!l.layers.is_empty());
+            assert!(l.width > 0 && l.height > 0);
+            for layer in &l.layers {
+                let (w, h) = (layer.image.width as usize, layer.image.height as usize);
+                assert!(w > 0 && h > 0);
+                assert_eq!(layer.image.rgba.len(), w * h * 4);
+            }
+        }
+        Err(e) => one_line(&e.to_string()),
+    }
+}

@@ -129,26 +129,14 @@ fn png(width: u32, height: u32, rgba: &[u8]) -> Vec<u8> {
     .expect("png")
 }
 
-/// An OpenRaster file of `layers` (bottom first): each layer's PNG cropped to its pixels and
-/// placed by x and y; hidden ones marked; the last `grouped` layers inside a group `arms`.
-pub fn write_ora(layers: &[TestLayer], grouped: usize) -> Vec<u8> {
+/// The `stack.xml` of [`write_ora`].
+pub fn ora_stack(layers: &[TestLayer], grouped: usize) -> String {
     let (w, h) = FIGURE_SIZE;
-    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    let stored =
-        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
-    let deflated = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated);
-    zip.start_file("mimetype", stored).expect("zip");
-    zip.write_all(b"image/openraster").expect("zip");
     let mut entries = Vec::new();
     for (i, l) in layers.iter().enumerate() {
         let b = bounds(&l.rgba, w, h);
-        let src = format!("data/layer{i}.png");
-        zip.start_file(&src, deflated).expect("zip");
-        zip.write_all(&png(b[2] - b[0], b[3] - b[1], &crop(&l.rgba, w, b)))
-            .expect("zip");
         entries.push(format!(
-            "<layer name=\"{}\" src=\"{src}\" x=\"{}\" y=\"{}\" visibility=\"{}\" opacity=\"1.0\"/>",
+            "<layer name=\"{}\" src=\"data/layer{i}.png\" x=\"{}\" y=\"{}\" visibility=\"{}\" opacity=\"1.0\"/>",
             l.name,
             b[0],
             b[1],
@@ -167,8 +155,34 @@ pub fn write_ora(layers: &[TestLayer], grouped: usize) -> Vec<u8> {
     }
     xml.push_str(&outer.concat());
     xml.push_str("</stack></image>");
+    xml
+}
+
+/// An OpenRaster file of `layers` (bottom first): each layer's PNG cropped to its pixels and
+/// placed by x and y; hidden ones marked; the last `grouped` layers inside a group `arms`.
+pub fn write_ora(layers: &[TestLayer], grouped: usize) -> Vec<u8> {
+    ora_with_stack(layers, ora_stack(layers, grouped).as_bytes())
+}
+
+/// An OpenRaster file of `layers`' PNGs (`data/layer{i}.png`) with `stack` as its stack.xml.
+pub fn ora_with_stack(layers: &[TestLayer], stack: &[u8]) -> Vec<u8> {
+    let (w, h) = FIGURE_SIZE;
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let stored =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    let deflated = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    zip.start_file("mimetype", stored).expect("zip");
+    zip.write_all(b"image/openraster").expect("zip");
+    for (i, l) in layers.iter().enumerate() {
+        let b = bounds(&l.rgba, w, h);
+        zip.start_file(format!("data/layer{i}.png"), deflated)
+            .expect("zip");
+        zip.write_all(&png(b[2] - b[0], b[3] - b[1], &crop(&l.rgba, w, b)))
+            .expect("zip");
+    }
     zip.start_file("stack.xml", deflated).expect("zip");
-    zip.write_all(xml.as_bytes()).expect("zip");
+    zip.write_all(stack).expect("zip");
     zip.finish().expect("zip").into_inner()
 }
 

@@ -364,3 +364,16 @@ fn a_morph_between_two_poses_keeps_the_tree_of_joints_together() {
     }
     assert!(worst_gap <= 1e-12 * size, "joints apart by {worst_gap}");
 }
+
+/// Writes the test figure as `figure.psd` and `figure.ora` into `BDMORPH_FIGURE_DIR` (for trying
+/// the studio and the command line by hand): `BDMORPH_FIGURE_DIR=/tmp/f cargo test --test parts
+/// write_the_figure -- --ignored`.
+#[test]
+#[ignore = "writes files for trying by hand"]
+fn write_the_figure() {
+    let dir =
+        std::path::PathBuf::from(std::env::var("BDMORPH_FIGURE_DIR").expect("BDMORPH_FIGURE_DIR"));
+    std::fs::create_dir_all(&dir).expect("dir");
+    std::fs::write(dir.join("figure.psd"), write_psd(&figure())).expect("psd");
+    std::fs::write(dir.join("figure.ora"), write_ora(&figure(), 0)).expect("ora");
+}

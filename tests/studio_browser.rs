@@ -10,6 +10,7 @@
 //! Without Chromium the tests are skipped, except in CI (`CI` set), where they fail: CI
 //! installs Chromium. Screenshots go to a scratch folder, printed, and kept.
 
+mod layered;
 mod studio_common;
 
 use std::ffi::OsStr;
@@ -2612,4 +2613,220 @@ fn a_stiff_region_keeps_its_shape_under_every_method() {
         page.wait("studio.pins.length === 0", 20);
         page.settle();
     }
+}
+
+/// The vertex range `[first, end)` of the part named `name` in the page's state.
+fn part_range(page: &PageTab, name: &str) -> [usize; 2] {
+    let r = page.eval(&format!(
+        "studio.state.parts.find((p) => p.name === '{name}').vertices"
+    ));
+    [
+        r[0].as_u64().expect("first") as usize,
+        r[1].as_u64().expect("end") as usize,
+    ]
+}
+
+/// The vertex of `range` (of the rest shape) with the least `key(x, y)`.
+fn extreme_of(page: &PageTab, range: [usize; 2], key: &str) -> usize {
+    page.num(&format!(
+        "(() => {{ let best = -1, bk = Infinity; for (let v = {}; v < {}; v++) {{ const x = studio.rest[2 * v], y = studio.rest[2 * v + 1]; const k = {key}; if (k < bk) {{ bk = k; best = v; }} }} return best; }})()",
+        range[0], range[1]
+    )) as usize
+}
+
+/// A character from a layered picture: its six parts drawn in their own colours, posed by the
+/// hand (the forearm and the upper arm follow, the joints hold), scrubbed (the joints stay
+/// together between the keyframes), and exported on transparency as the command line renders
+/// it.
+#[test]
+fn a_layered_character_poses_by_the_hand_and_exports_on_transparency() {
+    let Some(browser) = browser() else { return };
+    let dir = scratch("42-parts");
+    std::fs::write(
+        dir.join("figure.psd"),
+        layered::write_psd(&layered::figure()),
+    )
+    .expect("psd");
+    let studio = Studio::start(&dir, Some("figure.psd"));
+    let page = PageTab::open(&browser, &studio.url, &dir);
+    page.wait(
+        "!!studio.texture && !!studio.state && !!studio.state.parts",
+        30,
+    );
+    assert_eq!(page.num("studio.state.parts.length"), 6.0);
+    assert_eq!(page.num("studio.state.joints.length"), 5.0);
+    if page.eval("document.getElementById('edges').checked") == true {
+        page.click_on("#edges");
+    }
+    page.settle();
+    let shot = page.shot("42-parts-0-opened.png");
+    for (name, colour) in layered::COLOURS {
+        let near = |c: [u8; 3]| c.iter().zip(colour).all(|(&a, b)| a.abs_diff(b) < 40);
+        assert!(shot.count_in(page.canvas(), near) > 100, "{name} is drawn");
+    }
+
+    // The parts panel lists them front first; the head drawn behind the torso by its arrow
+    // shows less yellow, and undo brings it back in front.
+    assert!(page.shown("#parts-panel"));
+    let rows = page.eval("[...document.querySelectorAll('.part-row')].map((r) => r.dataset.part)");
+    assert_eq!(
+        rows,
+        serde_json::json!([
+            "forearm_r",
+            "upper_arm_r",
+            "forearm_l",
+            "upper_arm_l",
+            "head",
+            "torso"
+        ])
+    );
+    let yellow = |c: [u8; 3]| c[0] > 190 && c[1] > 160 && c[2] < 90;
+    let before = shot.count_in(page.canvas(), yellow);
+    page.click_on(".part-row[data-part='head'] button[title^='Draw behind']");
+    page.wait("studio.state.parts[0].name === 'head'", 20);
+    page.settle();
+    let behind = page
+        .shot("42-parts-0b-head-behind.png")
+        .count_in(page.canvas(), yellow);
+    assert!(
+        behind + 150 < before,
+        "the torso covers the neck: {before} -> {behind}"
+    );
+    assert!(page
+        .eval("studio.state.undo")
+        .as_str()
+        .unwrap_or("")
+        .contains("draw"));
+    page.undo();
+    page.wait("studio.state.parts[1].name === 'head'", 20);
+    // Hidden while editing: the right forearm's magenta is gone from the canvas, then back.
+    let magenta = |c: [u8; 3]| c[0] > 170 && c[1] < 80 && c[2] > 170;
+    page.click_on(".part-row[data-part='forearm_r'] button[title^='Hide']");
+    page.settle();
+    assert_eq!(
+        page.shot("42-parts-0c-hidden.png")
+            .count_in(page.canvas(), magenta),
+        0
+    );
+    page.click_on(".part-row[data-part='forearm_r'] button[title^='Show']");
+    page.settle();
+    assert!(
+        page.shot("42-parts-0d-shown.png")
+            .count_in(page.canvas(), magenta)
+            > 100
+    );
+    // Locked: a click on its vertex pins nothing.
+    page.click_on(".part-row[data-part='head'] button[title^='Lock']");
+    let head = part_range(&page, "head");
+    let top = extreme_of(&page, head, "-y");
+    page.click(page.vertex(top));
+    page.settle();
+    assert_eq!(
+        page.num("studio.pins.length"),
+        0.0,
+        "a locked part takes no pin"
+    );
+    page.click_on(".part-row[data-part='head'] button[title^='Unlock']");
+
+    // A second keyframe, posed by the hand: the torso's lower corners pinned, the hand raised.
+    page.click_on("#add-key");
+    page.wait(
+        "studio.state.current === 1 && studio.showing === 'pose'",
+        20,
+    );
+    let torso = part_range(&page, "torso");
+    let forearm = part_range(&page, "forearm_l");
+    let hand = extreme_of(&page, forearm, "x");
+    for corner in [
+        extreme_of(&page, torso, "y - x"),
+        extreme_of(&page, torso, "y + x"),
+    ] {
+        page.click(page.vertex(corner));
+        page.wait(&format!("studio.pins.includes({corner})"), 20);
+    }
+    let from = page.vertex(hand);
+    page.drag(from, [from[0] + 20.0, from[1] - 90.0], 40);
+    page.wait(&format!("studio.pins.includes({hand})"), 20);
+    page.settle();
+    page.shot("42-parts-1-posed.png");
+    let saved: serde_json::Value =
+        serde_json::from_slice(&document(&studio, &dir, "figure.json")).expect("json");
+    let doc = Project::from_json(&std::fs::read(dir.join("figure.json")).expect("saved"))
+        .expect("project");
+    assert_eq!(saved["parts"].as_array().map(Vec::len), Some(6));
+    let posed = &doc.keyframes[1].positions;
+    let size = doc.rest().diameter();
+    for &[a, b] in doc.joints.as_ref().expect("joints") {
+        let (p, q) = (posed[a as usize], posed[b as usize]);
+        assert!(
+            (p[0] - q[0]).hypot(p[1] - q[1]) <= 1e-9 * size,
+            "a joint came apart in the pose"
+        );
+    }
+    let moved = |range: [usize; 2]| {
+        (range[0]..range[1])
+            .map(|v| {
+                let (a, b) = (doc.mesh.positions[v], posed[v]);
+                (a[0] - b[0]).hypot(a[1] - b[1])
+            })
+            .fold(0.0, f64::max)
+    };
+    let upper = part_range(&page, "upper_arm_l");
+    assert!(moved(forearm) > 20.0, "the forearm follows the hand");
+    assert!(moved(upper) > 3.0, "the upper arm follows the forearm");
+
+    // Scrubbed halfway: the frame's joints are together (to the page's f32 precision).
+    page.slide_to(0.5);
+    page.wait("studio.showing === 'frame'", 20);
+    page.settle();
+    page.shot("42-parts-2-halfway.png");
+    let gap = page.num(
+        "Math.max(...studio.state.joints.map(([a, b]) => Math.hypot(studio.pose[2 * a] - studio.pose[2 * b], studio.pose[2 * a + 1] - studio.pose[2 * b + 1])))",
+    );
+    assert!(gap < 1e-3, "joints apart by {gap} pixels halfway");
+
+    // Exported on transparency from the page, and rendered by the command line: the same.
+    page.click_on("#export-open");
+    page.set_value("#export-format", "sheet");
+    page.set_value("#export-name", "page-sheet.png");
+    page.set_value("#export-background", "transparent");
+    page.set_value("#export-width", "200");
+    page.set_value("#export-height", "160");
+    page.click_on("#export");
+    page.wait(
+        "document.getElementById('notes').textContent.includes('exported')",
+        120,
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+        .current_dir(&dir)
+        .args(["render", "figure.json", "-o", "cli-sheet.png", "--sheet"])
+        .args(["--background", "transparent", "--size", "200x160"])
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page_sheet = raster::read_image(dir.join("page-sheet.png")).expect("page's sheet");
+    let cli_sheet = raster::read_image(dir.join("cli-sheet.png")).expect("command line's");
+    assert!(
+        page_sheet.rgba == cli_sheet.rgba,
+        "the same frames, pixel for pixel"
+    );
+    let transparent = page_sheet
+        .rgba
+        .chunks_exact(4)
+        .filter(|p| p[3] == 0)
+        .count();
+    let red = page_sheet
+        .rgba
+        .chunks_exact(4)
+        .filter(|p| p[3] > 200 && p[0] > 180 && p[1] < 80 && p[2] < 80)
+        .count();
+    assert!(
+        transparent * 2 > page_sheet.rgba.len() / 4,
+        "mostly transparent around"
+    );
+    assert!(red > 200, "the forearm is in every frame");
 }

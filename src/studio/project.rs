@@ -111,29 +111,96 @@ pub struct PartData {
     pub faces: [u32; 2],
 }
 
-/// Whether `parts` are in order, within `n` vertices and `m` triangles, and do not overlap.
+/// Whether `parts` lie within `n` vertices and `m` triangles and do not share any.
 pub fn check_parts(parts: Option<&[PartData]>, n: usize, m: usize) -> Result<(), String> {
     let Some(parts) = parts else { return Ok(()) };
-    let (mut v, mut f) = (0u32, 0u32);
     for p in parts {
         if p.name.len() > 1000 {
             return Err("a part's name is longer than 1000 bytes".into());
         }
-        let ok = p.vertices[0] >= v
-            && p.vertices[0] <= p.vertices[1]
+        let ok = p.vertices[0] <= p.vertices[1]
             && p.vertices[1] as usize <= n
-            && p.faces[0] >= f
             && p.faces[0] <= p.faces[1]
             && p.faces[1] as usize <= m;
         if !ok {
             return Err(format!(
-                "part '{}': its vertices or triangles are out of order or beyond the mesh's",
+                "part '{}': its vertices or triangles are beyond the mesh's",
                 p.name
             ));
         }
-        (v, f) = (p.vertices[1], p.faces[1]);
+    }
+    for range in [|p: &PartData| p.vertices, |p: &PartData| p.faces] {
+        let mut spans: Vec<[u32; 2]> = parts.iter().map(range).collect();
+        spans.sort_unstable();
+        if spans.windows(2).any(|w| w[1][0] < w[0][1]) {
+            return Err("two parts share vertices or triangles".into());
+        }
     }
     Ok(())
+}
+
+/// `doc` with its parts drawn in `order` (indices into its parts, bottom first, each once):
+/// the triangles regrouped part by part in that order (the depth and stiffness painted go
+/// with them), the parts listed in it. Also the edit's label.
+pub fn with_part_order(doc: &Project, order: &[u32]) -> Result<(Project, String), String> {
+    let parts = doc.parts.as_deref().ok_or("the document has no parts")?;
+    let mut seen = vec![false; parts.len()];
+    if order.len() != parts.len()
+        || order.iter().any(|&i| {
+            let fresh = seen.get(i as usize).is_some_and(|s| !s);
+            if fresh {
+                seen[i as usize] = true;
+            }
+            !fresh
+        })
+    {
+        return Err(format!(
+            "a draw order lists each of the {} parts once",
+            parts.len()
+        ));
+    }
+    let m = doc.mesh.faces.len();
+    // New triangle order: the parts' triangles in the new order, then any outside every part.
+    let mut in_part = vec![false; m];
+    let mut old_of_new: Vec<usize> = Vec::with_capacity(m);
+    let mut new_parts = Vec::with_capacity(parts.len());
+    for &i in order {
+        let p = &parts[i as usize];
+        let first = old_of_new.len() as u32;
+        for f in p.faces[0]..p.faces[1] {
+            in_part[f as usize] = true;
+            old_of_new.push(f as usize);
+        }
+        new_parts.push(PartData {
+            name: p.name.clone(),
+            vertices: p.vertices,
+            faces: [first, old_of_new.len() as u32],
+        });
+    }
+    old_of_new.extend((0..m).filter(|&f| !in_part[f]));
+    let mut out = doc.clone();
+    out.mesh.faces = old_of_new.iter().map(|&f| doc.mesh.faces[f]).collect();
+    out.depth = doc
+        .depth
+        .as_ref()
+        .map(|d| old_of_new.iter().map(|&f| d[f]).collect());
+    out.stiffness = doc
+        .stiffness
+        .as_ref()
+        .map(|w| old_of_new.iter().map(|&f| w[f]).collect());
+    out.parts = Some(new_parts);
+    // The label names the part that moved the most places.
+    let moved = order
+        .iter()
+        .enumerate()
+        .max_by_key(|&(at, &i)| (at as i64 - i64::from(i)).abs())
+        .map(|(at, &i)| (parts[i as usize].name.clone(), at as i64 - i64::from(i)));
+    let label = match moved {
+        Some((name, d)) if d > 0 => format!("draw {name} further in front"),
+        Some((name, d)) if d < 0 => format!("draw {name} further behind"),
+        _ => "draw order".to_owned(),
+    };
+    Ok((out, label))
 }
 
 /// Whether `joints` name two different vertices each, within `n`.

@@ -246,6 +246,12 @@ pub enum Request {
         /// The weight.
         weight: f64,
     },
+    /// A character's draw order (one undo step): `order` lists the parts (by their index in
+    /// the document's list) bottom first; each is drawn over the ones before it.
+    PartOrder {
+        /// Every part once, bottom first.
+        order: Vec<u32>,
+    },
     /// The range playback loops over, `[from, to]` seconds, or `null` for the whole animation.
     LoopRange {
         /// The range.

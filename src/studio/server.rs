@@ -57,6 +57,7 @@ const FILES: &[(&str, &str, &str)] = &[
     ),
     ("pose.js", include_str!("page/pose.js"), "text/javascript"),
     ("paint.js", include_str!("page/paint.js"), "text/javascript"),
+    ("parts.js", include_str!("page/parts.js"), "text/javascript"),
     (
         "outline.js",
         include_str!("page/outline.js"),

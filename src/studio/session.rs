@@ -1423,6 +1423,8 @@ impl Session {
             "vertices": self.doc.mesh.positions.len(),
             "faces": self.doc.mesh.faces.len(),
             "pieces": self.engine.pieces.vertices.len(),
+            "parts": self.doc.parts,
+            "joints": self.doc.joints,
             "keyframes": keys,
             "current": self.view.current,
             "shown": shown,
@@ -1864,6 +1866,10 @@ impl Session {
                 }
             }
             Request::PaintDepth { faces, all, level } => self.paint_depth(&faces, all, level)?,
+            Request::PartOrder { order } => {
+                let (project, label) = super::project::with_part_order(&self.doc, &order)?;
+                self.commit(label, Edit::Document(Box::new(project)))?
+            }
             Request::PaintStiffness { faces, all, weight } => {
                 self.paint_stiffness(&faces, all, weight)?
             }

@@ -67,7 +67,7 @@ pub fn figure() -> Vec<TestLayer> {
         shape(
             "head",
             COLOURS[1].1,
-            capsule([150.0, 38.0], [150.0, 40.0], 24.0),
+            capsule([150.0, 44.0], [150.0, 46.0], 24.0),
         ),
         shape(
             "upper_arm_l",

@@ -95,6 +95,8 @@ function make() {
   const vertexOf = (c) => S.faces[3 * faceOf(c) + (c % 3)];
   const expand = (src, out) => {
     for (let c = 0; c < corners; c++) {
+      // A hidden part's triangles collapse to a point: nothing is drawn for them.
+      if (S.faceHidden && S.faceHidden[faceOf(c)]) { out[2 * c] = 0; out[2 * c + 1] = 0; continue; }
       const v = vertexOf(c);
       out[2 * c] = src[2 * v];
       out[2 * c + 1] = src[2 * v + 1];

@@ -13,6 +13,7 @@ import { syncLayout } from "./layout.js";
 import { drawKeyPanel } from "./easing.js";
 import "./shortcuts.js";
 import { setPaint } from "./paint.js";
+import { drawPartsPanel } from "./parts.js";
 
 on("paint", ({ depth, stiffness }) => {
   setPaint(depth, stiffness);
@@ -57,6 +58,7 @@ on("state", (st) => {
   syncLayout();
   drawTimeline();
   drawKeyPanel();
+  drawPartsPanel();
 });
 
 on("error", (msg) => {

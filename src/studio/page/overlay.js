@@ -6,6 +6,7 @@ import { S, $, ctx, canvas, dpr, toCanvas, onDraw } from "./view.js";
 import { GL } from "./gl.js";
 import { drawGhosts } from "./onion.js";
 import { drawPins, drawAids, drawPinPanel } from "./pose.js";
+import { drawJoints } from "./parts.js";
 import { drawPaint } from "./paint.js";
 
 const PIECE_COLOURS = ["#1f77b4", "#e6550d", "#31a354", "#756bb1", "#d62728", "#8c564b", "#e377c2", "#17becf"];
@@ -166,6 +167,7 @@ onDraw(() => {
   drawPieces();
   drawFlips();
   drawAnchors();
+  drawJoints();
   drawAids();
   drawPins();
   drawPinPanel();

@@ -17,6 +17,8 @@ import { send, request } from "./net.js";
 function nearestVertex(px, py, radius) {
   let best = -1, bestD = radius * radius;
   for (let v = 0; v < S.n; v++) {
+    // A locked part's vertices take no new pin.
+    if (S.vertexLocked && S.vertexLocked[v]) continue;
     const [x, y] = toCanvas(S.pose[2 * v], S.pose[2 * v + 1]);
     const d = (x - px) ** 2 + (y - py) ** 2;
     if (d < bestD) { bestD = d; best = v; }

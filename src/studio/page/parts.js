@@ -1,0 +1,114 @@
+// The parts panel, for a character made from a layered picture: one row per part, front
+// first (as layer panels list them), with its name (a click selects the pins on it), an eye
+// (shown or hidden while editing; every export draws every part), a lock (its vertices take no
+// new pin) and two arrows that change the draw order (one undoable step on the server). The
+// joints are drawn on the canvas as small rings, where two parts are tied.
+
+import { S, $, ctx, dpr, toCanvas, redraw } from "./view.js";
+import { send } from "./net.js";
+
+S.hiddenParts = new Set();   // part names hidden on the page
+S.lockedParts = new Set();   // part names whose vertices take no new pin
+S.faceHidden = null;         // Uint8Array m: 1 for a triangle of a hidden part, or null
+S.vertexLocked = null;       // Uint8Array n: 1 for a vertex of a locked part, or null
+
+// The per-triangle and per-vertex masks from the sets, for the drawing and the picking.
+function syncMasks() {
+  const parts = (S.state && S.state.parts) || [];
+  S.faceHidden = null;
+  S.vertexLocked = null;
+  for (const p of parts) {
+    if (S.hiddenParts.has(p.name)) {
+      if (!S.faceHidden) S.faceHidden = new Uint8Array(S.m);
+      S.faceHidden.fill(1, p.faces[0], Math.min(p.faces[1], S.m));
+    }
+    if (S.lockedParts.has(p.name)) {
+      if (!S.vertexLocked) S.vertexLocked = new Uint8Array(S.n);
+      S.vertexLocked.fill(1, p.vertices[0], Math.min(p.vertices[1], S.n));
+    }
+  }
+}
+
+function button(text, title, onclick, on = false) {
+  const b = document.createElement("button");
+  b.textContent = text;
+  b.title = title;
+  b.className = "part-button" + (on ? " on" : "");
+  b.onclick = onclick;
+  return b;
+}
+
+// Moves part `i` (in the document's bottom-first list) `by` places towards the front.
+function move(i, by) {
+  const n = S.state.parts.length;
+  const order = Array.from({ length: n }, (_, k) => k);
+  const j = i + by;
+  if (j < 0 || j >= n) return;
+  [order[i], order[j]] = [order[j], order[i]];
+  send({ op: "part_order", order });
+}
+
+export function drawPartsPanel() {
+  const parts = (S.state && S.state.parts) || null;
+  $("parts-panel").hidden = !parts || S.state.mode === "outline";
+  syncMasks();
+  if (!parts) return;
+  const key = JSON.stringify([parts, [...S.hiddenParts], [...S.lockedParts]]);
+  if ($("part-list").dataset.key === key) return;
+  $("part-list").dataset.key = key;
+  const list = $("part-list");
+  list.replaceChildren();
+  // Front first, as layer panels list them.
+  for (let i = parts.length - 1; i >= 0; i--) {
+    const p = parts[i];
+    const row = document.createElement("div");
+    row.className = "part-row";
+    row.dataset.part = p.name;
+    const name = document.createElement("span");
+    name.className = "part-name";
+    name.textContent = p.name;
+    name.title = "Select the pins on this part (to turn or scale them with the handles)";
+    name.onclick = () => {
+      S.selected.clear();
+      for (const v of S.pins) if (v >= p.vertices[0] && v < p.vertices[1]) S.selected.add(v);
+      S.flash = { text: S.selected.size ? `${S.selected.size} pins on ${p.name} selected` : `no pins on ${p.name}: pin it to pose it`, until: performance.now() + 2500 };
+      setTimeout(redraw, 2600);
+      redraw();
+    };
+    const hidden = S.hiddenParts.has(p.name), locked = S.lockedParts.has(p.name);
+    row.append(
+      button(hidden ? "◌" : "●", hidden ? "Show this part" : "Hide this part while editing (exports draw every part)", () => {
+        if (hidden) S.hiddenParts.delete(p.name); else S.hiddenParts.add(p.name);
+        drawPartsPanel();
+        redraw();
+      }, !hidden),
+      button(locked ? "⊠" : "□", locked ? "Unlock: its vertices take pins again" : "Lock: its vertices take no new pin", () => {
+        if (locked) S.lockedParts.delete(p.name); else S.lockedParts.add(p.name);
+        drawPartsPanel();
+      }, locked),
+      name,
+      button("▲", "Draw in front of the part above", () => move(i, 1)),
+      button("▼", "Draw behind the part below", () => move(i, -1)),
+    );
+    list.append(row);
+  }
+}
+
+// The joints: a ring where two parts are tied.
+export function drawJoints() {
+  const joints = S.state && S.state.joints;
+  if (!joints || !$("joints-shown").checked || !S.pose) return;
+  ctx.setTransform(1, 0, 0, 1, 0, 0);
+  ctx.lineWidth = 2 * dpr();
+  ctx.strokeStyle = "rgba(255, 255, 255, 0.95)";
+  ctx.fillStyle = "rgba(20, 20, 20, 0.6)";
+  for (const [a] of joints) {
+    const [x, y] = toCanvas(S.pose[2 * a], S.pose[2 * a + 1]);
+    ctx.beginPath();
+    ctx.arc(x, y, 4 * dpr(), 0, 2 * Math.PI);
+    ctx.fill();
+    ctx.stroke();
+  }
+}
+
+$("joints-shown").addEventListener("change", redraw);

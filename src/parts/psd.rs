@@ -142,7 +142,14 @@ pub fn read_psd(bytes: &[u8]) -> Result<Layered, LayersError> {
     // The crate decodes a layer to the whole canvas at a time.
     spend.take(canvas, true)?;
     let psd = quietly(|| psd::Psd::from_bytes(bytes))
-        .map_err(|p| damaged(panic_text(p.as_ref())))?
+        .map_err(|p| {
+            let text = panic_text(p.as_ref());
+            if text.contains("Zip compression") {
+                unsupported("ZIP-compressed channels; save with RLE compression (Photoshop's own)")
+            } else {
+                damaged(text)
+            }
+        })?
         .map_err(|e| damaged(e.to_string()))?;
     let groups = psd.groups();
     // A group's path of names and whether it and every group around it are visible.

@@ -63,6 +63,8 @@ pub mod morph;
 pub use morph::{blend, path};
 pub mod param;
 pub mod parts;
+#[cfg(feature = "project")]
+pub mod project;
 pub mod reference;
 pub mod render;
 #[cfg(feature = "studio")]

@@ -384,7 +384,9 @@ fn imagemagick() -> Option<std::path::PathBuf> {
         let ok = std::process::Command::new(name)
             .arg("-version")
             .output()
-            .is_ok_and(|o| o.status.success() && String::from_utf8_lossy(&o.stdout).contains("ImageMagick"));
+            .is_ok_and(|o| {
+                o.status.success() && String::from_utf8_lossy(&o.stdout).contains("ImageMagick")
+            });
         if ok {
             return Some(name.into());
         }
@@ -397,7 +399,10 @@ fn imagemagick() -> Option<std::path::PathBuf> {
 #[test]
 fn a_psd_written_by_imagemagick_reads_as_written() {
     let Some(im) = imagemagick() else {
-        assert!(std::env::var_os("CI").is_none(), "ImageMagick is missing in CI");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "ImageMagick is missing in CI"
+        );
         eprintln!("ImageMagick is not installed: the PSD written by another program is not tried");
         return;
     };
@@ -418,7 +423,9 @@ fn a_psd_written_by_imagemagick_reads_as_written() {
         }
         let mut crop = Vec::new();
         for y in y0..y1 {
-            crop.extend_from_slice(&l.rgba[((y * w + x0) * 4) as usize..((y * w + x1) * 4) as usize]);
+            crop.extend_from_slice(
+                &l.rgba[((y * w + x0) * 4) as usize..((y * w + x1) * 4) as usize],
+            );
         }
         let file = dir.join(format!("{}.png", l.name));
         let png = bdmorph::render::raster::encode_png(&bdmorph::render::Image {
@@ -430,23 +437,58 @@ fn a_psd_written_by_imagemagick_reads_as_written() {
         std::fs::write(&file, png).expect("png");
         args.extend(["(", "-label", &l.name].map(String::from));
         args.push(file.display().to_string());
-        args.extend(["-set".into(), "page".into(), format!("+{x0}+{y0}"), ")".into()]);
+        args.extend([
+            "-set".into(),
+            "page".into(),
+            format!("+{x0}+{y0}"),
+            ")".into(),
+        ]);
     }
     // The composite first (ImageMagick writes the first image as the merged one), RLE.
-    args.extend(["(", "-clone", "0--1", "-background", "none", "-layers", "merge"].map(String::from));
-    args.extend(["-set".into(), "page".into(), format!("{w}x{h}+0+0"), "-extent".into(), format!("{w}x{h}"), ")".into()]);
+    args.extend(
+        [
+            "(",
+            "-clone",
+            "0--1",
+            "-background",
+            "none",
+            "-layers",
+            "merge",
+        ]
+        .map(String::from),
+    );
+    args.extend([
+        "-set".into(),
+        "page".into(),
+        format!("{w}x{h}+0+0"),
+        "-extent".into(),
+        format!("{w}x{h}"),
+        ")".into(),
+    ]);
     args.extend(["-insert", "0", "-compress", "RLE"].map(String::from));
     let out = dir.join("im.psd");
     args.push(out.display().to_string());
-    let run = std::process::Command::new(&im).args(&args).output().expect("ImageMagick runs");
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = std::process::Command::new(&im)
+        .args(&args)
+        .output()
+        .expect("ImageMagick runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let layered = read_layered(&std::fs::read(&out).expect("psd")).expect("reads");
     let names: Vec<&str> = layered.layers.iter().map(|l| l.name.as_str()).collect();
     assert_eq!(names, COLOURS.map(|c| c.0));
     assert_eq!((layered.layers[0].left, layered.layers[0].top), (125, 60));
     let mine = read_layered(&write_psd(&figure())).expect("mine");
     for (a, b) in layered.layers.iter().zip(&mine.layers) {
-        assert_eq!((a.left, a.top, &a.image), (b.left, b.top, &b.image), "{}", a.name);
+        assert_eq!(
+            (a.left, a.top, &a.image),
+            (b.left, b.top, &b.image),
+            "{}",
+            a.name
+        );
     }
     let c = character(&layered, &CharacterOptions::default()).expect("character");
     assert_eq!((c.parts.len(), c.joints.len()), (6, 5));

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import List, Literal, Optional, Sequence, Tuple, Type, Union, overload
+from typing import Dict, List, Literal, Optional, Sequence, Tuple, Type, Union, overload
 
 import numpy as np
 
@@ -49,6 +49,7 @@ __all__ = [
     "parameterize",
     "bounded_distortion",
     "Deformer",
+    "Project",
     "mesh_from_image",
     "read_mesh",
     "write_obj",
@@ -721,6 +722,69 @@ class Deformer:
 
 
 # ---- files and pictures -------------------------------------------------------------------
+
+# ---- projects -----------------------------------------------------------------------------
+
+class Project:
+    """A project the studio saved (or ``bdmorph mesh CHARACTER.psd -o project.json`` wrote),
+    animated as the studio plays and exports it: each keyframe's pose, the easing between
+    them, and for a character in parts (from a layered picture) each part's BDMORPH frame
+    placed so that the joints meet.
+
+    :meth:`frame` gives each part's positions by its name (``"mesh"`` for a project without
+    parts); :meth:`positions` every vertex's. :attr:`parts`, :attr:`joints` and
+    :attr:`draw_order` describe the character.
+
+    >>> import bdmorph                                   # doctest: +SKIP
+    >>> p = bdmorph.Project("figure.json")               # doctest: +SKIP
+    >>> p.draw_order                                     # doctest: +SKIP
+    ['torso', 'head', 'upper_arm_l', 'forearm_l', 'upper_arm_r', 'forearm_r']
+    >>> p.frame(0.5)["forearm_l"].shape                  # doctest: +SKIP
+    (182, 2)
+    """
+
+    def __init__(self, path) -> None:
+        self._p = _native.Project(str(path))
+
+    def rest(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The rest mesh ``(V, F)``: V ``n x 2``, F ``m x 3`` (parts' triangles in draw order)."""
+        return self._p.rest()
+
+    @property
+    def times(self) -> List[float]:
+        """The keyframes' times in seconds (the first is 0)."""
+        return self._p.times
+
+    @property
+    def duration(self) -> float:
+        """The last keyframe's time in seconds."""
+        return self._p.duration
+
+    @property
+    def parts(self) -> List[dict]:
+        """The parts, bottom first: ``{"name", "vertices": (first, end), "faces": (first,
+        end)}``; empty for a project of one mesh."""
+        return self._p.parts
+
+    @property
+    def joints(self) -> np.ndarray:
+        """The joints: a ``k x 2`` int64 array of vertex pairs that move together."""
+        return self._p.joints
+
+    @property
+    def draw_order(self) -> List[str]:
+        """The parts' names bottom first: each is drawn over the ones before it."""
+        return self._p.draw_order
+
+    def positions(self, time: float) -> np.ndarray:
+        """Every vertex at ``time`` seconds (clamped to the animation): ``n x 2``."""
+        return self._p.positions(_number(time, "time", MorphError, low=-math.inf))
+
+    def frame(self, time: float) -> Dict[str, np.ndarray]:
+        """Each part's positions at ``time`` seconds, by name (``{"mesh": ...}`` without
+        parts)."""
+        return self._p.frame(_number(time, "time", MorphError, low=-math.inf))
+
 
 def mesh_from_image(path, vertices: int = 2000, *, tolerance: Optional[float] = None,
                     min_angle: Optional[float] = None,

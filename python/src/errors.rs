@@ -124,3 +124,8 @@ pub fn morph_at(e: bdmorph::MorphError, at: &str) -> PyErr {
         other => MorphError::new_err(format!("{at}: {}", said(&other))),
     }
 }
+
+/// A morph error given in words (a project's animation) as `MorphError`.
+pub fn morph_text(e: impl std::fmt::Display) -> PyErr {
+    MorphError::new_err(said(&e))
+}

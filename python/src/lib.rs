@@ -11,6 +11,7 @@ mod geodesic;
 mod morph;
 mod param;
 mod picture;
+mod project;
 mod threads;
 
 use pyo3::prelude::*;
@@ -24,6 +25,7 @@ fn _bdmorph(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<morph::Path>()?;
     m.add_class::<geodesic::HeatGeodesics>()?;
     m.add_class::<deform::Deformer>()?;
+    m.add_class::<project::Project>()?;
     m.add_function(wrap_pyfunction!(param::parameterize, m)?)?;
     m.add_function(wrap_pyfunction!(param::bounded_distortion, m)?)?;
     m.add_function(wrap_pyfunction!(picture::mesh_from_image, m)?)?;

@@ -5,7 +5,7 @@ that it is both well typed and true. Not collected by pytest (its name is not te
 from __future__ import annotations
 
 import pathlib
-from typing import List, Tuple
+from typing import Dict, List, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -81,6 +81,14 @@ def main(picture: pathlib.Path, folder: pathlib.Path) -> List[str]:
     bdmorph.write_obj(target, V0, F)
     RV, RF = bdmorph.read_mesh(target)
     seen.append(f"read back {RV.shape} {RF.shape}")
+
+    try:
+        project = bdmorph.Project(folder / "character.json")
+        order: List[str] = project.draw_order
+        parts: Dict[str, npt.NDArray[np.float64]] = project.frame(0.5)
+        seen.append(f"project {order} {len(parts)} {project.joints.shape} {project.duration}")
+    except bdmorph.FileError as e:
+        seen.append(f"no project: {e}")
 
     try:
         bdmorph.Deformer(V0, F, weight=-1.0)

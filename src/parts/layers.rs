@@ -104,6 +104,7 @@ impl LayerBudget {
     }
 }
 
+#[cfg(feature = "layers")]
 /// Counts decoded bytes against a [`LayerBudget`].
 #[derive(Debug)]
 pub(crate) struct Spend {
@@ -111,6 +112,7 @@ pub(crate) struct Spend {
     spent: u64,
 }
 
+#[cfg(feature = "layers")]
 impl Spend {
     pub(crate) fn new(input: usize) -> Spend {
         Spend {
@@ -141,6 +143,7 @@ impl Spend {
     }
 }
 
+#[cfg(feature = "layers")]
 /// Crops `rgba` (`width` x `height`, canvas placed at `left`, `top`) to its pixels with
 /// non-zero alpha; `None` when there are none.
 pub(crate) fn crop(
@@ -185,6 +188,7 @@ pub(crate) fn crop(
     ))
 }
 
+#[cfg(feature = "layers")]
 /// Another library's message as one short line: whitespace runs (newlines included) made one
 /// space, at most 160 characters.
 pub(crate) fn one_line(text: &str) -> String {
@@ -201,6 +205,7 @@ pub(crate) fn one_line(text: &str) -> String {
     out
 }
 
+#[cfg(feature = "layers")]
 /// Multiplies alpha by `opacity` (0 to 255).
 pub(crate) fn apply_opacity(rgba: &mut [u8], opacity: u8) {
     if opacity == 255 {
@@ -285,7 +290,7 @@ pub fn read_layered_file(path: &std::path::Path) -> Result<Layered, LayersError>
     read_layered(&bytes)
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "layers"))]
 mod tests {
     use super::*;
 

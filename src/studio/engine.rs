@@ -18,7 +18,7 @@ use crate::deform::{DragReport, KvfOptions, PoseMethod};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
 use crate::parts::{JointedDeformer, Placement, Weld};
-use crate::{Easing, KeyframePath, MorphOptions, PathOptions};
+use crate::KeyframePath;
 
 /// How much larger than the rest mesh a pose may spread before a drag is refused.
 pub const MAX_POSE_SPREAD: f64 = 100.0;
@@ -472,17 +472,7 @@ pub fn pose_problem(rest: &PlanarMesh, pose: &[[f64; 2]]) -> Option<String> {
 
 /// The path through `meshes` (the keyframes' poses) with the document's times and easings.
 pub fn path_of(doc: &Project, meshes: &[PlanarMesh]) -> Result<KeyframePath, String> {
-    let keys = &doc.keyframes;
-    let durations: Vec<f64> = keys.windows(2).map(|w| w[1].time - w[0].time).collect();
-    let easings: Vec<Easing> = keys[..keys.len() - 1]
-        .iter()
-        .map(|k| k.easing.parse().unwrap_or(Easing::Linear))
-        .collect();
-    let options = PathOptions::default()
-        .with_durations(durations)
-        .with_easings(easings)
-        .with_morph(MorphOptions::default().with_allow_inverted(true));
-    KeyframePath::with_options(meshes, options).map_err(|e| people(&e.to_string()))
+    crate::project::path_of(doc, meshes).map_err(|e| people(&e.to_string()))
 }
 
 /// A library message in the page's words: keyframes counted from 1, no vertex or face

@@ -27,10 +27,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 
-use super::engine::path_of;
 use super::jobs::Progress;
 use super::project::Project;
-use crate::mesh::PlanarMesh;
 use crate::render::{
     apng, colour, depth_order, raster, sheet, webp, Background, Drawing, Image, ImageSize, Viewport,
 };
@@ -241,11 +239,8 @@ pub fn frames_kept(
 
 /// The frames of a project's animation, computed one at a time.
 struct Animation {
-    path: crate::KeyframePath,
-    /// A character's joints kept together (`None`: no joints).
-    placement: Option<crate::parts::Placement>,
+    animation: crate::project::Animation,
     count: usize,
-    duration: f64,
 }
 
 impl Animation {
@@ -253,36 +248,18 @@ impl Animation {
         if project.keyframes.len() < 2 {
             return Err("add a second keyframe to export an animation".into());
         }
-        let faces = &project.mesh.faces;
-        let meshes: Vec<PlanarMesh> = project
-            .keyframes
-            .iter()
-            .map(|k| PlanarMesh {
-                positions: k.positions.clone(),
-                faces: faces.clone(),
-            })
-            .collect();
-        let placement = project
-            .joints
-            .as_deref()
-            .filter(|j| !j.is_empty())
-            .map(|j| crate::parts::Placement::new(&project.rest(), j));
         Ok(Animation {
-            path: path_of(project, &meshes)?,
-            placement,
+            animation: crate::project::Animation::new(project)
+                .map_err(|e| super::engine::people(&e))?,
             count,
-            duration: project.keyframes.last().map_or(0.0, |k| k.time),
         })
     }
 
     /// Frame `i` into `frame`; its time in seconds.
     fn frame(&mut self, i: usize, frame: &mut [[f64; 2]]) -> Result<f64, String> {
         let t = i as f64 / (self.count - 1) as f64;
-        self.path.frame_into(t, frame).map_err(|e| e.to_string())?;
-        if let Some(placement) = self.placement.as_mut() {
-            placement.apply(frame);
-        }
-        Ok(t * self.duration)
+        self.animation.frame_at(t, frame)?;
+        Ok(t * self.animation.duration())
     }
 }
 

@@ -30,7 +30,8 @@ pub mod history;
 pub mod jobs;
 pub mod listen;
 pub mod open;
-pub mod project;
+/// The project file (the crate's [`crate::project`], with the feature `project`).
+pub use crate::project;
 pub mod protocol;
 pub mod server;
 pub mod session;

@@ -615,6 +615,120 @@ impl Project {
     }
 }
 
+/// The path through `meshes` (the keyframes' poses, with `doc`'s triangles) with the
+/// document's times and easings; keyframes with flipped triangles morph as the command line's
+/// `--allow-inverted` does.
+///
+/// # Errors
+/// The path's, when the keyframes cannot be morphed.
+pub fn path_of(
+    doc: &Project,
+    meshes: &[PlanarMesh],
+) -> Result<crate::KeyframePath, crate::MorphError> {
+    use crate::{Easing, MorphOptions, PathOptions};
+    let keys = &doc.keyframes;
+    let durations: Vec<f64> = keys.windows(2).map(|w| w[1].time - w[0].time).collect();
+    let easings: Vec<Easing> = keys[..keys.len().saturating_sub(1)]
+        .iter()
+        .map(|k| k.easing.parse().unwrap_or(Easing::Linear))
+        .collect();
+    let options = PathOptions::default()
+        .with_durations(durations)
+        .with_easings(easings)
+        .with_morph(MorphOptions::default().with_allow_inverted(true));
+    crate::KeyframePath::with_options(meshes, options)
+}
+
+/// A project's animation, frame by frame, as the studio plays and exports it: the path through
+/// its keyframes (their times and easings), and for a character in parts, its pieces placed so
+/// that their joints meet ([`crate::parts::Placement`]).
+///
+/// ```
+/// use bdmorph::project::{Animation, Keyframe, Project};
+/// let rest = bdmorph::generate::grid(4, 3, 0.0);
+/// let mut doc = Project::new(&rest, None);
+/// let moved: Vec<[f64; 2]> = rest.positions.iter().map(|p| [p[0] + 1.0, p[1]]).collect();
+/// doc.keyframes.push(Keyframe { time: 2.0, easing: "linear".into(), positions: moved, pins: vec![] });
+/// let mut animation = Animation::new(&doc)?;
+/// let mut frame = vec![[0.0; 2]; rest.positions.len()];
+/// assert_eq!(animation.frame_into(1.0, &mut frame)?, 1.0);
+/// assert!((frame[0][0] - 0.5).abs() < 1e-9);
+/// # Ok::<(), String>(())
+/// ```
+#[derive(Debug)]
+pub struct Animation {
+    path: crate::KeyframePath,
+    placement: Option<crate::parts::Placement>,
+    duration: f64,
+}
+
+impl Animation {
+    /// The animation of `doc` (at least two keyframes).
+    ///
+    /// # Errors
+    /// One keyframe only, or keyframes that cannot be morphed (the path's error, in words).
+    pub fn new(doc: &Project) -> Result<Animation, String> {
+        if doc.keyframes.len() < 2 {
+            return Err("the project has one keyframe: add a second to animate it".into());
+        }
+        let meshes: Vec<PlanarMesh> = doc
+            .keyframes
+            .iter()
+            .map(|k| PlanarMesh {
+                positions: k.positions.clone(),
+                faces: doc.mesh.faces.clone(),
+            })
+            .collect();
+        let placement = doc
+            .joints
+            .as_deref()
+            .filter(|j| !j.is_empty())
+            .map(|j| crate::parts::Placement::new(&doc.rest(), j));
+        Ok(Animation {
+            path: path_of(doc, &meshes).map_err(|e| e.to_string())?,
+            placement,
+            duration: doc.keyframes.last().map_or(0.0, |k| k.time),
+        })
+    }
+
+    /// The last keyframe's time, in seconds.
+    pub fn duration(&self) -> f64 {
+        self.duration
+    }
+
+    /// The animation at `time` seconds (clamped to it) into `out` (one point per vertex); the
+    /// time used.
+    ///
+    /// # Errors
+    /// The path's, in words.
+    pub fn frame_into(&mut self, time: f64, out: &mut [[f64; 2]]) -> Result<f64, String> {
+        let time = if time.is_finite() {
+            time.clamp(0.0, self.duration)
+        } else {
+            0.0
+        };
+        let t = if self.duration > 0.0 {
+            time / self.duration
+        } else {
+            0.0
+        };
+        self.frame_at(t, out)?;
+        Ok(time)
+    }
+
+    /// The animation at `t` in [0, 1] of its duration into `out`.
+    ///
+    /// # Errors
+    /// The path's, in words.
+    pub fn frame_at(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<(), String> {
+        self.path.frame_into(t, out).map_err(|e| e.to_string())?;
+        if let Some(placement) = self.placement.as_mut() {
+            placement.apply(out);
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

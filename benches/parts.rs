@@ -55,14 +55,19 @@ fn figure() -> Layered {
 /// The character's rest mesh and a pose (hands and feet moved, the torso pinned; bounded
 /// distortion, so that no triangle flips), its joints.
 fn posed_character() -> (PlanarMesh, PlanarMesh, Vec<[u32; 2]>) {
-    let c = character(&figure(), &CharacterOptions::default().with_vertices(20_000))
-        .expect("character");
+    let c = character(
+        &figure(),
+        &CharacterOptions::default().with_vertices(20_000),
+    )
+    .expect("character");
     let joints: Vec<[u32; 2]> = c.joints.iter().map(|j| j.vertices).collect();
     let rest = c.mesh.clone();
     let extreme = |name: &str, key: &dyn Fn([f64; 2]) -> f64| {
         let p = c.parts.iter().find(|p| p.name == name).expect("part");
         (p.vertices[0]..p.vertices[1])
-            .min_by(|&a, &b| key(rest.positions[a as usize]).total_cmp(&key(rest.positions[b as usize])))
+            .min_by(|&a, &b| {
+                key(rest.positions[a as usize]).total_cmp(&key(rest.positions[b as usize]))
+            })
             .expect("vertices")
     };
     let pins = [
@@ -73,7 +78,8 @@ fn posed_character() -> (PlanarMesh, PlanarMesh, Vec<[u32; 2]>) {
         extreme("shin_l", &|p| p[1]),
         extreme("shin_r", &|p| p[1]),
     ];
-    let mut pose = JointedDeformer::new(&rest, &joints, PoseMethod::bounded(5.0)).expect("deformer");
+    let mut pose =
+        JointedDeformer::new(&rest, &joints, PoseMethod::bounded(5.0)).expect("deformer");
     pose.set_pins(&pins).expect("pins");
     let at = |v: u32| rest.positions[v as usize];
     for k in 1..=6 {
@@ -141,7 +147,9 @@ fn frames(c: &mut Criterion) {
         b.iter(|| one.frame_into(next(), &mut one_frame).expect("frame"))
     });
     path.frame_into(0.5, &mut frame).expect("frame");
-    g.bench_function("placement_alone", |b| b.iter(|| placement.apply(&mut frame)));
+    g.bench_function("placement_alone", |b| {
+        b.iter(|| placement.apply(&mut frame))
+    });
     g.finish();
 }
 

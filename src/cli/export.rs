@@ -80,7 +80,7 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let opened = open(&args.project, workspace, &OpenOptions::default())?;
+    // Checked before it is opened: a picture given here would be meshed, then refused.
     if !args
         .project
         .extension()
@@ -91,6 +91,7 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
             args.project.display()
         ));
     }
+    let opened = open(&args.project, workspace, &OpenOptions::default())?;
     for note in &opened.notes {
         if !args.quiet {
             eprintln!("bdmorph: note: {note}");

@@ -82,24 +82,7 @@ impl<W: Write> ApngEncoder<W> {
     /// [`RenderError::FrameSize`] for a frame of another size, [`RenderError::BadBuffer`],
     /// [`RenderError::Incomplete`] after a failed write or past the frame count given.
     pub fn push(&mut self, frame: &Image) -> Result<(), RenderError> {
-        if (frame.width, frame.height) != (self.width, self.height) {
-            return Err(RenderError::FrameSize {
-                index: self.pushed as usize,
-                width: frame.width,
-                height: frame.height,
-                first_width: self.width,
-                first_height: self.height,
-            });
-        }
-        let expected = u64::from(frame.width) * u64::from(frame.height) * 4;
-        if frame.rgba.len() as u64 != expected {
-            return Err(RenderError::BadBuffer {
-                width: frame.width,
-                height: frame.height,
-                expected,
-                actual: frame.rgba.len(),
-            });
-        }
+        super::raster::check_gif_frame(frame, self.pushed as usize, self.width, self.height)?;
         let incomplete = RenderError::Incomplete { format: "APNG" };
         if self.pushed >= self.frames {
             return Err(incomplete);

@@ -805,8 +805,14 @@ fn check_gif_frames(frames: &[Image]) -> Result<(u32, u32), RenderError> {
     Ok((width, height))
 }
 
-/// Checks that frame `index` is `width` x `height` pixels with a whole pixel buffer.
-fn check_gif_frame(f: &Image, index: usize, width: u32, height: u32) -> Result<(), RenderError> {
+/// Checks that frame `index` is `width` x `height` pixels with a whole pixel buffer (every
+/// animation encoder's check of a frame pushed).
+pub(super) fn check_gif_frame(
+    f: &Image,
+    index: usize,
+    width: u32,
+    height: u32,
+) -> Result<(), RenderError> {
     if (f.width, f.height) != (width, height) {
         return Err(RenderError::FrameSize {
             index,

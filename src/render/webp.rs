@@ -88,24 +88,7 @@ impl WebpEncoder {
     /// # Errors
     /// [`RenderError::FrameSize`], [`RenderError::BadBuffer`], the encoder's errors.
     pub fn push(&mut self, frame: &Image) -> Result<(), RenderError> {
-        if (frame.width, frame.height) != (self.width, self.height) {
-            return Err(RenderError::FrameSize {
-                index: self.pushed as usize,
-                width: frame.width,
-                height: frame.height,
-                first_width: self.width,
-                first_height: self.height,
-            });
-        }
-        let expected = u64::from(frame.width) * u64::from(frame.height) * 4;
-        if frame.rgba.len() as u64 != expected {
-            return Err(RenderError::BadBuffer {
-                width: frame.width,
-                height: frame.height,
-                expected,
-                actual: frame.rgba.len(),
-            });
-        }
+        super::raster::check_gif_frame(frame, self.pushed as usize, self.width, self.height)?;
         let at = self.timestamp(self.pushed)?;
         self.encoder.add_frame(&frame.rgba, at).map_err(fail)?;
         self.pushed += 1;

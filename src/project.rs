@@ -795,4 +795,50 @@ mod tests {
         let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
         assert_eq!(back, project);
     }
+
+    #[test]
+    fn a_part_order_regroups_the_triangles_and_their_paint() {
+        // Two pieces of two triangles each, as two parts.
+        let mut positions = Vec::new();
+        let mut faces = Vec::new();
+        for k in 0..2u32 {
+            let x = f64::from(k) * 3.0;
+            positions.extend([[x, 0.0], [x + 1.0, 0.0], [x + 1.0, 1.0], [x, 1.0]]);
+            let o = 4 * k;
+            faces.extend([[o, o + 1, o + 2], [o, o + 2, o + 3]]);
+        }
+        let mesh = PlanarMesh { positions, faces };
+        let mut doc = Project::new(&mesh, None);
+        doc.parts = Some(vec![
+            PartData {
+                name: "a".into(),
+                vertices: [0, 4],
+                faces: [0, 2],
+            },
+            PartData {
+                name: "b".into(),
+                vertices: [4, 8],
+                faces: [2, 4],
+            },
+        ]);
+        doc.depth = Some(vec![1, 2, 3, 4]);
+        let (out, label) = with_part_order(&doc, &[1, 0]).expect("reordered");
+        assert_eq!(out.mesh.faces[..2], mesh.faces[2..]);
+        assert_eq!(out.depth, Some(vec![3, 4, 1, 2]));
+        let names: Vec<&str> = out
+            .parts
+            .as_ref()
+            .expect("parts")
+            .iter()
+            .map(|p| p.name.as_str())
+            .collect();
+        assert_eq!(names, ["b", "a"]);
+        assert_eq!(out.parts.as_ref().expect("parts")[0].faces, [0, 2]);
+        assert!(label.contains("draw"), "{label}");
+        out.check().expect("a valid project");
+        for bad in [&[0u32][..], &[0, 0], &[0, 2], &[]] {
+            assert!(with_part_order(&doc, bad).is_err(), "{bad:?}");
+        }
+        assert!(with_part_order(&Project::new(&mesh, None), &[0]).is_err());
+    }
 }

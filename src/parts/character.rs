@@ -358,7 +358,7 @@ fn joint_site(
     })
 }
 
-/// Makes a character from a layered picture (see the [module docs](self)). Layers too small to
+/// Makes a character from a layered picture (see the [module docs](crate::parts)). Layers too small to
 /// mesh are left out with a note.
 ///
 /// # Errors

@@ -1,5 +1,5 @@
 //! What the studio derives from its document to answer quickly: the rest mesh and its pieces,
-//! the [`Deformer`] of the keyframe being posed (with its pins set, so a drag costs one solve),
+//! the [`crate::deform::Deformer`] of the keyframe being posed (with its pins set, so a drag costs one solve),
 //! the compiled [`KeyframePath`] through the keyframes for scrubbing, and each keyframe's flipped
 //! triangles. All of it is a cache: rebuilt from the document when what it depends on changes
 //! ([`Engine::sync`]), never a second copy of the document's data to keep in step by hand.

@@ -200,8 +200,12 @@ fn message(r: &mut Rng) -> Value {
             let (name, body) = file_text(r);
             json!({"op": "import_outline", "name": name, "text": body, "vertices": r.pick(&[0usize, 50, 200, 1 << 40])})
         }
-        35 => match r.below(4) {
+        35 => match r.below(5) {
             0 => json!({"op": "fps", "fps": number(r)}),
+            3 => {
+                let order: Vec<Value> = (0..r.below(7)).map(|_| index(r)).collect();
+                json!({"op": "part_order", "order": order})
+            }
             1 => {
                 let faces: Vec<Value> = (0..r.below(5)).map(|_| index(r)).collect();
                 json!({"op": "paint_depth", "faces": faces, "all": r.below(4) == 0, "level": number(r)})

@@ -17,6 +17,10 @@ pub(super) fn is_layered(path: &Path) -> bool {
     if parts::is_layered_path(path) {
         return true;
     }
+    // Only a regular file is opened to look (a FIFO would block the open).
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return false;
+    }
     let mut head = [0u8; 4];
     std::fs::File::open(path)
         .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))

@@ -837,6 +837,111 @@ fn write_surface(dir: &Path, name: &str, mesh: &bdmorph::SurfaceMesh) -> PathBuf
 }
 
 #[test]
+fn geodesic_exact_distances_and_shortest_paths() {
+    let dir = scratch("geodesic-exact");
+    let sphere = generate::icosphere(2);
+    let n = sphere.positions.len();
+    let mesh = write_surface(&dir, "sphere.obj", &sphere);
+    let read = |path: &Path| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(path)
+            .expect("written")
+            .lines()
+            .map(|l| l.split(' ').map(|x| x.parse().expect("a number")).collect())
+            .collect()
+    };
+    // --exact agrees with the library, field by field and for the nearest source.
+    let mut exact = bdmorph::geodesic::ExactGeodesics::new(&sphere).expect("set up");
+    let out = dir.join("exact.txt");
+    let r = run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--exact", "--each-source", "0,9", "--stats", "-o"])
+            .arg(&out),
+    );
+    let rows = read(&out);
+    assert_eq!(rows.len(), n);
+    for (k, s) in [0u32, 9].into_iter().enumerate() {
+        let want = exact.distance(&[s]).expect("query");
+        for v in 0..n {
+            assert!((rows[v][k] - want[v]).abs() <= 1e-15 * (1.0 + want[v]));
+        }
+    }
+    let stats = String::from_utf8(r.stdout).expect("utf8");
+    assert!(
+        stats.contains("\"exact\":true") && stats.contains("\"windows\":"),
+        "{stats}"
+    );
+    // --path: a polyline as long as the distance, as text and as an OBJ polyline.
+    let d = exact.distance(&[3]).expect("query");
+    let far = (0..n)
+        .max_by(|&i, &j| d[i].total_cmp(&d[j]))
+        .expect("vertices");
+    let pair = format!("3,{far}");
+    let txt = dir.join("path.txt");
+    run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--path", &pair, "-o"])
+            .arg(&txt),
+    );
+    let points = read(&txt);
+    assert!(points.len() > 2 && points.iter().all(|p| p.len() == 3));
+    let length: f64 = points
+        .windows(2)
+        .map(|w| {
+            ((w[0][0] - w[1][0]).powi(2)
+                + (w[0][1] - w[1][1]).powi(2)
+                + (w[0][2] - w[1][2]).powi(2))
+            .sqrt()
+        })
+        .sum();
+    assert!((length - d[far]).abs() < 1e-9, "{length} vs {}", d[far]);
+    assert_eq!(points[0], sphere.positions[3].to_vec());
+    let obj = dir.join("path.obj");
+    run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--path", &pair, "-o"])
+            .arg(&obj),
+    );
+    let text = std::fs::read_to_string(&obj).expect("written");
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("v ")).count(),
+        points.len()
+    );
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("l "))
+        .expect("a polyline");
+    assert_eq!(line.split(' ').count(), points.len() + 1);
+    // Errors, each one line.
+    for (args, says) in [
+        (&["--path", "0", "-o", "p.txt"][..], "A,B"),
+        (&["--path", "0,x", "-o", "p.txt"][..], "not a vertex index"),
+        (&["--path", "0,99999", "-o", "p.txt"][..], "does not exist"),
+        (&["--path", "0,1"][..], "-o OUT.txt"),
+        (&["--path", "0,1", "-o", "p.png"][..], "unknown path output"),
+        (
+            &["--path", "0,1", "--source", "2", "-o", "p.txt"][..],
+            "cannot be used",
+        ),
+    ] {
+        let r = bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8(r.stderr).expect("utf8");
+        assert!(!r.status.success() && err.contains(says), "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn geodesic_writes_distances_columns_and_pictures() {
     let dir = scratch("geodesic");
     let sphere = generate::icosphere(2);

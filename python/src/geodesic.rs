@@ -4,7 +4,7 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use bdmorph::geodesic::{Boundary, HeatGeodesics as Heat, HeatOptions};
+use bdmorph::geodesic::{Boundary, ExactGeodesics as Exact, HeatGeodesics as Heat, HeatOptions};
 
 use crate::arrays;
 use crate::errors;
@@ -123,3 +123,75 @@ impl HeatGeodesics {
 }
 
 use numpy::IntoPyArray;
+
+/// Exact polyhedral geodesic distances and shortest paths (window propagation).
+#[pyclass(module = "bdmorph._bdmorph")]
+pub struct ExactGeodesics {
+    inner: Exact,
+    n: usize,
+}
+
+#[pymethods]
+impl ExactGeodesics {
+    #[new]
+    fn new(v: PyReadonlyArray2<'_, f64>, f: PyReadonlyArray2<'_, i64>) -> PyResult<ExactGeodesics> {
+        let mesh = arrays::surface(&v, &f)?;
+        let n = mesh.positions.len();
+        let inner = Exact::new(&mesh).map_err(errors::geodesic)?;
+        Ok(ExactGeodesics { inner, n })
+    }
+
+    /// The exact distance of every vertex from the nearest of `sources`, an array of n.
+    fn distance<'py>(
+        &mut self,
+        py: Python<'py>,
+        sources: PyReadonlyArray1<'_, i64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let sources = sources_of(&sources, self.n)?;
+        let inner = &mut self.inner;
+        let d = py
+            .detach(|| inner.distance(&sources))
+            .map_err(errors::geodesic)?;
+        Ok(arrays::out1(py, d))
+    }
+
+    /// The shortest path from vertex `a` to vertex `b`, as a k x 3 array of points.
+    fn path<'py>(
+        &mut self,
+        py: Python<'py>,
+        a: i64,
+        b: i64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let index = |v: i64, name: &str| -> PyResult<u32> {
+            u32::try_from(v)
+                .ok()
+                .filter(|&v| (v as usize) < self.n)
+                .ok_or_else(|| {
+                    errors::geodesic(format!(
+                        "{name}: vertex {v} does not exist (the mesh has {} vertices, numbered from 0)",
+                        self.n
+                    ))
+                })
+        };
+        let (a, b) = (index(a, "a")?, index(b, "b")?);
+        let inner = &mut self.inner;
+        let path = py.detach(|| inner.path(a, b)).map_err(errors::geodesic)?;
+        let k = path.points.len();
+        let flat: Vec<f64> = path.points.iter().flat_map(|p| p.position).collect();
+        Ok(numpy::ndarray::Array2::from_shape_vec((k, 3), flat)
+            .expect("k x 3 values")
+            .into_pyarray(py))
+    }
+
+    /// Windows made by the last query.
+    #[getter]
+    fn windows(&self) -> usize {
+        self.inner.stats().windows
+    }
+
+    /// Vertices.
+    #[getter]
+    fn n_vertices(&self) -> usize {
+        self.n
+    }
+}

@@ -24,6 +24,7 @@ fn _bdmorph(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<morph::Blend>()?;
     m.add_class::<morph::Path>()?;
     m.add_class::<geodesic::HeatGeodesics>()?;
+    m.add_class::<geodesic::ExactGeodesics>()?;
     m.add_class::<deform::Deformer>()?;
     m.add_class::<project::Project>()?;
     m.add_function(wrap_pyfunction!(param::parameterize, m)?)?;

@@ -59,6 +59,10 @@ def main(picture: pathlib.Path, folder: pathlib.Path) -> List[str]:
     d = g.distance([0])
     each = g.distances_each([0, 8])
     seen.append(f"geodesic {d.shape} {each.shape} max {float(d.max()):.2f}")
+    exact = bdmorph.ExactGeodesics(V3, F)
+    path = exact.path(0, 8)
+    nearest = bdmorph.geodesic_distance(V3, F, [0, 8], exact=True)
+    seen.append(f"exact {exact.distance(0).shape} path {path.shape} {nearest.shape} {exact.windows}")
 
     uv = bdmorph.parameterize(V3, F, "lscm")
     seen.append(f"uv {uv.shape}")

@@ -5,7 +5,9 @@ use std::io::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use bdmorph::geodesic::{Anchor, Boundary, HeatGeodesics, HeatOptions, TimeScale};
+use bdmorph::geodesic::{
+    Anchor, Boundary, ExactGeodesics, GeodesicPath, HeatGeodesics, HeatOptions, TimeScale,
+};
 use bdmorph::render::{html, raster, surface, Image};
 
 use super::{AnchorArg, BoundaryArg, GeodesicArgs, TimeScaleArg};
@@ -35,6 +37,9 @@ fn output_kind(path: &Path) -> Result<Output, String> {
 }
 
 pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
+    if let Some((a, b)) = args.path {
+        return shortest_path(&args, a, b);
+    }
     let each = !args.each_source.is_empty();
     let sources = if each {
         &args.each_source
@@ -85,31 +90,11 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
         .with_intrinsic_delaunay(!args.no_intrinsic_delaunay)
         .with_flip_boundary(!args.no_flip_boundary)
         .with_mollify(args.mollify);
-    let started = Instant::now();
-    let mut heat = HeatGeodesics::new(mesh, options).map_err(|e| file.locate(e).to_string())?;
-    let setup = started.elapsed().as_secs_f64();
-    if !args.quiet {
-        if let Some(note) = boundary_source_note(&heat, sources, each) {
-            eprintln!("{note}");
-        }
-    }
-    let started = Instant::now();
-    let fields: Vec<Vec<f64>> = if each {
-        heat.distances_each(sources)
+    let (fields, setup, query) = if args.exact {
+        exact_fields(&args, &file, sources, each)?
     } else {
-        heat.distance(sources).map(|d| vec![d])
-    }
-    .map_err(|e| file.locate(e).to_string())?;
-    let query = started.elapsed().as_secs_f64();
-    if args.stats {
-        let s = heat.stats();
-        writeln!(
-            std::io::stdout().lock(),
-            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"mollified\":{:e},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
-            s.vertices, s.faces, s.flips, s.has_boundary, s.mollified, s.time, s.factor_nnz, setup, fields.len(), query
-        )
-        .map_err(|e| e.to_string())?;
-    }
+        heat_fields(&args, &file, options, sources, each)?
+    };
     let (Some(path), Some(kind)) = (&args.output, kind) else {
         return Ok(());
     };
@@ -174,6 +159,168 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// The fields by the heat method, with the set-up and query times in seconds (and the
+/// `--stats` line).
+fn heat_fields(
+    args: &GeodesicArgs,
+    file: &bdmorph::MeshFile,
+    options: HeatOptions,
+    sources: &[u32],
+    each: bool,
+) -> Result<(Vec<Vec<f64>>, f64, f64), String> {
+    let started = Instant::now();
+    let mut heat =
+        HeatGeodesics::new(&file.mesh, options).map_err(|e| file.locate(e).to_string())?;
+    let setup = started.elapsed().as_secs_f64();
+    if !args.quiet {
+        if let Some(note) = boundary_source_note(&heat, sources, each) {
+            eprintln!("{note}");
+        }
+    }
+    let started = Instant::now();
+    let fields: Vec<Vec<f64>> = if each {
+        heat.distances_each(sources)
+    } else {
+        heat.distance(sources).map(|d| vec![d])
+    }
+    .map_err(|e| file.locate(e).to_string())?;
+    let query = started.elapsed().as_secs_f64();
+    if args.stats {
+        let s = heat.stats();
+        writeln!(
+            std::io::stdout().lock(),
+            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"mollified\":{:e},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
+            s.vertices, s.faces, s.flips, s.has_boundary, s.mollified, s.time, s.factor_nnz, setup, fields.len(), query
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    Ok((fields, setup, query))
+}
+
+/// The exact fields, with the set-up and query times in seconds (and the `--stats` line).
+fn exact_fields(
+    args: &GeodesicArgs,
+    file: &bdmorph::MeshFile,
+    sources: &[u32],
+    each: bool,
+) -> Result<(Vec<Vec<f64>>, f64, f64), String> {
+    let started = Instant::now();
+    let mut exact = ExactGeodesics::new(&file.mesh).map_err(|e| file.locate(e).to_string())?;
+    let setup = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let mut windows = 0;
+    let mut fields = Vec::new();
+    let groups: Vec<&[u32]> = if each {
+        sources.chunks(1).collect()
+    } else {
+        vec![sources]
+    };
+    for group in groups {
+        fields.push(
+            exact
+                .distance(group)
+                .map_err(|e| file.locate(e).to_string())?,
+        );
+        windows += exact.stats().windows;
+    }
+    let query = started.elapsed().as_secs_f64();
+    if args.stats {
+        writeln!(
+            std::io::stdout().lock(),
+            "{{\"vertices\":{},\"faces\":{},\"exact\":true,\"windows\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
+            file.mesh.positions.len(), file.mesh.faces.len(), windows, setup, fields.len(), query
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    Ok((fields, setup, query))
+}
+
+/// `--path A,B`: the exact shortest path, written as text or an OBJ polyline.
+fn shortest_path(args: &GeodesicArgs, a: u32, b: u32) -> Result<(), String> {
+    let Some(out) = &args.output else {
+        return Err("--path A,B writes the path: give -o OUT.txt or -o OUT.obj".into());
+    };
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let obj = match ext.as_deref() {
+        None | Some("txt") => false,
+        Some("obj") => true,
+        Some(other) => {
+            return Err(format!(
+                "{}: unknown path output extension '.{other}' (use .txt or .obj)",
+                out.display()
+            ))
+        }
+    };
+    let file = bdmorph::MeshFile::read(&args.mesh).map_err(|e| e.to_string())?;
+    let n = file.mesh.positions.len();
+    if let Some(v) = [a, b].into_iter().find(|&v| v as usize >= n) {
+        return Err(format!(
+            "{}: vertex {v} does not exist (the mesh has {n} vertices, numbered from 0)",
+            args.mesh.display()
+        ));
+    }
+    let started = Instant::now();
+    let mut exact = ExactGeodesics::new(&file.mesh).map_err(|e| file.locate(e).to_string())?;
+    let path = exact.path(a, b).map_err(|e| file.locate(e).to_string())?;
+    let seconds = started.elapsed().as_secs_f64();
+    let text = if obj {
+        path_obj(&path, a, b)
+    } else {
+        path_text(&path)
+    };
+    bdmorph::io::write_bytes_atomic(out, text.as_bytes()).map_err(|e| e.to_string())?;
+    if args.stats {
+        writeln!(
+            std::io::stdout().lock(),
+            "{{\"points\":{},\"length\":{:e},\"windows\":{},\"seconds\":{:e}}}",
+            path.points.len(),
+            path.length(),
+            exact.stats().windows,
+            seconds
+        )
+        .map_err(|e| e.to_string())?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "wrote {} (a shortest path from vertex {a} to vertex {b}: length {}, {} points, {:.0} ms)",
+            out.display(),
+            path.length(),
+            path.points.len(),
+            seconds * 1e3
+        );
+    }
+    Ok(())
+}
+
+fn path_text(path: &GeodesicPath) -> String {
+    let mut out = String::new();
+    for p in &path.points {
+        let [x, y, z] = p.position;
+        let _ = writeln!(out, "{x} {y} {z}");
+    }
+    out
+}
+
+fn path_obj(path: &GeodesicPath, a: u32, b: u32) -> String {
+    let mut out = format!(
+        "# bdmorph geodesic --path: the shortest path from vertex {a} to vertex {b}, length {}\n",
+        path.length()
+    );
+    for p in &path.points {
+        let [x, y, z] = p.position;
+        let _ = writeln!(out, "v {x} {y} {z}");
+    }
+    out.push('l');
+    for i in 1..=path.points.len() {
+        let _ = write!(out, " {i}");
+    }
+    out.push('\n');
+    out
 }
 
 /// The note for `--boundary dirichlet|average` when a source lies on the boundary: those

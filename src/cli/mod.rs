@@ -487,9 +487,18 @@ struct GeodesicArgs {
     /// One field per source vertex.
     #[arg(long = "each-source", value_name = "V1,V2,...", value_delimiter = ',')]
     each_source: Vec<u32>,
-    /// Output: .txt (distances), .png or .html (pictures).
+    /// Output: .txt (distances), .png or .html (pictures); with --path, .txt (one point
+    /// "x y z" per line) or .obj (the points and one polyline).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
+    /// Exact polyhedral distances (window propagation, Chen and Han improved by Xin and
+    /// Wang) instead of the heat method: slower to compute, no set-up to amortise, exact.
+    #[arg(long)]
+    exact: bool,
+    /// The shortest path on the surface from vertex A to vertex B (always exact), written as
+    /// a polyline with a point wherever it crosses an edge.
+    #[arg(long, value_name = "A,B", value_parser = parse_vertex_pair, conflicts_with_all = ["sources", "each_source"])]
+    path: Option<(u32, u32)>,
     /// The heat flows for t = M h^2, h measured on the (intrinsic Delaunay) triangulation as
     /// --time-scale says.
     #[arg(long, value_name = "M", default_value_t = 0.5)]
@@ -917,4 +926,17 @@ fn times(t: Option<f64>, frames: Option<usize>) -> Result<Vec<f64>, String> {
         (None, Some(n)) => Err(format!("--frames {n}: at least 2 frames are needed")),
         _ => Err("give either --t T or --frames N".into()),
     }
+}
+
+/// `A,B`: two vertex indices.
+fn parse_vertex_pair(text: &str) -> Result<(u32, u32), String> {
+    let (a, b) = text
+        .split_once(',')
+        .ok_or_else(|| format!("'{text}': give two vertices as A,B"))?;
+    let vertex = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{s}' is not a vertex index (0, 1, 2, ...)"))
+    };
+    Ok((vertex(a)?, vertex(b)?))
 }

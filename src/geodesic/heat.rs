@@ -260,6 +260,24 @@ pub enum GeodesicError {
     /// The mesh file could not be read (for callers that read and measure with one `?`).
     #[error(transparent)]
     Read(#[from] crate::io::ReadError),
+    /// An exact query made more windows than allowed ([`super::ExactGeodesics::with_max_windows`]).
+    #[error("the exact geodesic query gave up after {windows} windows (raise the limit with more memory, or use the heat method)")]
+    WindowBudget {
+        /// The limit.
+        windows: usize,
+    },
+    /// No path joins two vertices: they lie on different pieces of the mesh.
+    #[error("no path on the surface joins vertex {from} to vertex {to}: they lie on different pieces of the mesh")]
+    Unreachable {
+        /// The source.
+        from: u32,
+        /// The target.
+        to: u32,
+    },
+    /// Tracing a shortest path back to its source went round in a loop (a bug, reported
+    /// instead of hanging).
+    #[error("tracing the shortest path back to its source did not end (please report this mesh)")]
+    PathLoop,
     /// A factorisation failed (a matrix that is not numerically positive definite).
     #[error("{system}: {source}")]
     Factorization {

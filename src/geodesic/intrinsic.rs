@@ -176,6 +176,12 @@ impl Intrinsic {
         self.n_vertices
     }
 
+    /// The twin of half-edge `h` ([`NONE`] on the boundary). Before any flip, half-edge
+    /// `3f + k` runs from corner `k` of face `f` to corner `k + 1`.
+    pub fn twin(&self, h: usize) -> u32 {
+        self.twin[h]
+    }
+
     /// Number of faces.
     pub fn n_faces(&self) -> usize {
         self.face_he.len()

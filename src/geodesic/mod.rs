@@ -53,8 +53,12 @@
 //! # Ok::<(), bdmorph::geodesic::GeodesicError>(())
 //! ```
 
+mod exact;
 mod heat;
 pub mod intrinsic;
 mod operators;
 
+pub use exact::{
+    ExactGeodesics, ExactStats, GeodesicPath, OnSurface, PathPoint, DEFAULT_WINDOWS_PER_FACE,
+};
 pub use heat::{Anchor, Boundary, GeodesicError, HeatGeodesics, HeatOptions, HeatStats, TimeScale};

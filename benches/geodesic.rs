@@ -4,7 +4,8 @@
 //!
 //! Groups: `geodesic_setup/<mesh>` ([`HeatGeodesics::new`], default options),
 //! `geodesic_query/<mesh>` (one source, [`HeatGeodesics::distance_into`]), and
-//! `geodesic_query_plain/<mesh>` (without the intrinsic Delaunay triangulation). Without
+//! `geodesic_query_plain/<mesh>` (without the intrinsic Delaunay triangulation),
+//! `geodesic_exact/<mesh>` (exact distances, [`ExactGeodesics::distance_into`]). Without
 //! `../shared/data` the shared meshes are skipped with a message. See BENCHMARKS.md.
 
 use std::hint::black_box;
@@ -12,7 +13,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use bdmorph::generate;
-use bdmorph::geodesic::{HeatGeodesics, HeatOptions};
+use bdmorph::geodesic::{ExactGeodesics, HeatGeodesics, HeatOptions};
 use bdmorph::SurfaceMesh;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
@@ -79,6 +80,27 @@ fn benches(c: &mut Criterion) {
         }
         group.finish();
     }
+    // Exact distances (window propagation) from one source: a query is the whole work (the
+    // set-up is a pass over the faces); against the heat query above, in the same run.
+    let mut group = c.benchmark_group("geodesic_exact");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
+    for (name, mesh) in &meshes {
+        let mut exact = ExactGeodesics::new(mesh).expect("set up");
+        let mut out = vec![0.0; mesh.positions.len()];
+        exact.distance_into(&[0], &mut out).expect("query");
+        eprintln!("[bdmorph {name}] exact: {:?}", exact.stats());
+        group.bench_function(BenchmarkId::from_parameter(name), |b| {
+            b.iter(|| {
+                exact
+                    .distance_into(black_box(&[0]), &mut out)
+                    .expect("query")
+            });
+        });
+    }
+    group.finish();
 }
 
 criterion_group!(geodesic, benches);

@@ -883,7 +883,7 @@ fn geodesic_exact_distances_and_shortest_paths() {
         bin()
             .arg("geodesic")
             .arg(&mesh)
-            .args(["--path", &pair, "-o"])
+            .args(["--path", &pair, "--exact", "-o"])
             .arg(&txt),
     );
     let points = read(&txt);
@@ -904,7 +904,7 @@ fn geodesic_exact_distances_and_shortest_paths() {
         bin()
             .arg("geodesic")
             .arg(&mesh)
-            .args(["--path", &pair, "-o"])
+            .args(["--path", &pair, "--exact", "-o"])
             .arg(&obj),
     );
     let text = std::fs::read_to_string(&obj).expect("written");
@@ -917,6 +917,35 @@ fn geodesic_exact_distances_and_shortest_paths() {
         .find(|l| l.starts_with("l "))
         .expect("a polyline");
     assert_eq!(line.split(' ').count(), points.len() + 1);
+    // Without --exact: down the heat method's distance, a little longer than the shortest.
+    let heat = dir.join("heat.txt");
+    let r = run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--path", &pair, "--stats", "-o"])
+            .arg(&heat),
+    );
+    assert!(String::from_utf8(r.stdout)
+        .expect("utf8")
+        .contains("\"exact\":false"));
+    let points = read(&heat);
+    let length: f64 = points
+        .windows(2)
+        .map(|w| {
+            ((w[0][0] - w[1][0]).powi(2)
+                + (w[0][1] - w[1][1]).powi(2)
+                + (w[0][2] - w[1][2]).powi(2))
+            .sqrt()
+        })
+        .sum();
+    assert!(
+        length >= d[far] - 1e-9 && length < 1.03 * d[far],
+        "{length} vs {}",
+        d[far]
+    );
+    assert_eq!(points[0], sphere.positions[3].to_vec());
+    assert_eq!(points[points.len() - 1], sphere.positions[far].to_vec());
     // Errors, each one line.
     for (args, says) in [
         (&["--path", "0", "-o", "p.txt"][..], "A,B"),

@@ -6,7 +6,9 @@ mod common;
 
 use bdmorph::generate;
 use bdmorph::geodesic::intrinsic::TriangulationError;
-use bdmorph::geodesic::{Anchor, Boundary, GeodesicError, HeatGeodesics, HeatOptions, TimeScale};
+use bdmorph::geodesic::{
+    Anchor, Boundary, ExactGeodesics, GeodesicError, HeatGeodesics, HeatOptions, TimeScale,
+};
 use bdmorph::SurfaceMesh;
 use std::f64::consts::FRAC_1_SQRT_2;
 
@@ -218,21 +220,12 @@ fn boundary_conditions_are_all_usable() {
     }
 }
 
-/// Exact polyhedral distances from a file of `tests/data/` (computed outside the test run by
-/// `tools/exact_geodesics.py`, pygeodesic's MMP algorithm).
-fn exact_file(text: &str) -> Vec<f64> {
-    text.lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| l.trim().parse().expect("a number"))
-        .collect()
-}
-
 #[test]
 fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
     let Some(dir) = common::shared_data() else {
         return;
     };
-    // (mesh, source, exact distances, the best peer's error, its name, our bar). The peers'
+    // (mesh, source, the best peer's error, its name, our bar). The peers'
     // errors were measured by tools/geodesic_compare.py in one run with ours (potpourri3d
     // 1.4.0 robust and plain, libigl 2.6.3); ours now: Isis 0.00882 and 0.02206, Nefertiti
     // 0.01348 and 0.01834, camel head 0.01360 (with the defaults before issue 23's
@@ -244,7 +237,6 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
         (
             "disk3d/ustc-cg/Isis_dABF.obj",
             0,
-            include_str!("data/isis_exact_0.txt"),
             0.01583,
             "pp3d robust",
             0.0090,
@@ -252,7 +244,6 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
         (
             "disk3d/ustc-cg/Isis_dABF.obj",
             53,
-            include_str!("data/isis_exact_53.txt"),
             0.03255,
             "pp3d robust",
             0.0225,
@@ -260,7 +251,6 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
         (
             "disk3d/ustc-cg/Nefertiti_face.obj",
             0,
-            include_str!("data/nefertiti_exact_0.txt"),
             0.02061,
             "libigl",
             0.0138,
@@ -268,7 +258,6 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
         (
             "disk3d/ustc-cg/Nefertiti_face.obj",
             206,
-            include_str!("data/nefertiti_exact_206.txt"),
             0.02375,
             "libigl",
             0.0187,
@@ -276,16 +265,18 @@ fn shared_meshes_match_exact_geodesics_as_well_as_the_peers() {
         (
             "disk3d/libigl/camelhead.off",
             0,
-            include_str!("data/camelhead_exact_0.txt"),
             0.01369,
             "pp3d robust",
             0.0139,
         ),
     ];
-    for (rel, source, text, peer, peer_name, bar) in cases {
+    for (rel, source, peer, peer_name, bar) in cases {
         let mesh = bdmorph::io::read_mesh(dir.join(rel)).expect("mesh");
-        let exact = exact_file(text);
-        assert_eq!(exact.len(), mesh.positions.len(), "{rel}");
+        // The reference: exact polyhedral distances (tests/geodesic_exact.rs checks them
+        // against pygeodesic's and libigl's).
+        let exact = ExactGeodesics::new(&mesh)
+            .and_then(|mut e| e.distance(&[source as u32]))
+            .expect("exact distances");
         let err = error_with(&mesh, HeatOptions::default(), source, &exact);
         let neumann = error_with(
             &mesh,

@@ -5,7 +5,9 @@
 mod common;
 
 use bdmorph::generate;
-use bdmorph::geodesic::{ExactGeodesics, GeodesicError, OnSurface};
+use bdmorph::geodesic::{
+    descend, ExactGeodesics, GeodesicError, HeatGeodesics, HeatOptions, OnSurface,
+};
 use bdmorph::SurfaceMesh;
 use std::f64::consts::PI;
 
@@ -390,5 +392,91 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(
         ExactGeodesics::new(&nan),
         Err(GeodesicError::NonFinite { vertex: 3 })
+    ));
+}
+
+/// Every point of a path lies on the mesh where it says, and consecutive points share a face.
+fn check_on_surface(mesh: &SurfaceMesh, path: &bdmorph::geodesic::GeodesicPath) {
+    let verts = |p: &bdmorph::geodesic::PathPoint| -> Vec<u32> {
+        match p.on {
+            OnSurface::Vertex(v) => vec![v],
+            OnSurface::Edge { from, to, t } => {
+                assert!(t > 0.0 && t < 1.0);
+                let (x, y) = (mesh.positions[from as usize], mesh.positions[to as usize]);
+                for k in 0..3 {
+                    assert!((p.position[k] - (x[k] + t * (y[k] - x[k]))).abs() < 1e-12);
+                }
+                vec![from, to]
+            }
+        }
+    };
+    for w in path.points.windows(2) {
+        let (a, b) = (verts(&w[0]), verts(&w[1]));
+        assert!(
+            mesh.faces
+                .iter()
+                .any(|f| a.iter().chain(&b).all(|v| f.contains(v))),
+            "{:?} and {:?} share no face",
+            w[0].on,
+            w[1].on
+        );
+    }
+}
+
+#[test]
+fn heat_paths_run_down_the_distance_close_to_the_shortest() {
+    let (plane, flat) = tilted_plane(24, 12);
+    let mut meshes = vec![("plane", plane), ("sphere", generate::icosphere(4))];
+    if let Some(dir) = common::shared_data() {
+        meshes.push((
+            "camel head",
+            bdmorph::io::read_mesh(dir.join("disk3d/libigl/camelhead.off")).expect("mesh"),
+        ));
+    }
+    for (name, mesh) in &meshes {
+        let mut heat = HeatGeodesics::new(mesh, HeatOptions::default()).expect("set up");
+        let mut exact = ExactGeodesics::new(mesh).expect("set up");
+        let n = mesh.positions.len() as u32;
+        let mut worst: f64 = 0.0;
+        for (a, b) in [(0, n - 1), (n / 3, 2 * n / 3 + 1), (7, n / 2)] {
+            let d = heat.distance(&[a]).expect("query");
+            let path = descend(mesh, &d, b).expect("a path down");
+            assert_eq!(path.points[0].on, OnSurface::Vertex(a), "{name}");
+            assert_eq!(path.points[path.points.len() - 1].on, OnSurface::Vertex(b));
+            check_on_surface(mesh, &path);
+            let shortest = exact.distance(&[a]).expect("exact")[b as usize];
+            let ratio = path.length() / shortest;
+            assert!(
+                ratio >= 1.0 - 1e-9,
+                "{name} {a} -> {b}: shorter than the shortest"
+            );
+            worst = worst.max(ratio);
+            let exact_path = exact.path(a, b).expect("path");
+            check_on_surface(mesh, &exact_path);
+        }
+        eprintln!("{name}: heat paths at most {worst:.4} times the shortest");
+        assert!(worst < 1.03, "{name}: {worst}");
+    }
+    let _ = flat;
+}
+
+#[test]
+fn a_field_with_a_false_minimum_is_a_typed_error() {
+    let sphere = generate::icosphere(2);
+    let mut d: Vec<f64> = sphere.positions.iter().map(|p| 1.0 - p[2]).collect();
+    let top = (0..d.len())
+        .min_by(|&i, &j| d[i].total_cmp(&d[j]))
+        .expect("vertices");
+    d[top] = 0.0;
+    // A dent: the bottom vertex lower than all its neighbours, but not a source.
+    let far = (0..d.len())
+        .max_by(|&i, &j| d[i].total_cmp(&d[j]))
+        .expect("vertices");
+    d[far] = 0.5;
+    let r = descend(&sphere, &d, far as u32);
+    assert!(matches!(r, Err(GeodesicError::NoDescent { .. })), "{r:?}");
+    assert!(matches!(
+        descend(&sphere, &d[1..], 0),
+        Err(GeodesicError::OutputLength { .. })
     ));
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use bdmorph::geodesic::{
-    Anchor, Boundary, ExactGeodesics, GeodesicPath, HeatGeodesics, HeatOptions, TimeScale,
+    descend, Anchor, Boundary, ExactGeodesics, GeodesicPath, HeatGeodesics, HeatOptions, TimeScale,
 };
 use bdmorph::render::{html, raster, surface, Image};
 
@@ -68,28 +68,7 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
             mesh.positions.len()
         ));
     }
-    let options = HeatOptions::default()
-        .with_time_factor(args.time_factor)
-        .with_boundary(match args.boundary {
-            BoundaryArg::Robin => Boundary::Robin,
-            BoundaryArg::Neumann => Boundary::Neumann,
-            BoundaryArg::Dirichlet => Boundary::Dirichlet,
-            BoundaryArg::Average => Boundary::Average,
-        })
-        .with_absorption(args.absorption)
-        .with_boundary_source_absorption(args.boundary_source_absorption)
-        .with_absorb_at_cuts(args.absorb_at_cuts)
-        .with_time_scale(match args.time_scale {
-            TimeScaleArg::Spacing => TimeScale::Spacing,
-            TimeScaleArg::MeanEdge => TimeScale::MeanEdge,
-        })
-        .with_anchor(match args.anchor {
-            AnchorArg::OneRing => Anchor::OneRing,
-            AnchorArg::Sources => Anchor::Sources,
-        })
-        .with_intrinsic_delaunay(!args.no_intrinsic_delaunay)
-        .with_flip_boundary(!args.no_flip_boundary)
-        .with_mollify(args.mollify);
+    let options = heat_options(&args);
     let (fields, setup, query) = if args.exact {
         exact_fields(&args, &file, sources, each)?
     } else {
@@ -161,6 +140,32 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// The heat method's options from the command line.
+fn heat_options(args: &GeodesicArgs) -> HeatOptions {
+    HeatOptions::default()
+        .with_time_factor(args.time_factor)
+        .with_boundary(match args.boundary {
+            BoundaryArg::Robin => Boundary::Robin,
+            BoundaryArg::Neumann => Boundary::Neumann,
+            BoundaryArg::Dirichlet => Boundary::Dirichlet,
+            BoundaryArg::Average => Boundary::Average,
+        })
+        .with_absorption(args.absorption)
+        .with_boundary_source_absorption(args.boundary_source_absorption)
+        .with_absorb_at_cuts(args.absorb_at_cuts)
+        .with_time_scale(match args.time_scale {
+            TimeScaleArg::Spacing => TimeScale::Spacing,
+            TimeScaleArg::MeanEdge => TimeScale::MeanEdge,
+        })
+        .with_anchor(match args.anchor {
+            AnchorArg::OneRing => Anchor::OneRing,
+            AnchorArg::Sources => Anchor::Sources,
+        })
+        .with_intrinsic_delaunay(!args.no_intrinsic_delaunay)
+        .with_flip_boundary(!args.no_flip_boundary)
+        .with_mollify(args.mollify)
+}
+
 /// The fields by the heat method, with the set-up and query times in seconds (and the
 /// `--stats` line).
 fn heat_fields(
@@ -210,7 +215,7 @@ fn exact_fields(
     let mut exact = ExactGeodesics::new(&file.mesh).map_err(|e| file.locate(e).to_string())?;
     let setup = started.elapsed().as_secs_f64();
     let started = Instant::now();
-    let mut windows = 0;
+    let (mut windows, mut held) = (0, 0);
     let mut fields = Vec::new();
     let groups: Vec<&[u32]> = if each {
         sources.chunks(1).collect()
@@ -224,20 +229,22 @@ fn exact_fields(
                 .map_err(|e| file.locate(e).to_string())?,
         );
         windows += exact.stats().windows;
+        held = held.max(exact.stats().held);
     }
     let query = started.elapsed().as_secs_f64();
     if args.stats {
         writeln!(
             std::io::stdout().lock(),
-            "{{\"vertices\":{},\"faces\":{},\"exact\":true,\"windows\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
-            file.mesh.positions.len(), file.mesh.faces.len(), windows, setup, fields.len(), query
+            "{{\"vertices\":{},\"faces\":{},\"exact\":true,\"windows\":{},\"windows_held\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
+            file.mesh.positions.len(), file.mesh.faces.len(), windows, held, setup, fields.len(), query
         )
         .map_err(|e| e.to_string())?;
     }
     Ok((fields, setup, query))
 }
 
-/// `--path A,B`: the exact shortest path, written as text or an OBJ polyline.
+/// `--path A,B`: the shortest path (exact with `--exact`, else down the heat method's
+/// distance from A), written as text or an OBJ polyline.
 fn shortest_path(args: &GeodesicArgs, a: u32, b: u32) -> Result<(), String> {
     let Some(out) = &args.output else {
         return Err("--path A,B writes the path: give -o OUT.txt or -o OUT.obj".into());
@@ -265,8 +272,20 @@ fn shortest_path(args: &GeodesicArgs, a: u32, b: u32) -> Result<(), String> {
         ));
     }
     let started = Instant::now();
-    let mut exact = ExactGeodesics::new(&file.mesh).map_err(|e| file.locate(e).to_string())?;
-    let path = exact.path(a, b).map_err(|e| file.locate(e).to_string())?;
+    let (path, windows) = if args.exact {
+        let mut exact = ExactGeodesics::new(&file.mesh).map_err(|e| file.locate(e).to_string())?;
+        let path = exact.path(a, b).map_err(|e| file.locate(e).to_string())?;
+        (path, Some(exact.stats().windows))
+    } else {
+        // Down the heat method's distance from A, starting at B.
+        let mut heat = HeatGeodesics::new(&file.mesh, heat_options(args))
+            .map_err(|e| file.locate(e).to_string())?;
+        let d = heat
+            .distance(&[a])
+            .map_err(|e| file.locate(e).to_string())?;
+        let path = descend(&file.mesh, &d, b).map_err(|e| file.locate(e).to_string())?;
+        (path, None)
+    };
     let seconds = started.elapsed().as_secs_f64();
     let text = if obj {
         path_obj(&path, a, b)
@@ -277,18 +296,24 @@ fn shortest_path(args: &GeodesicArgs, a: u32, b: u32) -> Result<(), String> {
     if args.stats {
         writeln!(
             std::io::stdout().lock(),
-            "{{\"points\":{},\"length\":{:e},\"windows\":{},\"seconds\":{:e}}}",
+            "{{\"points\":{},\"length\":{:e},\"exact\":{},\"windows\":{},\"seconds\":{:e}}}",
             path.points.len(),
             path.length(),
-            exact.stats().windows,
+            args.exact,
+            windows.unwrap_or(0),
             seconds
         )
         .map_err(|e| e.to_string())?;
     }
     if !args.quiet {
         eprintln!(
-            "wrote {} (a shortest path from vertex {a} to vertex {b}: length {}, {} points, {:.0} ms)",
+            "wrote {} ({} path from vertex {a} to vertex {b}: length {}, {} points, {:.0} ms)",
             out.display(),
+            if args.exact {
+                "the exact shortest"
+            } else {
+                "the heat method's"
+            },
             path.length(),
             path.points.len(),
             seconds * 1e3

@@ -98,7 +98,7 @@ enum Command {
     ///   bdmorph blend man.obj man2.obj man3.obj --weights 0.1,0.4,0.5 --stats
     #[command(verbatim_doc_comment)]
     Blend(BlendArgs),
-    /// Geodesic distances on a 3D triangle mesh by the heat method.
+    /// Geodesic distances on a 3D triangle mesh by the heat method, or exact ones, and paths.
     ///
     /// The mesh (OBJ or OFF, any triangle mesh: closed, with boundaries, several pieces) is
     /// prepared once (intrinsic Delaunay triangulation, cotan Laplacian, two Cholesky
@@ -116,11 +116,18 @@ enum Command {
     /// source on the boundary is computed with neumann conditions instead (zero heat on the
     /// boundary would contradict that source), and a one-line note on stderr says so.
     ///
+    /// --exact: exact polyhedral distances (window propagation) instead, with the same
+    /// outputs. --path A,B: the shortest path from vertex A to vertex B, down the heat
+    /// method's distance (exact with --exact), written to -o OUT.txt (one point "x y z" per
+    /// line) or OUT.obj (the points and one polyline).
+    ///
     /// Examples:
     ///   bdmorph geodesic camelhead.off --source 0 -o distance.txt
     ///   bdmorph geodesic camelhead.off --source 0 --source 500 -o nearest.png
     ///   bdmorph geodesic sphere.obj --each-source 0,10,20 -o fields.txt
     ///   bdmorph geodesic bunny.off --source 0 --stats -o bunny.html
+    ///   bdmorph geodesic camelhead.off --exact --source 0 -o exact.txt
+    ///   bdmorph geodesic camelhead.off --path 0,5000 --exact -o path.obj
     #[command(verbatim_doc_comment)]
     Geodesic(GeodesicArgs),
     /// Flatten a disk-topology 3D mesh into the plane (a parameterisation).
@@ -495,8 +502,9 @@ struct GeodesicArgs {
     /// Wang) instead of the heat method: slower to compute, no set-up to amortise, exact.
     #[arg(long)]
     exact: bool,
-    /// The shortest path on the surface from vertex A to vertex B (always exact), written as
-    /// a polyline with a point wherever it crosses an edge.
+    /// The shortest path on the surface from vertex A to vertex B, written as a polyline with
+    /// a point wherever it crosses an edge: exact with --exact, else traced down the heat
+    /// method's distance from A (fast, approximate).
     #[arg(long, value_name = "A,B", value_parser = parse_vertex_pair, conflicts_with_all = ["sources", "each_source"])]
     path: Option<(u32, u32)>,
     /// The heat flows for t = M h^2, h measured on the (intrinsic Delaunay) triangulation as

@@ -274,6 +274,13 @@ pub enum GeodesicError {
         /// The target.
         to: u32,
     },
+    /// A path down a distance field reached a vertex with no lower neighbour that is not a
+    /// source (the field has a local minimum there).
+    #[error("the distance field has a local minimum at vertex {vertex}, which is not a source: no way down from there (try the exact path)")]
+    NoDescent {
+        /// The vertex.
+        vertex: u32,
+    },
     /// Tracing a shortest path back to its source went round in a loop (a bug, reported
     /// instead of hanging).
     #[error("tracing the shortest path back to its source did not end (please report this mesh)")]

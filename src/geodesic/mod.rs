@@ -53,11 +53,13 @@
 //! # Ok::<(), bdmorph::geodesic::GeodesicError>(())
 //! ```
 
+mod descent;
 mod exact;
 mod heat;
 pub mod intrinsic;
 mod operators;
 
+pub use descent::descend;
 pub use exact::{
     ExactGeodesics, ExactStats, GeodesicPath, OnSurface, PathPoint, DEFAULT_WINDOWS_PER_FACE,
 };

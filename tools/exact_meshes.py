@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
-"""Larger meshes for tools/exact_compare.py, written as OFF into target/exact_meshes/:
-a bumpy sphere of 10242 and 40962 vertices (an icosphere pushed in and out by a sum of
-waves, so about half its vertices are saddles), and a bumpy torus of 102400 vertices."""
+"""Meshes made in code for tools/exact_compare.py and tools/geodesic_compare.py (`--extra`),
+written as OFF into target/exact_meshes/: a bumpy sphere of 10242 and 40962 vertices (an
+icosphere pushed in and out by a sum of waves, so about half its vertices are saddles), a
+bumpy torus of 102400 vertices, and two adversarial meshes with a boundary: a wavy strip of
+slivers (cells 10 times longer than wide, rows sheared) and a saddle-shaped disk whose
+density varies 30-fold from the centre to the rim."""
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +56,43 @@ def torus(nu, nv):
     return P.reshape(-1, 3), np.array(F)
 
 
+def sliver_strip(nx=100, ny=10):
+    V = []
+    for j in range(ny + 1):
+        shift = 0.35 if j % 2 else 0.0
+        for i in range(nx + 1):
+            x = i + (shift if 0 < i < nx else 0.0)
+            x = 10.0 * x / nx
+            V.append([x, j / ny, 0.2 * np.sin(x)])
+    idx = lambda i, j: j * (nx + 1) + i
+    F = []
+    for j in range(ny):
+        for i in range(nx):
+            F += [[idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)], [idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]]
+    return np.array(V), np.array(F)
+
+
+def graded_disk(rings=30, around=64):
+    V = [[0.0, 0.0]]
+    for k in range(1, rings + 1):
+        r = (k / rings) ** 2
+        for i in range(around):
+            a = 2 * np.pi * (i + 0.5 * (k % 2)) / around
+            V.append([r * np.cos(a), r * np.sin(a)])
+    V = np.array(V)
+    F = [[0, 1 + i, 1 + (i + 1) % around] for i in range(around)]
+    for k in range(rings - 1):
+        a0, a1 = 1 + k * around, 1 + (k + 1) * around
+        for i in range(around):
+            j = (i + 1) % around
+            if k % 2 == 0:
+                F += [[a0 + i, a1 + i, a0 + j], [a0 + j, a1 + i, a1 + j]]
+            else:
+                F += [[a0 + i, a1 + i, a1 + j], [a0 + i, a1 + j, a0 + j]]
+    z = 0.4 * (V[:, 0] ** 2 - V[:, 1] ** 2)
+    return np.column_stack([V, z]), np.array(F)
+
+
 def write_off(path, V, F):
     with open(path, "w") as f:
         f.write(f"OFF\n{len(V)} {len(F)} 0\n")
@@ -67,6 +107,10 @@ def main():
         write_off(OUT / f"bumpy_sphere_{len(V)}.off", V * bumps(V)[:, None], F)
     V, F = torus(640, 160)
     write_off(OUT / f"bumpy_torus_{len(V)}.off", V, F)
+    V, F = sliver_strip()
+    write_off(OUT / f"sliver_strip_{len(V)}.off", V, F)
+    V, F = graded_disk()
+    write_off(OUT / f"graded_disk_{len(V)}.off", V, F)
     print("\n".join(str(p) for p in sorted(OUT.glob("*.off"))))
 
 

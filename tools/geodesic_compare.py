@@ -18,8 +18,10 @@ mesh (on meshes with a boundary some end up on it; the table counts them);
 `--skip-sources 10` takes the next 10 of the same sequence, an independent set.
 
 Methods, each with its defaults (the peers: `t = h^2`, `h` the mean edge length):
-  exact       pygeodesic 0.1.11 (MMP, exact polyhedral distances); cached as .npy files in
-              `--cache` (default `target/geodesic_compare/`, which git ignores)
+  exact       bdmorph's exact solver (`bdmorph geodesic --exact`, window propagation; it
+              agrees with pygeodesic's and libigl's MMP to about 1e-15 of the size,
+              BENCHMARKS.md), or pygeodesic 0.1.11 with `--exact-from pygeodesic`; cached
+              as .npy files in `--cache` (default `target/geodesic_compare/`)
   pp3d-robust potpourri3d 1.4.0 `MeshHeatMethodDistanceSolver(V, F, use_robust=True)`
               (geometry-central: mollified intrinsic Delaunay on the tufted cover)
   pp3d-plain  the same with `use_robust=False` (the mesh's own cotan Laplacian)
@@ -83,15 +85,23 @@ def pick_sources(points, count, skip=0):
     return chosen[skip:]
 
 
-def exact_distances(path, points, faces, source, cache):
+def exact_distances(path, points, faces, source, cache, solver="bdmorph"):
     name = os.path.relpath(path, start=os.path.dirname(os.path.dirname(os.path.dirname(path))))
     file = os.path.join(cache, name.replace(os.sep, "_") + f"_{source}.npy")
     if os.path.exists(file):
         return np.load(file)
-    import pygeodesic.geodesic as geodesic
+    if solver == "pygeodesic":
+        import pygeodesic.geodesic as geodesic
 
-    algorithm = geodesic.PyGeodesicAlgorithmExact(points, faces)
-    distances, _ = algorithm.geodesicDistances(np.array([source]), None)
+        algorithm = geodesic.PyGeodesicAlgorithmExact(points, faces)
+        distances, _ = algorithm.geodesicDistances(np.array([source]), None)
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "exact.txt")
+            subprocess.run([os.path.join(REPO, "target", "release", "bdmorph"), "geodesic", path,
+                            "--exact", "--source", str(source), "-o", out, "--quiet"],
+                           check=True)
+            distances = np.loadtxt(out)
     distances = np.asarray(distances, dtype=np.float64)
     os.makedirs(cache, exist_ok=True)
     np.save(file, distances)
@@ -180,12 +190,17 @@ def main():
                         help="NAME=ARGS: also run bdmorph with these example arguments")
     parser.add_argument("--no-peers", action="store_true", help="bdmorph and exact only")
     parser.add_argument("--per-source", action="store_true", help="print every field's error")
+    parser.add_argument("--exact-from", choices=["bdmorph", "pygeodesic"], default="bdmorph",
+                        help="the exact reference (cached per solver-independent file name)")
+    parser.add_argument("--extra", action="append", default=[],
+                        help="another mesh file to include (e.g. target/exact_meshes/*.off)")
     args = parser.parse_args()
     if not os.path.exists(args.bin):
         sys.exit(f"{args.bin} not found: cargo build --release --example geodesic_fields")
     paths = sorted(p for sub in ("closed3d", "disk3d")
                    for p in glob.glob(os.path.join(args.data, sub, "**", "*"), recursive=True)
                    if p.lower().endswith((".obj", ".off")) and args.meshes in p)
+    paths += args.extra
     if not paths:
         sys.exit(f"no meshes under {args.data}")
     variants = [("bdmorph", [])]
@@ -197,20 +212,23 @@ def main():
         points, faces = read_mesh(path)
         sources = pick_sources(points, args.sources, args.skip_sources)
         on_boundary = boundary_vertices(faces)
-        exact = [exact_distances(path, points, faces, s, args.cache) for s in sources]
+        exact = [exact_distances(path, points, faces, s, args.cache, args.exact_from)
+                 for s in sources]
         results = {} if args.no_peers else peers(points, faces, sources, args.repeats)
         for name, extra in variants:
             results[name] = bdmorph(args.bin, path, points, sources, extra, args.repeats)
         label = os.path.relpath(path, args.data)
         errors = {}
+        per_source = {}
         for method, (fields, _, _) in results.items():
             per = [relative_error(f, e, s) for f, e, s in zip(fields, exact, sources)]
+            per_source[method] = per
             errors[method] = float(np.mean(per))
             if args.per_source:
                 print(f"{label} {method}: " + " ".join(
                     f"{s}{'b' if s in on_boundary else ''}:{x:.5f}" for s, x in zip(sources, per)))
         rows.append((label, len(points), sources, sum(s in on_boundary for s in sources),
-                     errors, {m: (r[1], r[2]) for m, r in results.items()}))
+                     errors, {m: (r[1], r[2]) for m, r in results.items()}, per_source))
         print(f"done {label}", file=sys.stderr, flush=True)
     methods = list(rows[0][4])
     peer_names = [m for m in methods if m in ("pp3d-robust", "pp3d-plain", "libigl")]
@@ -221,7 +239,7 @@ def main():
         head += " | bdmorph / best peer"
     print(head + " |")
     print("|---|---:|---|" + "---:|" * (len(methods) + bool(peer_names)))
-    for label, n, sources, nb, errors, _ in rows:
+    for label, n, sources, nb, errors, _, _ in rows:
         best = min(errors[m] for m in peer_names) if peer_names else None
         cells = []
         for m in methods:
@@ -240,13 +258,30 @@ def main():
         head += " | fastest peer query / bdmorph query"
     print(head + " |")
     print("|---|" + "---:|" * (len(methods) + bool(peer_names)))
-    for label, _, _, _, _, times in rows:
+    for label, _, _, _, _, times, _ in rows:
         cells = [f"{times[m][0] * 1e3:.1f} / {times[m][1] * 1e3:.3f}" for m in methods]
         line = f"| {label} | " + " | ".join(cells)
         if peer_names:
             fastest = min(times[m][1] for m in peer_names)
             line += f" | {fastest / times['bdmorph'][1]:.2f}"
         print(line + " |")
+
+    if peer_names:
+        # The figure that counts: per (mesh, source), bdmorph's error over the best peer's.
+        print("\nPer source: bdmorph's error over the best peer's (worst source of each mesh)\n")
+        print("| mesh | worst source | ratio | sources worse than the best peer |")
+        print("|---|---:|---:|---:|")
+        overall = []
+        for label, _, sources, _, _, _, per in rows:
+            ratios = [per["bdmorph"][i] / min(per[m][i] for m in peer_names)
+                      for i in range(len(sources))]
+            worst = int(np.argmax(ratios))
+            overall += ratios
+            print(f"| {label} | {sources[worst]} | {ratios[worst]:.3f} | "
+                  f"{sum(r > 1 for r in ratios)} of {len(ratios)} |")
+        print(f"\nWorst ratio over all {len(overall)} fields: {max(overall):.3f}; "
+              f"worse than the best peer: {sum(r > 1 for r in overall)}; geometric mean "
+              f"{float(np.exp(np.mean(np.log(overall)))):.3f}")
 
 
 if __name__ == "__main__":

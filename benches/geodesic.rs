@@ -5,6 +5,8 @@
 //! Groups: `geodesic_setup/<mesh>` ([`HeatGeodesics::new`], default options),
 //! `geodesic_query/<mesh>` (one source, [`HeatGeodesics::distance_into`]), and
 //! `geodesic_query_plain/<mesh>` (without the intrinsic Delaunay triangulation),
+//! `geodesic_setup_refined/<mesh>` and `geodesic_query_refined/<mesh>` (with intrinsic
+//! Delaunay refinement to 30°),
 //! `geodesic_exact/<mesh>` (exact distances, [`ExactGeodesics::distance_into`]). Without
 //! `../shared/data` the shared meshes are skipped with a message. See BENCHMARKS.md.
 
@@ -42,25 +44,36 @@ fn meshes() -> Vec<(String, SurfaceMesh)> {
     out
 }
 
+/// Intrinsic Delaunay refinement to 30° (at most twice the vertices inserted).
+fn refined() -> HeatOptions {
+    HeatOptions::default().with_refinement(30.0, 2.0)
+}
+
 fn benches(c: &mut Criterion) {
     let meshes = meshes();
-    let mut group = c.benchmark_group("geodesic_setup");
-    group
-        .sample_size(20)
-        .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(4));
-    for (name, mesh) in &meshes {
-        group.bench_function(BenchmarkId::from_parameter(name), |b| {
-            b.iter(|| HeatGeodesics::new(black_box(mesh), HeatOptions::default()).expect("set up"));
-        });
+    for (group_name, options) in [
+        ("geodesic_setup", HeatOptions::default()),
+        ("geodesic_setup_refined", refined()),
+    ] {
+        let mut group = c.benchmark_group(group_name);
+        group
+            .sample_size(20)
+            .warm_up_time(Duration::from_secs(1))
+            .measurement_time(Duration::from_secs(4));
+        for (name, mesh) in &meshes {
+            group.bench_function(BenchmarkId::from_parameter(name), |b| {
+                b.iter(|| HeatGeodesics::new(black_box(mesh), options).expect("set up"));
+            });
+        }
+        group.finish();
     }
-    group.finish();
     for (group_name, options) in [
         ("geodesic_query", HeatOptions::default()),
         (
             "geodesic_query_plain",
             HeatOptions::default().with_intrinsic_delaunay(false),
         ),
+        ("geodesic_query_refined", refined()),
     ] {
         let mut group = c.benchmark_group(group_name);
         group

@@ -5,7 +5,8 @@
 //! cargo run --release --example geodesic_fields -- MESH --sources 0,17,523 --out fields.f64 \
 //!     [--time-factor M] [--time-scale mean-edge|spacing] [--anchor sources|one-ring] \
 //!     [--boundary robin|neumann|dirichlet|average] [--absorption R] [--boundary-source-absorption R] [--absorb-at-cuts] \
-//!     [--no-intrinsic-delaunay] [--no-flip-boundary] [--mollify DELTA] [--repeats R]
+//!     [--no-intrinsic-delaunay] [--no-flip-boundary] [--mollify DELTA] [--refine DEGREES]
+//!     [--refine-budget FRACTION] [--repeats R]
 //! ```
 //!
 //! Writes one distance field per source to `--out` (little-endian `f64`, source after
@@ -43,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let usage = "usage: geodesic_fields MESH --sources V1,V2,... --out FILE [--time-factor M] \
                  [--time-scale mean-edge|spacing] [--anchor sources|one-ring] \
                  [--boundary robin|neumann|dirichlet|average] [--absorption R] [--boundary-source-absorption R] [--absorb-at-cuts] [--no-intrinsic-delaunay] [--no-flip-boundary] \
-                 [--mollify DELTA] [--repeats R]";
+                 [--mollify DELTA] [--refine DEGREES] [--refine-budget FRACTION] [--repeats R]";
     let path = args.first().ok_or(usage)?;
     let sources: Vec<u32> = value(&args, "--sources")
         .ok_or(usage)?
@@ -56,6 +57,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .with_intrinsic_delaunay(!args.iter().any(|a| a == "--no-intrinsic-delaunay"))
         .with_flip_boundary(!args.iter().any(|a| a == "--no-flip-boundary"))
         .with_absorb_at_cuts(args.iter().any(|a| a == "--absorb-at-cuts"));
+    if let Some(a) = value(&args, "--refine") {
+        let budget = value(&args, "--refine-budget").unwrap_or("0.5").parse()?;
+        options = options.with_refinement(a.parse()?, budget);
+    }
     if let Some(r) = value(&args, "--absorption") {
         options = options.with_absorption(r.parse()?);
     }
@@ -120,12 +125,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let stats = heat.stats();
     writeln!(
         std::io::stdout().lock(),
-        "{{\"vertices\":{n},\"coordinate_sum\":{coordinate_sum:e},\"flips\":{},\"mean_edge\":{:e},\"spacing\":{:e},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"query_seconds\":{:e}}}",
+        "{{\"vertices\":{n},\"coordinate_sum\":{coordinate_sum:e},\"flips\":{},\"mean_edge\":{:e},\"spacing\":{:e},\"time\":{:e},\"factor_nnz\":{},\"inserted\":{},\"below_bound\":{},\"budget_reached\":{},\"min_angle\":{:.3},\"setup_seconds\":{:e},\"query_seconds\":{:e}}}",
         stats.flips,
         stats.mean_edge,
         stats.spacing,
         stats.time,
         stats.factor_nnz,
+        stats.refine.inserted + stats.refine.split,
+        stats.refine.below_bound,
+        stats.refine.budget_reached,
+        stats.refine.min_angle_degrees,
         median(setup),
         median(query)
     )?;

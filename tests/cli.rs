@@ -1043,7 +1043,19 @@ fn geodesic_writes_distances_columns_and_pictures() {
             assert!(page.contains("<figure><img") && page.contains("Isolines every"));
         }
     }
-    // Errors: a vertex that does not exist, an unknown extension, no source.
+    // Refined: the same vertices, the refinement reported by --stats.
+    let r = run_ok(
+        bin()
+            .arg("geodesic")
+            .arg(&mesh)
+            .args(["--source", "3", "--refine", "30", "--stats", "-q", "-o"])
+            .arg(dir.join("refined.txt")),
+    );
+    let stats = String::from_utf8(r.stdout).expect("utf8");
+    assert!(stats.contains("\"refined_min_angle\":"), "{stats}");
+    let refined = std::fs::read_to_string(dir.join("refined.txt")).expect("written");
+    assert_eq!(refined.lines().count(), n);
+    // Errors: a vertex that does not exist, an unknown extension, no source, a bad option.
     for (args, says) in [
         (&["--source", "9999", "-o", "x.txt"][..], "does not exist"),
         (
@@ -1051,6 +1063,10 @@ fn geodesic_writes_distances_columns_and_pictures() {
             "unknown output extension",
         ),
         (&["-o", "x.txt"][..], "--source"),
+        (
+            &["--source", "0", "--refine", "-1", "-o", "x.txt"][..],
+            "refinement angle -1",
+        ),
     ] {
         let r = bin()
             .arg("geodesic")

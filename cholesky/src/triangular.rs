@@ -193,6 +193,13 @@ impl SupernodalSolve {
         }
     }
 
+    /// Solves on the calling thread from now on (no split, its buffers freed).
+    pub fn drop_split(&mut self) {
+        self.split = None;
+        self.bins_buf = Vec::new();
+        self.top_y = Vec::new();
+    }
+
     /// The bins of the split over threads (1 without one).
     pub fn threads(&self) -> usize {
         self.split.as_ref().map_or(1, |s| s.bins.len())

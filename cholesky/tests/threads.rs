@@ -147,3 +147,29 @@ fn small_solves_stay_on_one_thread() {
     assert_eq!(used, 1, "400 unknowns are not worth a second thread");
     assert!(residual < 1e-12);
 }
+
+#[test]
+fn solves_kept_on_one_thread_give_one_threads_bits() {
+    let (one, _, _) = solve_columns(160, 1, 1);
+    let (pattern, values) = fixtures::grid(160, 1, 1e-2).assemble().expect("pattern");
+    let kept = pool(2).install(|| {
+        let mut chol =
+            Cholesky::with_options(&pattern, CholeskyOptions::default()).expect("analysis");
+        chol.factorize(&values).expect("definite");
+        assert!(chol.solve_threads() >= 2, "split for two threads");
+        chol.keep_solves_on_one_thread();
+        assert_eq!(chol.solve_threads(), 1);
+        let n = chol.dim();
+        let mut x: Vec<f64> = (0..n)
+            .map(|i| ((i * 53) % 97) as f64 / 97.0 - 0.5)
+            .collect();
+        chol.solve_in_place(&mut x, 1).expect("solve");
+        // Still one thread after a new factorisation of the same pattern.
+        chol.factorize(&values).expect("definite");
+        assert_eq!(chol.solve_threads(), 1);
+        x
+    });
+    // The factorisation itself was split (its top summed in another order): rounding apart.
+    let diff = max_difference(&one, &kept);
+    assert!(diff < 1e-11, "{diff:e} from one thread");
+}

@@ -497,7 +497,10 @@ class HeatGeodesics:
 
     Options: ``time_factor`` (the heat time's ``m`` in ``t = m h^2``, default 0.5),
     ``boundary`` (``"robin"`` (default), ``"neumann"``, ``"dirichlet"`` or ``"average"``),
-    ``intrinsic_delaunay`` (default True).
+    ``intrinsic_delaunay`` (default True), ``refine`` (intrinsic Delaunay refinement: insert
+    vertices on the surface until every triangle's angles are at least this many degrees, at
+    most 30; default 0, off) and ``refine_budget`` (the most vertices it inserts, as a
+    fraction of the mesh's; default 0.5). Distances are always per vertex of the mesh.
 
     >>> import numpy as np, bdmorph
     >>> V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
@@ -510,10 +513,13 @@ class HeatGeodesics:
     """
 
     def __init__(self, V, F, *, time_factor: Optional[float] = None, boundary: str = "robin",
-                 intrinsic_delaunay: bool = True):
+                 intrinsic_delaunay: bool = True, refine: float = 0.0,
+                 refine_budget: float = 0.5):
         self._g = _native.HeatGeodesics(_points(V), _faces(F),
                                         _real(time_factor, "time_factor", GeodesicError),
-                                        boundary, intrinsic_delaunay)
+                                        boundary, intrinsic_delaunay,
+                                        _real(refine, "refine", GeodesicError, strict=False),
+                                        _real(refine_budget, "refine_budget", GeodesicError, strict=False))
 
     def distance(self, sources) -> np.ndarray:
         """Distances from the nearest of ``sources`` (a vertex or a non-empty list), an array
@@ -533,7 +539,7 @@ class HeatGeodesics:
     @property
     def stats(self) -> dict:
         """What the set-up did: vertices, faces, flips, time, mean_edge, spacing,
-        has_boundary."""
+        has_boundary, refined_vertices, refined_min_angle (degrees; 0 without refinement)."""
         return self._g.stats
 
     def __repr__(self) -> str:

@@ -29,7 +29,8 @@ pub struct HeatGeodesics {
 #[pymethods]
 impl HeatGeodesics {
     #[new]
-    #[pyo3(signature = (v, f, time_factor=None, boundary="robin", intrinsic_delaunay=true))]
+    #[pyo3(signature = (v, f, time_factor=None, boundary="robin", intrinsic_delaunay=true, refine=0.0, refine_budget=0.5))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         v: PyReadonlyArray2<'_, f64>,
@@ -37,6 +38,8 @@ impl HeatGeodesics {
         time_factor: Option<f64>,
         boundary: &str,
         intrinsic_delaunay: bool,
+        refine: f64,
+        refine_budget: f64,
     ) -> PyResult<HeatGeodesics> {
         let mesh = arrays::surface(&v, &f)?;
         let boundary = match boundary {
@@ -52,7 +55,8 @@ impl HeatGeodesics {
         };
         let mut options = HeatOptions::default()
             .with_boundary(boundary)
-            .with_intrinsic_delaunay(intrinsic_delaunay);
+            .with_intrinsic_delaunay(intrinsic_delaunay)
+            .with_refinement(refine, refine_budget);
         if let Some(m) = time_factor {
             if !(m.is_finite() && m > 0.0) {
                 return Err(errors::geodesic(format!(
@@ -100,7 +104,8 @@ impl HeatGeodesics {
             .into_pyarray(py))
     }
 
-    /// What the set-up did: vertices, faces, flips, time, mean_edge, spacing, has_boundary.
+    /// What the set-up did: vertices, faces, flips, time, mean_edge, spacing, has_boundary,
+    /// refined_vertices and refined_min_angle (degrees; 0 without refinement).
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = self.inner.stats();
@@ -112,6 +117,8 @@ impl HeatGeodesics {
         d.set_item("mean_edge", s.mean_edge)?;
         d.set_item("spacing", s.spacing)?;
         d.set_item("has_boundary", s.has_boundary)?;
+        d.set_item("refined_vertices", s.refine.inserted + s.refine.split)?;
+        d.set_item("refined_min_angle", s.refine.min_angle_degrees)?;
         Ok(d)
     }
 

@@ -34,6 +34,7 @@ def test_options_follow_the_command_line(tmp_path, cli):
         ({"boundary": "neumann"}, ["--boundary", "neumann"]),
         ({"boundary": "average", "time_factor": 1.0}, ["--boundary", "average", "--time-factor", "1"]),
         ({"intrinsic_delaunay": False}, ["--no-intrinsic-delaunay"]),
+        ({"refine": 25.0, "refine_budget": 1.0}, ["--refine", "25", "--refine-budget", "1"]),
     ]:
         g = bdmorph.HeatGeodesics(V, F, **kwargs)
         cli("geodesic", tmp_path / "bump.obj", "--source", 210, *flags, "-o", tmp_path / "d.txt")

@@ -164,6 +164,7 @@ fn heat_options(args: &GeodesicArgs) -> HeatOptions {
         .with_intrinsic_delaunay(!args.no_intrinsic_delaunay)
         .with_flip_boundary(!args.no_flip_boundary)
         .with_mollify(args.mollify)
+        .with_refinement(args.refine, args.refine_budget)
 }
 
 /// The fields by the heat method, with the set-up and query times in seconds (and the
@@ -196,8 +197,9 @@ fn heat_fields(
         let s = heat.stats();
         writeln!(
             std::io::stdout().lock(),
-            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"mollified\":{:e},\"time\":{:e},\"factor_nnz\":{},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
-            s.vertices, s.faces, s.flips, s.has_boundary, s.mollified, s.time, s.factor_nnz, setup, fields.len(), query
+            "{{\"vertices\":{},\"faces\":{},\"flips\":{},\"has_boundary\":{},\"mollified\":{:e},\"time\":{:e},\"factor_nnz\":{},\"refined_vertices\":{},\"refined_min_angle\":{:.3},\"setup_seconds\":{:e},\"fields\":{},\"query_seconds\":{:e}}}",
+            s.vertices, s.faces, s.flips, s.has_boundary, s.mollified, s.time, s.factor_nnz,
+            s.refine.inserted + s.refine.split, s.refine.min_angle_degrees, setup, fields.len(), query
         )
         .map_err(|e| e.to_string())?;
     }

@@ -549,6 +549,14 @@ struct GeodesicArgs {
     /// degenerate triangles are accepted (0: off).
     #[arg(long, value_name = "DELTA", default_value_t = 1e-5)]
     mollify: f64,
+    /// Intrinsic Delaunay refinement: insert vertices on the surface until every triangle's
+    /// angles are at least DEGREES (at most 30; 0: off, the default), solve on the refined
+    /// triangulation and read the distances at the mesh's vertices.
+    #[arg(long, value_name = "DEGREES", default_value_t = 0.0)]
+    refine: f64,
+    /// The most vertices --refine inserts, as a fraction of the mesh's vertices.
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.5)]
+    refine_budget: f64,
     /// Picture size for PNG and HTML output, as WxH (per field).
     #[arg(long, value_name = "WxH", default_value = "800x800")]
     size: ImageSize,

@@ -127,6 +127,16 @@ pub struct HeatOptions {
     /// the margin (every shared mesh) nothing changes. `0` turns it off, and then a triangle
     /// of zero area is an error.
     pub mollify: f64,
+    /// Intrinsic Delaunay refinement ([`Intrinsic::refine`]): vertices are inserted on the
+    /// surface until every triangle's angles are at least this many degrees (at most 30;
+    /// 0: off). The systems are solved on the refined triangulation and the distances read
+    /// at the mesh's own vertices. The time `t` is measured on the triangulation before
+    /// refinement, so refining changes the discretisation, not the smoothing. With
+    /// [`HeatOptions::flip_boundary`] (the default) the doubled surface is refined, a closed
+    /// surface; without it, boundary edges opposite an obtuse angle are split.
+    pub refine_angle: f64,
+    /// The most vertices refinement inserts, as a fraction of the mesh's vertices.
+    pub refine_budget: f64,
     /// Threads for this object's work: `None` (default) for rayon's global pool, one thread
     /// per core; `Some(n)` for a pool of its own of `n` threads, in which the systems are
     /// factored and the queries solved ([`crate::threads`]).
@@ -146,6 +156,8 @@ impl Default for HeatOptions {
             intrinsic_delaunay: true,
             flip_boundary: true,
             mollify: 1e-5,
+            refine_angle: 0.0,
+            refine_budget: 0.5,
             threads: None,
         }
     }
@@ -203,6 +215,13 @@ impl HeatOptions {
         self.flip_boundary = on;
         self
     }
+    /// Sets the intrinsic Delaunay refinement's angle bound in degrees (0: off) and its
+    /// budget (the most vertices inserted, as a fraction of the mesh's).
+    pub fn with_refinement(mut self, angle_degrees: f64, budget: f64) -> Self {
+        self.refine_angle = angle_degrees;
+        self.refine_budget = budget;
+        self
+    }
     /// Sets the intrinsic mollification margin (relative to the mean edge length; 0: off).
     pub fn with_mollify(mut self, relative_delta: f64) -> Self {
         self.mollify = relative_delta;
@@ -232,6 +251,14 @@ pub enum GeodesicError {
     /// The absorption is negative or not a number.
     #[error("absorption {0} must be zero or a positive number")]
     Absorption(f64),
+    /// The refinement angle or budget is negative or not a number.
+    #[error("refinement angle {angle} and budget {budget} must be zero or positive numbers")]
+    Refine {
+        /// The angle bound (degrees).
+        angle: f64,
+        /// The budget (fraction of the vertices).
+        budget: f64,
+    },
     /// The mollification margin is negative or not a number.
     #[error("mollification margin {0} must be zero or a positive number")]
     Mollify(f64),
@@ -319,6 +346,8 @@ pub struct HeatStats {
     pub mollified: f64,
     /// Nonzeros in the Cholesky factors (heat and Poisson, and the Dirichlet heat when used).
     pub factor_nnz: usize,
+    /// What intrinsic Delaunay refinement did (all zero when it is off).
+    pub refine: crate::geodesic::RefineStats,
 }
 
 /// One linear system on a subset of the vertices (its unknowns), factored once.
@@ -381,7 +410,11 @@ impl System {
             system: name,
             source,
         };
-        let chol = Cholesky::assemble(k, &pairs, &values, 1).map_err(factor)?;
+        let mut chol = Cholesky::assemble(k, &pairs, &values, 1).map_err(factor)?;
+        // A query's solves alternate with its own serial work (the gradient and divergence):
+        // measured, splitting the Poisson solve over the threads made queries slower on 11K
+        // vertices (waking the pool each time) and no faster on 41K-102K.
+        chol.keep_solves_on_one_thread();
         Ok(System {
             index,
             vertex,
@@ -486,6 +519,10 @@ impl HeatGeodesics {
         if !(options.mollify >= 0.0 && options.mollify.is_finite()) {
             return Err(GeodesicError::Mollify(options.mollify));
         }
+        let (angle, budget) = (options.refine_angle, options.refine_budget);
+        if !(angle >= 0.0 && angle.is_finite() && budget >= 0.0 && budget.is_finite()) {
+            return Err(GeodesicError::Refine { angle, budget });
+        }
         for r in [options.absorption, options.boundary_source_absorption] {
             if !(r >= 0.0 && r.is_finite()) {
                 return Err(GeodesicError::Absorption(r));
@@ -506,9 +543,15 @@ impl HeatGeodesics {
             &mesh.faces,
             options.mollify * mean_edge,
         )?;
-        let boundary = tri.boundary_vertices();
-        let boundary_edges = tri.boundary_edges();
-        let has_boundary = boundary.iter().any(|&b| b);
+        let input_boundary = tri.boundary_vertices();
+        let input_boundary_edges = tri.boundary_edges();
+        let input_parents = tri.boundary_parents();
+        let input_cut = if options.absorb_at_cuts {
+            vec![false; input_boundary_edges.len()]
+        } else {
+            cut_edges(&mesh.positions, &input_boundary_edges)
+        };
+        let refining = options.intrinsic_delaunay && options.refine_angle > 0.0;
         let flips = if options.intrinsic_delaunay {
             if options.flip_boundary {
                 tri.double_across_boundary();
@@ -525,24 +568,58 @@ impl HeatGeodesics {
             (s + weight * (l[0] + l[1] + l[2]), w + 3.0 * weight)
         });
         let mean_edge = sides / weights;
-        let geometry = FaceGeometry::from_faces(&faces);
+        let mut geometry = FaceGeometry::from_faces(&faces);
         let mass = geometry.vertex_areas(n);
         let (area, area2) = mass
             .iter()
             .fold((0.0, 0.0), |(a, a2), &m| (a + m, a2 + m * m));
         let spacing = (2.0 / 3f64.sqrt() * area2 / area).sqrt();
-        let (component, n_components) = components(n, &mesh.faces);
         let h = match options.time_scale {
             TimeScale::MeanEdge => mean_edge,
             TimeScale::Spacing => spacing,
         };
         let time = options.time_factor * h * h;
-        let used = |v: usize| component[v] != NONE;
-        let cut = if options.absorb_at_cuts {
-            vec![false; boundary_edges.len()]
+        let mut refine = crate::geodesic::RefineStats::default();
+        let mut mass = mass;
+        let mut faces = faces;
+        if refining {
+            let cap = (options.refine_budget * n as f64)
+                .ceil()
+                .min(u32::MAX as f64 / 4.0);
+            refine = tri.refine(options.refine_angle, cap as usize);
+            faces = tri.weighted_faces();
+            geometry = FaceGeometry::from_faces(&faces);
+            mass = geometry.vertex_areas(tri.n_vertices());
+        }
+        // The refined triangulation's vertices: the mesh's, then those refinement inserted.
+        let n_all = tri.n_vertices();
+        let (boundary, boundary_edges, cut) = if refining && tri.is_doubled() {
+            // Refined on the doubled surface: the boundary is the input's (its vertices keep
+            // their numbers; the new ones lie off it, on one sheet or the other).
+            let mut boundary = input_boundary;
+            boundary.resize(n_all, false);
+            (boundary, input_boundary_edges, input_cut)
+        } else if refining {
+            // A boundary edge of the refined triangulation lies on one of the input's, which
+            // says whether it is a cut.
+            let index: std::collections::HashMap<u32, usize> = input_parents
+                .iter()
+                .enumerate()
+                .map(|(i, &h)| (h, i))
+                .collect();
+            let cut = tri
+                .boundary_parents()
+                .iter()
+                .map(|p| index.get(p).is_some_and(|&i| input_cut[i]))
+                .collect();
+            (tri.boundary_vertices(), tri.boundary_edges(), cut)
         } else {
-            cut_edges(&mesh.positions, &boundary_edges)
+            (input_boundary, input_boundary_edges, input_cut)
         };
+        let has_boundary = boundary.iter().any(|&b| b);
+        let refined_faces: Vec<[u32; 3]> = faces.iter().map(|f| f.0).collect();
+        let (component, n_components) = components(n_all, &refined_faces);
+        let used = |v: usize| component[v] != NONE;
         let absorbing = options.boundary == Boundary::Robin && cut.iter().any(|&c| !c);
         // The heat system with absorption r: the boundary term t ∫ κ u v ds, lumped: t κ l / 2
         // from each absorbing boundary edge of length l to both its ends' diagonal entries,
@@ -586,9 +663,9 @@ impl HeatGeodesics {
             None
         };
         // Pin the first vertex of each component.
-        let mut pinned = vec![false; n];
+        let mut pinned = vec![false; n_all];
         let mut seen = vec![false; n_components];
-        for v in 0..n {
+        for v in 0..n_all {
             let c = component[v];
             if c != NONE && !seen[c as usize] {
                 seen[c as usize] = true;
@@ -618,6 +695,7 @@ impl HeatGeodesics {
                 + boundary_source_heat
                     .as_ref()
                     .map_or(0, |d| d.chol.factor_nnz()),
+            refine,
         };
         let (ring_start, ring) = match options.anchor {
             Anchor::OneRing => one_rings(mesh),
@@ -636,9 +714,9 @@ impl HeatGeodesics {
             touched: Vec::with_capacity(if ring.is_empty() { 0 } else { n }),
             ring_start,
             ring,
-            u: vec![0.0; n],
+            u: vec![0.0; n_all],
             grad: Vec::with_capacity(geometry.len()),
-            div: vec![0.0; n],
+            div: vec![0.0; n_all],
             shift: vec![0.0; n_components],
             source_rows: Vec::new(),
             averaged: Vec::with_capacity(16),

@@ -55,17 +55,20 @@ pub enum TriangulationError {
 /// A triangle mesh by connectivity and edge lengths.
 #[derive(Clone, Debug)]
 pub struct Intrinsic {
-    origin: Vec<u32>,
-    next: Vec<u32>,
-    twin: Vec<u32>,
+    pub(super) origin: Vec<u32>,
+    pub(super) next: Vec<u32>,
+    pub(super) twin: Vec<u32>,
     /// Length of each half-edge's edge (twins agree).
-    len: Vec<f64>,
+    pub(super) len: Vec<f64>,
     /// Face of each half-edge, and a half-edge of each face.
-    face_of: Vec<u32>,
-    face_he: Vec<u32>,
-    n_vertices: usize,
+    pub(super) face_of: Vec<u32>,
+    pub(super) face_he: Vec<u32>,
+    pub(super) n_vertices: usize,
     /// Whether this is the doubled surface of [`Intrinsic::double_across_boundary`].
-    doubled: bool,
+    pub(super) doubled: bool,
+    /// For each half-edge, the half-edge of the input mesh it lies on (itself unless
+    /// [`Intrinsic::refine`] split it; meaningful on the boundary, whose edges never flip).
+    pub(super) parent: Vec<u32>,
 }
 
 impl Intrinsic {
@@ -159,6 +162,7 @@ impl Intrinsic {
             }
         }
         let tri = Intrinsic {
+            parent: (0..3 * m as u32).collect(),
             face_of: (0..3 * m as u32).map(|h| h / 3).collect(),
             face_he: (0..m as u32).map(|f| 3 * f).collect(),
             origin,
@@ -174,6 +178,11 @@ impl Intrinsic {
     /// Number of vertices.
     pub fn n_vertices(&self) -> usize {
         self.n_vertices
+    }
+
+    /// Whether this is the doubled surface ([`Intrinsic::double_across_boundary`]).
+    pub fn is_doubled(&self) -> bool {
+        self.doubled
     }
 
     /// The twin of half-edge `h` ([`NONE`] on the boundary). Before any flip, half-edge
@@ -244,6 +253,7 @@ impl Intrinsic {
         self.next.resize(2 * nh, 0);
         self.twin.resize(2 * nh, NONE);
         self.len.resize(2 * nh, 0.0);
+        self.parent = (0..2 * nh as u32).collect();
         let mut glued = 0;
         for h in 0..nh {
             let g = mirror(h);
@@ -326,9 +336,18 @@ impl Intrinsic {
             .collect()
     }
 
+    /// For each of [`Intrinsic::boundary_edges`], in the same order, the half-edge of the
+    /// input mesh it lies on (itself unless [`Intrinsic::refine`] split it).
+    pub fn boundary_parents(&self) -> Vec<u32> {
+        (0..self.origin.len())
+            .filter(|&h| self.twin[h] == NONE)
+            .map(|h| self.parent[h])
+            .collect()
+    }
+
     /// The sum of the cotangents of the two angles opposite `h`'s edge (one when it is a
     /// boundary edge); negative when the edge is not Delaunay.
-    fn cot_sum(&self, h: usize) -> f64 {
+    pub(super) fn cot_sum(&self, h: usize) -> f64 {
         let opposite = |h: usize| {
             let n = self.next[h] as usize;
             let p = self.next[n] as usize;
@@ -393,7 +412,7 @@ impl Intrinsic {
 
     /// Flips the interior edge of half-edge `h`; false (and no change) when it cannot be
     /// flipped (a boundary edge, both sides one face, or a degenerate layout).
-    fn flip(&mut self, h: usize) -> bool {
+    pub(super) fn flip(&mut self, h: usize) -> bool {
         let t = self.twin[h];
         if t == NONE {
             return false;
@@ -472,7 +491,7 @@ pub fn triangle_area(a: f64, b: f64, c: f64) -> f64 {
 }
 
 /// Whether `x` is a positive number (false for NaN).
-fn positive(x: f64) -> bool {
+pub(super) fn positive(x: f64) -> bool {
     x > 0.0
 }
 

@@ -58,9 +58,11 @@ mod exact;
 mod heat;
 pub mod intrinsic;
 mod operators;
+mod refine;
 
 pub use descent::descend;
 pub use exact::{
     ExactGeodesics, ExactStats, GeodesicPath, OnSurface, PathPoint, DEFAULT_WINDOWS_PER_FACE,
 };
 pub use heat::{Anchor, Boundary, GeodesicError, HeatGeodesics, HeatOptions, HeatStats, TimeScale};
+pub use refine::RefineStats;

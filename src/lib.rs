@@ -70,6 +70,7 @@ pub mod render;
 #[cfg(feature = "studio")]
 pub mod studio;
 pub mod threads;
+mod vec3;
 
 /// The sparse Cholesky engine every system factors and solves with.
 pub use bdmorph_cholesky as cholesky;

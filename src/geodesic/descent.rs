@@ -15,21 +15,7 @@ use super::intrinsic::{Intrinsic, NONE};
 use super::GeodesicError;
 use crate::io::SurfaceMesh;
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
+use crate::vec3::{cross, dot, sub};
 
 /// Where the walk is.
 #[derive(Clone, Copy, Debug)]

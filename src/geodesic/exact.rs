@@ -48,6 +48,7 @@ use std::collections::BinaryHeap;
 use super::intrinsic::{Intrinsic, NONE};
 use super::GeodesicError;
 use crate::io::SurfaceMesh;
+use crate::vec3;
 
 /// "No window": a window started at a pseudo-source.
 const NO: u32 = u32::MAX;
@@ -165,7 +166,7 @@ impl GeodesicPath {
     pub fn length(&self) -> f64 {
         self.points
             .windows(2)
-            .map(|w| distance3(w[0].position, w[1].position))
+            .map(|w| vec3::distance(w[0].position, w[1].position))
             .sum()
     }
     /// The positions alone.
@@ -232,26 +233,6 @@ pub struct ExactGeodesics {
     windows: Vec<Window>,
     queue: BinaryHeap<Event>,
     stats: ExactStats,
-}
-
-fn distance3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// Each corner's start angle around its vertex ([`ExactGeodesics::corner_start`]): the fan
@@ -341,16 +322,18 @@ impl ExactGeodesics {
             for k in 0..3 {
                 twin.push(tri.twin(3 * f + k));
                 let (a, b, c) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
-                let ab = sub3(b, a);
-                let ac = sub3(c, a);
-                let l = dot3(ab, ab).sqrt();
+                let ab = vec3::sub(b, a);
+                let ac = vec3::sub(c, a);
+                let l = vec3::dot(ab, ab).sqrt();
                 len.push(l);
-                let x = dot3(ac, ab) / l;
-                let y = dot3(cross3(ab, ac), cross3(ab, ac)).sqrt() / l;
+                let x = vec3::dot(ac, ab) / l;
+                let y = vec3::dot(vec3::cross(ab, ac), vec3::cross(ab, ac)).sqrt() / l;
                 third.push([x, y]);
                 // The corner angle at `a`.
                 let (u, v) = (ab, ac);
-                let corner = dot3(cross3(u, v), cross3(u, v)).sqrt().atan2(dot3(u, v));
+                let corner = vec3::dot(vec3::cross(u, v), vec3::cross(u, v))
+                    .sqrt()
+                    .atan2(vec3::dot(u, v));
                 corner_angle[3 * f + k] = corner;
                 angle[face[k] as usize] += corner;
                 count[face[(k + 2) % 3] as usize + 1] += 1;
@@ -381,7 +364,7 @@ impl ExactGeodesics {
                 hi[i] = hi[i].max(p[i]);
             }
         }
-        let size = distance3(lo, hi);
+        let size = vec3::distance(lo, hi);
         Ok(ExactGeodesics {
             positions: mesh.positions.clone(),
             faces: mesh.faces.clone(),

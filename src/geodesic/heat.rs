@@ -543,14 +543,7 @@ impl HeatGeodesics {
             &mesh.faces,
             options.mollify * mean_edge,
         )?;
-        let input_boundary = tri.boundary_vertices();
-        let input_boundary_edges = tri.boundary_edges();
-        let input_parents = tri.boundary_parents();
-        let input_cut = if options.absorb_at_cuts {
-            vec![false; input_boundary_edges.len()]
-        } else {
-            cut_edges(&mesh.positions, &input_boundary_edges)
-        };
+        let input_boundary = MeshBoundary::of(&tri, &mesh.positions, options.absorb_at_cuts);
         let refining = options.intrinsic_delaunay && options.refine_angle > 0.0;
         let flips = if options.intrinsic_delaunay {
             if options.flip_boundary {
@@ -593,28 +586,15 @@ impl HeatGeodesics {
         }
         // The refined triangulation's vertices: the mesh's, then those refinement inserted.
         let n_all = tri.n_vertices();
-        let (boundary, boundary_edges, cut) = if refining && tri.is_doubled() {
-            // Refined on the doubled surface: the boundary is the input's (its vertices keep
-            // their numbers; the new ones lie off it, on one sheet or the other).
-            let mut boundary = input_boundary;
-            boundary.resize(n_all, false);
-            (boundary, input_boundary_edges, input_cut)
-        } else if refining {
-            // A boundary edge of the refined triangulation lies on one of the input's, which
-            // says whether it is a cut.
-            let index: std::collections::HashMap<u32, usize> = input_parents
-                .iter()
-                .enumerate()
-                .map(|(i, &h)| (h, i))
-                .collect();
-            let cut = tri
-                .boundary_parents()
-                .iter()
-                .map(|p| index.get(p).is_some_and(|&i| input_cut[i]))
-                .collect();
-            (tri.boundary_vertices(), tri.boundary_edges(), cut)
+        let MeshBoundary {
+            on: boundary,
+            edges: boundary_edges,
+            cut,
+            ..
+        } = if refining {
+            input_boundary.after_refinement(&tri)
         } else {
-            (input_boundary, input_boundary_edges, input_cut)
+            input_boundary
         };
         let has_boundary = boundary.iter().any(|&b| b);
         let refined_faces: Vec<[u32; 3]> = faces.iter().map(|f| f.0).collect();
@@ -1031,13 +1011,71 @@ fn one_rings(mesh: &SurfaceMesh) -> (Vec<u32>, Vec<(u32, f64)>) {
     let ring = pairs
         .iter()
         .map(|&(a, b)| {
-            let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-            let len =
-                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            let len = crate::vec3::distance(mesh.positions[a as usize], mesh.positions[b as usize]);
             (b, len)
         })
         .collect();
     (start, ring)
+}
+
+/// The boundary of the triangulation the operators are built on.
+struct MeshBoundary {
+    /// Per vertex, whether it lies on the boundary.
+    on: Vec<bool>,
+    /// The boundary edges `(a, b, length)`.
+    edges: Vec<(u32, u32, f64)>,
+    /// Per boundary edge, whether it is a cut ([`HeatOptions::absorb_at_cuts`]).
+    cut: Vec<bool>,
+    /// Per boundary edge, the input's half-edge it lies on ([`Intrinsic::boundary_parents`]).
+    parents: Vec<u32>,
+}
+
+impl MeshBoundary {
+    /// The input triangulation's boundary (before any flip or doubling); no edge is a cut
+    /// when cuts absorb.
+    fn of(tri: &Intrinsic, positions: &[[f64; 3]], absorb_at_cuts: bool) -> MeshBoundary {
+        let edges = tri.boundary_edges();
+        let cut = if absorb_at_cuts {
+            vec![false; edges.len()]
+        } else {
+            cut_edges(positions, &edges)
+        };
+        MeshBoundary {
+            on: tri.boundary_vertices(),
+            parents: tri.boundary_parents(),
+            edges,
+            cut,
+        }
+    }
+
+    /// The boundary after `tri` (this boundary's triangulation) was refined. On the doubled
+    /// surface it is the input's (its vertices keep their numbers; the new ones lie off it, on
+    /// one sheet or the other). Otherwise refinement split boundary edges: each lies on one of
+    /// the input's, which says whether it is a cut.
+    fn after_refinement(self, tri: &Intrinsic) -> MeshBoundary {
+        if tri.is_doubled() {
+            let mut on = self.on;
+            on.resize(tri.n_vertices(), false);
+            return MeshBoundary { on, ..self };
+        }
+        let index: std::collections::HashMap<u32, usize> = self
+            .parents
+            .iter()
+            .enumerate()
+            .map(|(i, &h)| (h, i))
+            .collect();
+        let parents = tri.boundary_parents();
+        let cut = parents
+            .iter()
+            .map(|p| index.get(p).is_some_and(|&i| self.cut[i]))
+            .collect();
+        MeshBoundary {
+            on: tri.boundary_vertices(),
+            edges: tri.boundary_edges(),
+            cut,
+            parents,
+        }
+    }
 }
 
 /// Which boundary edges are cuts ([`HeatOptions::absorb_at_cuts`]): those whose two ends'
@@ -1070,8 +1108,7 @@ fn mean_edge_length(mesh: &SurfaceMesh) -> f64 {
     let total: f64 = edges
         .iter()
         .map(|&(a, b)| {
-            let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+            crate::vec3::distance(mesh.positions[a as usize], mesh.positions[b as usize])
         })
         .sum();
     total / edges.len().max(1) as f64

@@ -108,10 +108,10 @@ impl Intrinsic {
             for (k, (p, q)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
                 origin.push(p);
                 next.push(base + (k as u32 + 1) % 3);
-                let (x, y) = (positions[p as usize], positions[q as usize]);
-                len.push(
-                    ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt(),
-                );
+                len.push(crate::vec3::distance(
+                    positions[p as usize],
+                    positions[q as usize],
+                ));
             }
         }
         // Mollify: the largest shortfall of any corner's triangle inequality against `delta`

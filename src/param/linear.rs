@@ -40,10 +40,7 @@ pub(crate) fn tutte(
 ) -> Result<Vec<[f64; 2]>, ParamError> {
     let n = positions.len();
     let mut uv = vec![[0.0; 2]; n];
-    let dist = |a: u32, b: u32| {
-        let (p, q) = (positions[a as usize], positions[b as usize]);
-        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-    };
+    let dist = |a: u32, b: u32| crate::vec3::distance(positions[a as usize], positions[b as usize]);
     let nb = boundary.len();
     let perimeter: f64 = (0..nb)
         .map(|i| dist(boundary[i], boundary[(i + 1) % nb]))
@@ -109,10 +106,7 @@ pub(crate) fn lscm(
 ) -> Result<Vec<[f64; 2]>, ParamError> {
     let n = positions.len();
     let p0 = boundary[0];
-    let dist = |a: u32, b: u32| {
-        let (p, q) = (positions[a as usize], positions[b as usize]);
-        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-    };
+    let dist = |a: u32, b: u32| crate::vec3::distance(positions[a as usize], positions[b as usize]);
     let p1 = *boundary
         .iter()
         .max_by(|&&a, &&b| dist(p0, a).total_cmp(&dist(p0, b)))

@@ -20,6 +20,7 @@ use tiny_skia::{Color, FillRule, LineCap, Paint, PathBuilder, Pixmap, Stroke, Tr
 
 use super::colour::shade_colour;
 use super::{Image, ImageSize};
+use crate::vec3::{cross, dot};
 
 /// Colour of isolines.
 const ISOLINE: [u8; 3] = [0x20, 0x20, 0x20];
@@ -90,18 +91,6 @@ fn view_frame(positions: &[[f64; 3]]) -> ([[f64; 3]; 3], [f64; 3]) {
     let (right, up) = (axis(order[0]), axis(order[1]));
     let towards = cross(right, up);
     ([right, up, towards], c)
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Draws the field `values` (one per vertex) on the mesh as an image of `size` on white: see

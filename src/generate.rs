@@ -582,6 +582,48 @@ pub fn capsule_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2], radius: f64) -> f
     (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy) - radius
 }
 
+/// A figure drawn with capsules on a `size` x `size` [`picture`]: a head, a body, two arms and
+/// two legs, one piece without holes. `arm` raises the figure's right arm (on the picture's
+/// left) from hanging down (0) by that angle in radians (π: straight up); `bend` leans the
+/// upper body (body, head and arms) about the hips by that angle (positive: to the
+/// picture's right). Two drawings of one subject for in-betweens.
+pub fn figure_picture(size: u32, arm: f64, bend: f64) -> Image {
+    let s = f64::from(size);
+    // In units of the picture, y up; the hips at (0.5, 0.42).
+    let hips = [0.5, 0.42];
+    let (sin, cos) = (-bend).sin_cos();
+    let lean = move |p: [f64; 2]| {
+        let (dx, dy) = (p[0] - hips[0], p[1] - hips[1]);
+        [hips[0] + cos * dx - sin * dy, hips[1] + sin * dx + cos * dy]
+    };
+    let neck = lean([0.5, 0.66]);
+    let head = lean([0.5, 0.79]);
+    let (left_shoulder, right_shoulder) = (lean([0.43, 0.63]), lean([0.57, 0.63]));
+    // The right arm (on the picture's left) hangs down and out, raised by `arm`.
+    let hang = (-122f64).to_radians() - bend;
+    let a = hang - arm;
+    let left_hand = [
+        left_shoulder[0] + 0.24 * a.cos(),
+        left_shoulder[1] + 0.24 * a.sin(),
+    ];
+    let b = (-58f64).to_radians() - bend;
+    let right_hand = [
+        right_shoulder[0] + 0.24 * b.cos(),
+        right_shoulder[1] + 0.24 * b.sin(),
+    ];
+    let (left_foot, right_foot) = ([0.4, 0.08], [0.6, 0.08]);
+    picture(size, size, move |x, y| {
+        let p = [x / s, 1.0 - y / s];
+        let d = capsule_distance(p, hips, neck, 0.075)
+            .min(capsule_distance(p, head, head, 0.085))
+            .min(capsule_distance(p, left_shoulder, left_hand, 0.035))
+            .min(capsule_distance(p, right_shoulder, right_hand, 0.035))
+            .min(capsule_distance(p, [0.46, 0.42], left_foot, 0.04))
+            .min(capsule_distance(p, [0.54, 0.42], right_foot, 0.04));
+        s * d
+    })
+}
+
 /// The meshing benchmark's subject on a `size` x `size` [`picture`]: a round body with a
 /// hole and an arm, and a separate disk (two pieces, one hole).
 pub fn picture_subject(size: u32) -> Image {

@@ -54,6 +54,7 @@ pub mod deform;
 pub mod distortion;
 pub mod generate;
 pub mod geodesic;
+pub mod inbetween;
 pub mod info;
 pub mod io;
 pub mod located;

@@ -1,0 +1,386 @@
+//! In-betweens of two drawings: a compatible mesh of the two pictures, then BDMORPH.
+//!
+//! Animators draw key poses as separate pictures. [`Inbetween::new`] meshes drawing A, lays
+//! the same triangles over drawing B without a flipped triangle ([`compatible_mesh`]), and
+//! morphs A's layout into B's by BDMORPH; [`Inbetween::frame`] gives the in-between at any
+//! `t`, and [`Crossfade::weight`] how much of B's picture to cross-fade in.
+//! [`Inbetween::through`] does the same through several drawings on one mesh
+//! ([`compatible_path`]). [`linear_frame`] and [`ArapInterpolation`] are the interpolations
+//! it is compared with.
+//!
+//! # How the compatible mesh is built
+//!
+//! 1. **Outlines.** Each picture's subject is traced and simplified (as
+//!    [`crate::meshing::picture_outline`] does, then fitted to about half the vertices
+//!    asked for). The two must have the same pieces and, piece by piece, the same number of
+//!    holes; otherwise [`InbetweenError::Topology`] says in one line what differs. Pieces
+//!    and holes are paired by place and size in each drawing's frame (centred on its area,
+//!    scaled to unit area).
+//! 2. **Correspondence.** Each pair of loops gets a monotone map of arc length: a rigid
+//!    alignment (the rotation and cyclic shift that bring A's outline closest to B's), then
+//!    a dynamic time warping that matches corners with corners and turning with turning.
+//!    The user's point pairs ([`Match`]) on the outlines pin the map: between them, arcs are
+//!    warped with their ends fixed. Pairs inside the drawings pin a vertex of the mesh.
+//! 3. **A's mesh.** A's outline with B's corners carried back onto it is meshed (a
+//!    constrained Delaunay triangulation refined to [`InbetweenOptions::min_angle`]), so
+//!    that B's outline is reproduced exactly by the mesh laid over B.
+//! 4. **Over B.** The boundary goes to its place on B's outline, interior pairs to B's
+//!    points; the interior follows by as-rigid-as-possible posing (a mesh over 3,000
+//!    vertices starts instead from the layout of a 2,000-vertex mesh of the same outline),
+//!    and the triangles it flips are repaired by [`crate::deform::untangle`]
+//!    (bounded-distortion projections, Kovalsky et al. 2015) with every pin held, then the
+//!    bounded-distortion mapping lowers the largest distortion. An interior pair that no
+//!    flip-free layout can meet is let go, and said so ([`PairReport`]); when triangles stay
+//!    flipped, [`InbetweenError::Flipped`].
+//!
+//! ```
+//! use bdmorph::generate;
+//! use bdmorph::inbetween::{Inbetween, InbetweenOptions};
+//!
+//! // A capsule standing, and the same capsule leaning, as two pictures.
+//! let draw = |top: [f64; 2]| {
+//!     generate::picture(160, 160, move |x, y| {
+//!         generate::capsule_distance([x, y], [80.0, 130.0], top, 22.0)
+//!     })
+//! };
+//! let (a, b) = (draw([80.0, 40.0]), draw([115.0, 45.0]));
+//! let options = InbetweenOptions::default().with_vertices(300);
+//! let mut inbetween = Inbetween::new(&a, &b, &[], &options)?;
+//! let report = inbetween.compatible().report;
+//! assert_eq!(report.flipped, 0);
+//! assert!(report.outline_error < 1.0);
+//! let half = inbetween.frame(0.5)?;
+//! assert_eq!(half.stats.flipped_triangles, 0);
+//! # Ok::<(), bdmorph::inbetween::InbetweenError>(())
+//! ```
+
+mod baseline;
+mod compatible;
+mod correspondence;
+mod outline;
+
+pub use baseline::{linear_frame, ArapInterpolation};
+pub use compatible::{
+    compatible_mesh, compatible_path, CompatibleMesh, CompatiblePath, CompatibleReport, PairReport,
+};
+
+use crate::deform::DeformError;
+use crate::meshing::{MeshingError, PictureOptions, DEFAULT_MIN_ANGLE, MAX_VERTICES};
+use crate::morph::{Frame, Morph, MorphError, MorphOptions};
+use crate::path::{KeyframePath, PathOptions};
+use crate::render::Image;
+use crate::MeshError;
+
+/// Which drawing, counting from 0: drawing A (t = 0) is 0, drawing B 1, and so on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Drawing(pub usize);
+
+impl std::fmt::Display for Drawing {
+    /// `drawing A`, `drawing B`, ... `drawing Z`, then `drawing 27`, ...
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0 < 26 {
+            write!(f, "drawing {}", char::from(b'A' + self.0 as u8))
+        } else {
+            write!(f, "drawing {}", self.0 + 1)
+        }
+    }
+}
+
+/// A point of drawing A and the point of drawing B it becomes, in pixels from each
+/// picture's top-left corner (x right, y down, as image editors show them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Match {
+    /// The point in drawing A.
+    pub a: [f64; 2],
+    /// The point in drawing B.
+    pub b: [f64; 2],
+}
+
+/// Options of [`compatible_mesh`] and [`Inbetween`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct InbetweenOptions {
+    /// About how many vertices the mesh has (default 2000).
+    pub vertices: usize,
+    /// The smallest angle of A's triangles, in degrees (default 28).
+    pub min_angle: f64,
+    /// How each picture's subject is told from its background.
+    pub picture: PictureOptions,
+    /// The morph's options.
+    pub morph: MorphOptions,
+}
+
+impl Default for InbetweenOptions {
+    fn default() -> Self {
+        InbetweenOptions {
+            vertices: 2000,
+            min_angle: DEFAULT_MIN_ANGLE,
+            picture: PictureOptions::default(),
+            morph: MorphOptions::default(),
+        }
+    }
+}
+
+impl InbetweenOptions {
+    /// About `n` vertices.
+    pub fn with_vertices(mut self, n: usize) -> Self {
+        self.vertices = n;
+        self
+    }
+    /// The smallest angle of A's triangles, in degrees.
+    pub fn with_min_angle(mut self, degrees: f64) -> Self {
+        self.min_angle = degrees;
+        self
+    }
+    /// How pictures' subjects are found.
+    pub fn with_picture(mut self, picture: PictureOptions) -> Self {
+        self.picture = picture;
+        self
+    }
+    /// The morph's options.
+    pub fn with_morph(mut self, morph: MorphOptions) -> Self {
+        self.morph = morph;
+        self
+    }
+
+    fn validate(&self) -> Result<(), InbetweenError> {
+        if !(3..=MAX_VERTICES).contains(&self.vertices) {
+            return Err(InbetweenError::BadOption(format!(
+                "{} vertices: give from 3 to {MAX_VERTICES}",
+                self.vertices
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Why in-betweens could not be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum InbetweenError {
+    /// A picture could not be outlined or meshed.
+    #[error("{which}: {source}")]
+    Meshing {
+        /// Which picture.
+        which: Drawing,
+        /// Why.
+        source: MeshingError,
+    },
+    /// The drawings' pieces and holes differ (the message names what differs).
+    #[error("{0}")]
+    Topology(String),
+    /// A point pair cannot be used.
+    #[error("pair {pair}: {reason}")]
+    Match {
+        /// The pair, 1-based.
+        pair: usize,
+        /// Why.
+        reason: String,
+    },
+    /// No layout of A's mesh over B without flipped triangles was found.
+    #[error(
+        "{flipped} of {faces} triangles stay flipped when drawing A's mesh is laid over {which}: \
+         the drawings may be too different for this mesh; add point pairs where they differ most, \
+         or ask for more vertices"
+    )]
+    Flipped {
+        /// The drawing it was laid over.
+        which: Drawing,
+        /// Triangles left flipped.
+        flipped: usize,
+        /// Triangles of the mesh.
+        faces: usize,
+    },
+    /// An option out of range.
+    #[error("{0}")]
+    BadOption(String),
+    /// Posing (the layout over B) failed.
+    #[error(transparent)]
+    Deform(#[from] DeformError),
+    /// The morph failed.
+    #[error(transparent)]
+    Morph(#[from] MorphError),
+    /// A mesh was not valid.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A check of the construction failed: a bug.
+    #[error("internal error: {0}")]
+    Internal(String),
+}
+
+/// The morph through the layouts: one segment, or a path through several.
+enum Animation {
+    Morph(Morph),
+    Path(KeyframePath),
+}
+
+/// The in-betweens of two drawings (or a path through several): their compatible mesh and
+/// the morph between its layouts.
+pub struct Inbetween {
+    path: CompatiblePath,
+    animation: Animation,
+}
+
+impl std::fmt::Debug for Inbetween {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Inbetween")
+            .field("reports", &self.path.reports)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Inbetween {
+    /// Builds the compatible mesh of `a` and `b` with the point pairs `matches`
+    /// ([`compatible_mesh`]) and prepares the morph from A's layout to B's.
+    ///
+    /// # Errors
+    /// Those of [`compatible_mesh`]; [`InbetweenError::Morph`] when the morph cannot be set
+    /// up.
+    pub fn new(
+        a: &Image,
+        b: &Image,
+        matches: &[Match],
+        options: &InbetweenOptions,
+    ) -> Result<Inbetween, InbetweenError> {
+        Inbetween::through(&[a, b], matches, options)
+    }
+
+    /// A path through several drawings (A, B, C, ...) on one compatible mesh
+    /// ([`compatible_path`]): drawing k at `t = k / (n − 1)`, each segment a BDMORPH morph;
+    /// `matches` are between A and B.
+    ///
+    /// # Errors
+    /// Those of [`compatible_path`]; [`InbetweenError::Morph`] when the morph cannot be set
+    /// up.
+    pub fn through(
+        drawings: &[&Image],
+        matches: &[Match],
+        options: &InbetweenOptions,
+    ) -> Result<Inbetween, InbetweenError> {
+        let path = compatible_path(drawings, matches, options)?;
+        Inbetween::from_path(path, options.morph)
+    }
+
+    /// Prepares the morph of a compatible mesh already built.
+    ///
+    /// # Errors
+    /// [`InbetweenError::Morph`] when the morph cannot be set up.
+    pub fn from_compatible(
+        compatible: CompatibleMesh,
+        options: MorphOptions,
+    ) -> Result<Inbetween, InbetweenError> {
+        let path = CompatiblePath {
+            mesh: compatible.mesh,
+            layouts: vec![compatible.positions_b],
+            texcoords: vec![compatible.texcoords_a, compatible.texcoords_b],
+            reports: vec![compatible.report],
+        };
+        Inbetween::from_path(path, options)
+    }
+
+    /// Prepares the morph through the layouts of a compatible path already built.
+    ///
+    /// # Errors
+    /// [`InbetweenError::Morph`] when the morph cannot be set up.
+    pub fn from_path(
+        path: CompatiblePath,
+        options: MorphOptions,
+    ) -> Result<Inbetween, InbetweenError> {
+        let keyframes = path.keyframes();
+        let animation = if keyframes.len() == 2 {
+            Animation::Morph(Morph::new(&keyframes[0], &keyframes[1], options)?)
+        } else {
+            Animation::Path(KeyframePath::with_options(
+                &keyframes,
+                PathOptions::default().with_morph(options),
+            )?)
+        };
+        Ok(Inbetween { path, animation })
+    }
+
+    /// The compatible mesh of the first two drawings.
+    pub fn compatible(&self) -> CompatibleMesh {
+        CompatibleMesh {
+            mesh: self.path.mesh.clone(),
+            positions_b: self.path.layouts[0].clone(),
+            texcoords_a: self.path.texcoords[0].clone(),
+            texcoords_b: self.path.texcoords[1].clone(),
+            report: self.path.reports[0].clone(),
+        }
+    }
+
+    /// The mesh and its layout over every drawing.
+    pub fn path(&self) -> &CompatiblePath {
+        &self.path
+    }
+
+    /// Drawings: two, or the path's.
+    pub fn drawings(&self) -> usize {
+        self.path.layouts.len() + 1
+    }
+
+    /// Which segment `t` (in [0, 1]) falls in, and where in it: `(k, s)` between drawing `k`
+    /// (s = 0) and drawing `k + 1` (s = 1), segments of equal length.
+    pub fn segment(&self, t: f64) -> (usize, f64) {
+        let n = self.path.layouts.len();
+        let x = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) } * n as f64;
+        let k = (x.floor() as usize).min(n - 1);
+        (k, x - k as f64)
+    }
+
+    /// The in-between at `t` (0: A's layout, 1: the last drawing's).
+    ///
+    /// # Errors
+    /// Those of [`Morph::frame`] and [`KeyframePath::frame`].
+    pub fn frame(&mut self, t: f64) -> Result<Frame<'_>, InbetweenError> {
+        Ok(match &mut self.animation {
+            Animation::Morph(m) => m.frame(t)?,
+            Animation::Path(p) => p.frame(t)?,
+        })
+    }
+}
+
+/// How the two pictures are cross-faded along `t`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Crossfade {
+    /// B's share is `t`.
+    Linear,
+    /// B's share follows a smooth step, `3t² − 2t³` (default): each picture holds near its
+    /// own drawing.
+    #[default]
+    Smooth,
+    /// A's picture until `t = 0.5`, B's from there.
+    Cut,
+}
+
+impl std::str::FromStr for Crossfade {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Crossfade, String> {
+        match s {
+            "linear" => Ok(Crossfade::Linear),
+            "smooth" => Ok(Crossfade::Smooth),
+            "cut" => Ok(Crossfade::Cut),
+            other => Err(format!(
+                "'{other}': the cross-fade is linear, smooth or cut"
+            )),
+        }
+    }
+}
+
+impl Crossfade {
+    /// B's share at `t`, in [0, 1].
+    pub fn weight(self, t: f64) -> f64 {
+        let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+        match self {
+            Crossfade::Linear => t,
+            Crossfade::Smooth => t * t * (3.0 - 2.0 * t),
+            Crossfade::Cut => {
+                if t < 0.5 {
+                    0.0
+                } else {
+                    1.0
+                }
+            }
+        }
+    }
+}

@@ -141,6 +141,7 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
         fps: 25,
         title,
         background: bdmorph::render::Background::WHITE,
+        crossfade: None,
         depth: None,
     };
     let mut files = Vec::new();

@@ -136,6 +136,7 @@ pub(super) fn run(args: MeshArgs) -> Result<(), String> {
             fps: 25,
             title: &title,
             background: bdmorph::render::Background::WHITE,
+            crossfade: None,
             depth: None,
         };
         let frames = [output::Frame {

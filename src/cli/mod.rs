@@ -5,6 +5,7 @@ mod compile;
 mod demo;
 mod export;
 mod geodesic;
+mod inbetween;
 mod info;
 mod layered;
 mod mesh;
@@ -246,6 +247,36 @@ enum Command {
     ///   bdmorph morph man.obj man2.obj --program man.bdm --frames 30 -o frames/
     #[command(verbatim_doc_comment)]
     Compile(CompileArgs),
+    /// In-betweens of two drawings of one subject (pictures with transparency), or a path
+    /// through several.
+    ///
+    /// Drawing A is meshed, and the same triangles are laid over drawing B without a flipped
+    /// triangle: A's outline goes onto B's by a correspondence found automatically (a rigid
+    /// alignment, then a warping that matches corners and turning), the inside follows by
+    /// as-rigid-as-possible posing, untangling and a bounded-distortion mapping. BDMORPH
+    /// then morphs A's layout into B's, each frame textured by a cross-fade of the two
+    /// pictures (--crossfade). The drawings must have the same pieces and holes. With more
+    /// than two (A B C ...), one mesh of A is laid over each, and the frames walk through
+    /// them in order, drawing k at t = k / (n - 1).
+    ///
+    /// --match AX,AY:BX,BY (repeatable) says that point (AX, AY) of drawing A becomes point
+    /// (BX, BY) of drawing B, in pixels from each picture's top-left corner: on both outlines
+    /// it pins the correspondence there; inside both drawings it pins a vertex. A pair that
+    /// no flip-free mesh can meet is let go with a warning naming it.
+    ///
+    /// Outputs and options as for `morph`: .obj frames in a directory (the default, with A's
+    /// texture coordinates), .png frames, .gif, .mp4, .apng, .webp; --size, --fps,
+    /// --background transparent, --easing, --color-by distortion, --stats (a first line for
+    /// the compatible mesh, then one per frame).
+    ///
+    /// Examples:
+    ///   bdmorph inbetween a.png b.png --frames 24 -o walk.mp4
+    ///   bdmorph inbetween a.png b.png --match 120,80:160,40 --frames 12 -o frames/
+    ///   bdmorph inbetween a.png b.png --frames 30 --background transparent -o walk.webp
+    ///   bdmorph inbetween a.png b.png --t 0.5 -o half.png
+    ///   bdmorph inbetween a.png b.png c.png --frames 36 -o path.gif
+    #[command(verbatim_doc_comment)]
+    Inbetween(InbetweenArgs),
     /// Describe a mesh file: counts, boundary loops, and whether it can be morphed.
     ///
     /// Example:
@@ -380,6 +411,67 @@ struct MorphArgs {
     out: OutputArgs,
     #[command(flatten)]
     solver: SolverArgs,
+}
+
+#[derive(Args, Debug)]
+struct InbetweenArgs {
+    /// The drawings: A (t = 0) and B (t = 1), pictures with transparency (PNG) of one
+    /// subject with the same pieces and holes; or A B C ... for a path through them (drawing
+    /// k at t = k / (n - 1)).
+    #[arg(value_name = "DRAWING", num_args = 2.., required = true)]
+    drawings: Vec<PathBuf>,
+    /// A point of A and the point of B it becomes, AX,AY:BX,BY in pixels from each picture's
+    /// top-left corner (repeatable).
+    #[arg(long = "match", value_name = "AX,AY:BX,BY", value_parser = parse_match)]
+    matches: Vec<bdmorph::inbetween::Match>,
+    /// One frame at this time in [0, 1].
+    #[arg(long = "t", value_name = "T", conflicts_with = "frames")]
+    t: Option<f64>,
+    /// N frames at t = i / (N - 1).
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
+    /// Easing of t (of each segment of a path): linear, ease-in-out or
+    /// cubic-bezier(x1,y1,x2,y2).
+    #[arg(long, value_name = "EASING", value_parser = parse_easing)]
+    easing: Option<Easing>,
+    /// How the pictures cross-fade along t: smooth (3t² - 2t³), linear or cut (A's picture
+    /// to t = 0.5, then B's).
+    #[arg(long, value_name = "CURVE", default_value = "smooth")]
+    crossfade: bdmorph::inbetween::Crossfade,
+    /// About how many vertices the mesh has.
+    #[arg(long, value_name = "N", default_value_t = bdmorph::meshing::DEFAULT_VERTICES)]
+    vertices: usize,
+    /// The smallest angle of A's triangles, in degrees (at most 33).
+    #[arg(long, value_name = "DEG", default_value_t = bdmorph::meshing::DEFAULT_MIN_ANGLE)]
+    min_angle: f64,
+    #[command(flatten)]
+    out: OutputArgs,
+    #[command(flatten)]
+    solver: SolverArgs,
+}
+
+/// `AX,AY:BX,BY`: a point pair.
+fn parse_match(text: &str) -> Result<bdmorph::inbetween::Match, String> {
+    let (a, b) = text
+        .split_once(':')
+        .ok_or_else(|| format!("'{text}': give a pair as AX,AY:BX,BY"))?;
+    let point = |s: &str| -> Result<[f64; 2], String> {
+        let (x, y) = s
+            .split_once(',')
+            .ok_or_else(|| format!("'{s}': give a point as X,Y"))?;
+        let number = |v: &str| {
+            v.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("'{v}' is not a number of pixels"))
+        };
+        Ok([number(x)?, number(y)?])
+    };
+    Ok(bdmorph::inbetween::Match {
+        a: point(a)?,
+        b: point(b)?,
+    })
 }
 
 #[derive(Args, Debug)]
@@ -896,6 +988,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Deform(args) => param::deform(args),
         Command::Mesh(args) => mesh::run(args),
         Command::Compile(args) => compile::run(args),
+        Command::Inbetween(args) => inbetween::run(args),
         Command::Info(args) => info::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Export(args) | Command::Render(args) => export::run(args),

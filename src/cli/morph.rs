@@ -73,6 +73,15 @@ pub(super) fn check_options(out: &OutputArgs, solver: &SolverArgs) -> Result<(),
     Ok(())
 }
 
+/// Where and how `frames` frames are written (`-o`, `--format`, `--sheet`); `None` without
+/// `-o`.
+pub(super) fn plan_of(out: &OutputArgs, frames: usize) -> Result<Option<Plan>, String> {
+    out.output
+        .as_ref()
+        .map(|path| Plan::with_sheet(path, out.format, frames, out.sheet))
+        .transpose()
+}
+
 /// Checks that the output can hold pictures of `--size` (and `--background`), and says when
 /// they will be padded.
 pub(super) fn check_size(plan: Option<&Plan>, out: &OutputArgs) -> Result<(), String> {
@@ -298,15 +307,7 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             args.easing.len()
         ));
     }
-    let plan = match &args.out.output {
-        Some(path) => Some(Plan::with_sheet(
-            path,
-            args.out.format,
-            times.len(),
-            args.out.sheet,
-        )?),
-        None => None,
-    };
+    let plan = plan_of(&args.out, times.len())?;
     check_size(plan.as_ref(), &args.out)?;
     let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
     let options = morph_options(&args.solver);
@@ -661,6 +662,7 @@ fn write_files(
         fps: out.fps,
         title,
         background: out.background.unwrap_or_default(),
+        crossfade: None,
         depth: inputs.depth.as_deref(),
     };
     let bar = progress_bar(frames.len(), out.quiet, "rendering");

@@ -196,6 +196,17 @@ pub struct Look<'a> {
     pub background: Background,
     /// The draw order: a depth level per face (higher in front), if any.
     pub depth: Option<&'a [i8]>,
+    /// Textures cross-faded frame by frame instead of `texture` (in-betweens of drawings).
+    pub crossfade: Option<Crossfade<'a>>,
+}
+
+/// Textures cross-faded frame by frame: two of them per frame, and how much of the second.
+pub struct Crossfade<'a> {
+    /// The textures, each with its coordinates at each corner (parallel to the faces).
+    pub textures: Vec<(&'a Image, &'a [[[f64; 2]; 3]])>,
+    /// Per frame (in the order of the frames rendered): the first texture, the second, and
+    /// the second's share in [0, 1].
+    pub blends: &'a [(usize, usize, f64)],
 }
 
 /// One computed frame.
@@ -276,8 +287,37 @@ pub fn render(
             })
             .collect::<Result<Vec<_>, String>>()
     };
+    // A frame's picture: its drawing, or with cross-faded textures the two of the frame.
+    let draw = |i: usize, f: &Frame| match &look.crossfade {
+        Some(fade) if colours[i].is_none() && !fade.textures.is_empty() => {
+            let (first, second, weight) = fade.blends.get(i).copied().unwrap_or((0, 0, 0.0));
+            let textured = |k: usize| {
+                let (texture, uv) = fade.textures[k.min(fade.textures.len() - 1)];
+                let with = Drawing {
+                    corner_uv: Some(uv),
+                    texture: Some(texture),
+                    ..drawing(i)
+                };
+                raster::render_on(
+                    &f.positions,
+                    &with,
+                    &view,
+                    look.size,
+                    Background::Transparent,
+                )
+            };
+            let under = textured(first);
+            let over = if weight > 0.0 {
+                textured(second)
+            } else {
+                under.clone()
+            };
+            raster::crossfade(&under, &over, weight, look.background)
+        }
+        _ => raster::render_on(&f.positions, &drawing(i), &view, look.size, look.background),
+    };
     let picture = |i: usize, f: &Frame| {
-        let img = raster::render_on(&f.positions, &drawing(i), &view, look.size, look.background);
+        let img = draw(i, f);
         progress();
         img
     };
@@ -333,8 +373,7 @@ pub fn render(
         }
         Format::Png => {
             files = each(&|i, f| {
-                let img =
-                    raster::render_on(&f.positions, &drawing(i), &view, look.size, look.background);
+                let img = draw(i, f);
                 Ok((name(f.index), raster::encode_png(&img).map_err(err)?))
             })?;
         }

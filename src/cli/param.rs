@@ -595,6 +595,7 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
             fps: 25,
             title: &title,
             background: bdmorph::render::Background::WHITE,
+            crossfade: None,
             depth: None,
         };
         let frames = [output::Frame {

@@ -1,0 +1,261 @@
+//! `bdmorph inbetween A.png B.png [--match ...] --frames N -o OUT`: outputs, options, errors.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use bdmorph::generate;
+use bdmorph::render::{raster, Image};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_bdmorph"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bdmorph-inbetween-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn save(dir: &Path, name: &str, image: &Image) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, raster::encode_png(image).expect("png")).expect("write");
+    path
+}
+
+fn drawings(dir: &Path) -> (PathBuf, PathBuf) {
+    (
+        save(dir, "a.png", &generate::figure_picture(200, 0.0, 0.0)),
+        save(dir, "b.png", &generate::figure_picture(200, 1.6, 0.15)),
+    )
+}
+
+fn run(args: &[&std::ffi::OsStr]) -> Output {
+    bin().arg("inbetween").args(args).output().expect("run")
+}
+
+fn os(s: &str) -> &std::ffi::OsStr {
+    std::ffi::OsStr::new(s)
+}
+
+#[test]
+fn frames_are_written_as_obj_png_and_gif() {
+    let dir = scratch("outputs");
+    let (a, b) = drawings(&dir);
+    // OBJ frames in a directory by default, with A's texture coordinates.
+    let objs = dir.join("objs");
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--frames"),
+        os("5"),
+        os("--vertices"),
+        os("600"),
+        os("-o"),
+        objs.as_os_str(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let first = std::fs::read_to_string(objs.join("frame_0000.obj")).unwrap();
+    let last = std::fs::read_to_string(objs.join("frame_0004.obj")).unwrap();
+    assert!(first.contains("\nvt ") && first.contains("\nf "));
+    assert_ne!(first, last);
+    // A GIF, and PNG frames on a transparent background cross-fading the two pictures.
+    let gif = dir.join("walk.gif");
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--frames"),
+        os("6"),
+        os("--vertices"),
+        os("600"),
+        os("--size"),
+        os("120x120"),
+        os("-o"),
+        gif.as_os_str(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::read(&gif).unwrap().starts_with(b"GIF89a"));
+    let pngs = dir.join("pngs");
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--frames"),
+        os("3"),
+        os("--vertices"),
+        os("600"),
+        os("--format"),
+        os("png"),
+        os("--background"),
+        os("transparent"),
+        os("--crossfade"),
+        os("linear"),
+        os("--size"),
+        os("160x160"),
+        os("-o"),
+        pngs.as_os_str(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let middle = raster::read_image(pngs.join("frame_0001.png")).unwrap();
+    let alpha = middle.rgba.chunks_exact(4).filter(|p| p[3] == 0).count();
+    let covered = middle.rgba.chunks_exact(4).filter(|p| p[3] == 255).count();
+    assert!(
+        alpha > 1000 && covered > 1000,
+        "{alpha} transparent, {covered} covered"
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("compatible mesh:") && stderr.contains("none flipped"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn three_drawings_make_a_path() {
+    let dir = scratch("path");
+    let (a, b) = drawings(&dir);
+    let c = save(&dir, "c.png", &generate::figure_picture(200, 2.0, -0.1));
+    let gif = dir.join("path.gif");
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        c.as_os_str(),
+        os("--frames"),
+        os("9"),
+        os("--vertices"),
+        os("500"),
+        os("--easing"),
+        os("ease-in-out"),
+        os("--size"),
+        os("100x100"),
+        os("--stats"),
+        os("-o"),
+        gif.as_os_str(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // A line for the mesh over B, one over C, then nine frames.
+    assert_eq!(lines.len(), 11, "{text}");
+    assert!(lines[1].starts_with("{\"compatible_mesh\":{\"drawing\":2,"));
+    assert!(std::fs::read(&gif).unwrap().starts_with(b"GIF89a"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("none flipped over drawing C"), "{stderr}");
+}
+
+#[test]
+fn stats_describe_the_compatible_mesh_then_each_frame() {
+    let dir = scratch("stats");
+    let (a, b) = drawings(&dir);
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--frames"),
+        os("4"),
+        os("--vertices"),
+        os("500"),
+        os("--match"),
+        os("100,55:105,40"),
+        os("--stats"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 5, "{text}");
+    assert!(lines[0].starts_with("{\"compatible_mesh\":{\"drawing\":1,\"vertices\":"));
+    assert!(lines[0].contains("\"flipped\":0") && lines[0].contains("\"pairs\":[{"));
+    for line in &lines[1..] {
+        assert!(line.contains("\"flipped_triangles\":0"), "{line}");
+    }
+}
+
+#[test]
+fn mistakes_are_one_line_and_write_nothing() {
+    let dir = scratch("mistakes");
+    let (a, b) = drawings(&dir);
+    let holed = save(
+        &dir,
+        "ring.png",
+        &generate::picture(200, 200, |x, y| {
+            let outer = generate::capsule_distance([x, y], [100.0, 100.0], [100.0, 100.0], 80.0);
+            let hole = generate::capsule_distance([x, y], [100.0, 100.0], [100.0, 100.0], 30.0);
+            outer.max(-hole)
+        }),
+    );
+    let target = dir.join("out.gif");
+    let cases: Vec<(Vec<&std::ffi::OsStr>, &str)> = vec![
+        (
+            vec![a.as_os_str(), holed.as_os_str(), os("--frames"), os("3")],
+            "0 holes in drawing A and 1 hole in drawing B",
+        ),
+        (
+            vec![
+                a.as_os_str(),
+                b.as_os_str(),
+                os("--match"),
+                os("1,2"),
+                os("--frames"),
+                os("3"),
+            ],
+            "AX,AY:BX,BY",
+        ),
+        (
+            vec![
+                a.as_os_str(),
+                b.as_os_str(),
+                os("--frames"),
+                os("3"),
+                os("--format"),
+                os("html"),
+            ],
+            "cannot cross-fade",
+        ),
+        (
+            vec![a.as_os_str(), b.as_os_str(), os("--t"), os("1.5")],
+            "[0, 1]",
+        ),
+        (
+            vec![
+                a.as_os_str(),
+                b.as_os_str(),
+                os("--frames"),
+                os("3"),
+                os("--vertices"),
+                os("2"),
+            ],
+            "vertices",
+        ),
+        (
+            vec![os("missing.png"), b.as_os_str(), os("--frames"), os("3")],
+            "missing.png",
+        ),
+    ];
+    for (mut args, expected) in cases {
+        args.extend([os("-o"), target.as_os_str()]);
+        let out = run(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(!target.exists(), "{args:?} wrote {}", target.display());
+    }
+}

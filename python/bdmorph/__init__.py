@@ -33,6 +33,7 @@ from ._bdmorph import (
     Error,
     FileError,
     GeodesicError,
+    InbetweenError,
     MeshError,
     MeshingError,
     MorphError,
@@ -53,6 +54,7 @@ __all__ = [
     "Deformer",
     "Project",
     "mesh_from_image",
+    "compatible_mesh",
     "read_mesh",
     "write_obj",
     "Error",
@@ -62,6 +64,7 @@ __all__ = [
     "ParamError",
     "DeformError",
     "MeshingError",
+    "InbetweenError",
     "FileError",
     "SolverWarning",
     "FrameFailure",
@@ -876,6 +879,32 @@ def mesh_from_image(path, vertices: int = 2000, *, tolerance: Optional[float] = 
         str(path), n, _real(tolerance, "tolerance", MeshingError),
         _real(min_angle, "min_angle", MeshingError, strict=False, high=33.0),
         _real(threshold, "threshold", MeshingError, strict=False, high=1.0, high_strict=True))
+
+
+def compatible_mesh(a, b, matches=None, vertices: int = 2000
+                    ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """The compatible mesh of two drawings of one subject (pictures with transparency, the
+    same pieces and holes): ``(VA, F, VB, report)``. ``VA`` is drawing A's mesh in its
+    pixels (y up), ``VB`` the same triangles laid over drawing B, none flipped; ``F`` is
+    ``m x 3``. ``matches`` (``k x 4``: AX, AY, BX, BY, in pixels from each picture's top-left
+    corner) pairs points of A with the points of B they become. ``report`` has
+    ``max_distortion``, ``outline_error``, ``pairs`` (each ``met``, ``error``, ``reason``)...
+
+    The in-betweens as arrays: ``Morph(VA, VB, F).frames(ts)``.
+
+    >>> VA, F, VB, report = bdmorph.compatible_mesh("a.png", "b.png")  # doctest: +SKIP
+    >>> frames = bdmorph.Morph(VA, VB, F).frames(np.linspace(0, 1, 24))  # doctest: +SKIP
+    """
+    n = _whole(vertices, "vertices", InbetweenError, low=3, high=20_000_000)
+    if n is None:
+        raise InbetweenError("vertices must be a whole number from 3 to 20000000, not None")
+    pairs = None
+    if matches is not None:
+        try:
+            pairs = np.ascontiguousarray(np.asarray(matches, dtype=np.float64).reshape(-1, 4))
+        except (TypeError, ValueError) as e:
+            raise InbetweenError(f"matches must be k x 4 numbers (AX, AY, BX, BY): {e}") from None
+    return _native.compatible_mesh(str(a), str(b), pairs, n)
 
 
 def read_mesh(path) -> Tuple[np.ndarray, np.ndarray]:

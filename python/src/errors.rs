@@ -54,6 +54,12 @@ create_exception!(
 );
 create_exception!(
     bdmorph,
+    InbetweenError,
+    Error,
+    "Two drawings that cannot be given a compatible mesh: their topology, a point pair..."
+);
+create_exception!(
+    bdmorph,
     FileError,
     Error,
     "A file that cannot be read or written."
@@ -70,6 +76,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DeformError", py.get_type::<DeformError>())?;
     m.add("MeshingError", py.get_type::<MeshingError>())?;
     m.add("FileError", py.get_type::<FileError>())?;
+    m.add("InbetweenError", py.get_type::<InbetweenError>())?;
     Ok(())
 }
 
@@ -110,6 +117,11 @@ pub fn deform(e: impl std::fmt::Display) -> PyErr {
 /// A meshing error.
 pub fn meshing(e: impl std::fmt::Display) -> PyErr {
     MeshingError::new_err(said(&e))
+}
+
+/// An in-betweens error.
+pub fn inbetween(e: impl std::fmt::Display) -> PyErr {
+    InbetweenError::new_err(said(&e))
 }
 
 /// A file error.

@@ -8,6 +8,7 @@ mod arrays;
 mod deform;
 mod errors;
 mod geodesic;
+mod inbetween;
 mod morph;
 mod param;
 mod picture;
@@ -32,6 +33,7 @@ fn _bdmorph(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(picture::mesh_from_image, m)?)?;
     m.add_function(wrap_pyfunction!(picture::read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(picture::write_obj, m)?)?;
+    m.add_function(wrap_pyfunction!(inbetween::compatible_mesh, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -13,7 +13,8 @@ import bdmorph
 from conftest import grid
 
 EXCEPTIONS = [bdmorph.Error, bdmorph.MeshError, bdmorph.MorphError, bdmorph.GeodesicError,
-              bdmorph.ParamError, bdmorph.DeformError, bdmorph.MeshingError, bdmorph.FileError]
+              bdmorph.ParamError, bdmorph.DeformError, bdmorph.MeshingError, bdmorph.FileError,
+              bdmorph.InbetweenError]
 
 
 def test_the_exceptions_live_in_the_public_module_and_keep_their_hierarchy():

@@ -1,0 +1,75 @@
+//! In-betweens of two drawings made in code ([`generate::figure_picture`]: a figure, and the
+//! same figure with an arm raised 115° and the body bent 11°), 1024 x 1024 pixels.
+//!
+//! Groups: `inbetween_compatible_mesh/<N>` (the whole [`compatible_mesh`] at about N
+//! vertices: outlines, correspondence, meshing, the layout over B, untangling, polishing)
+//! and `inbetween_frame/<method>` (one in-between at about 2K vertices, t alternating
+//! between 0.3 and 0.7 so that no frame is a repeat: BDMORPH against the as-rigid-as-possible
+//! interpolation and straight lines on the same compatible mesh). See BENCHMARKS.md.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use bdmorph::generate;
+use bdmorph::inbetween::{
+    compatible_mesh, linear_frame, ArapInterpolation, Inbetween, InbetweenOptions,
+};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+
+fn benches(c: &mut Criterion) {
+    let a = generate::figure_picture(1024, 0.0, 0.0);
+    let b = generate::figure_picture(1024, 2.0, 0.2);
+    let mut group = c.benchmark_group("inbetween_compatible_mesh");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
+    for n in [1_000usize, 10_000] {
+        let options = InbetweenOptions::default().with_vertices(n);
+        let made = compatible_mesh(&a, &b, &[], &options).expect("compatible");
+        eprintln!("[bdmorph inbetween {n}] {:?}", made.report);
+        group.bench_function(BenchmarkId::from_parameter(n), |bench| {
+            bench.iter(|| compatible_mesh(black_box(&a), &b, &[], &options).expect("compatible"));
+        });
+    }
+    group.finish();
+
+    let options = InbetweenOptions::default().with_vertices(2_000);
+    let mut inbetween = Inbetween::new(&a, &b, &[], &options).expect("compatible");
+    let made = inbetween.compatible().clone();
+    let mut arap = ArapInterpolation::new(&made.mesh, &made.positions_b).expect("arap");
+    let mut group = c.benchmark_group("inbetween_frame");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    let mut flip = false;
+    let mut next_t = move || {
+        flip = !flip;
+        if flip {
+            0.3
+        } else {
+            0.7
+        }
+    };
+    group.bench_function("bdmorph", |bench| {
+        bench.iter(|| {
+            let t = next_t();
+            inbetween
+                .frame(black_box(t))
+                .expect("frame")
+                .stats
+                .flipped_triangles
+        });
+    });
+    group.bench_function("arap", |bench| {
+        bench.iter(|| arap.frame(black_box(next_t())).expect("frame"));
+    });
+    group.bench_function("linear", |bench| {
+        bench.iter(|| linear_frame(&made.mesh.positions, &made.positions_b, black_box(next_t())));
+    });
+    group.finish();
+}
+
+criterion_group!(inbetween, benches);
+criterion_main!(inbetween);

@@ -159,6 +159,61 @@ fn three_drawings_make_a_path() {
 }
 
 #[test]
+fn opaque_scans_on_paper_are_read_with_paper() {
+    let dir = scratch("paper");
+    // The drawings flattened onto white: no transparency left.
+    let on_white = |image: Image| Image {
+        rgba: raster::crossfade(
+            &image,
+            &Image {
+                rgba: vec![0; image.rgba.len()],
+                ..image.clone()
+            },
+            0.0,
+            bdmorph::render::Background::WHITE,
+        )
+        .rgba,
+        ..image
+    };
+    let a = save(
+        &dir,
+        "a.png",
+        &on_white(generate::figure_picture(200, 0.0, 0.0)),
+    );
+    let b = save(
+        &dir,
+        "b.png",
+        &on_white(generate::figure_picture(200, 1.6, 0.15)),
+    );
+    let args = [
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--frames"),
+        os("3"),
+        os("--vertices"),
+        os("500"),
+        os("--stats"),
+    ];
+    let out = run(&args);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("drawing A"), "{stderr}");
+    let mut with_paper = args.to_vec();
+    with_paper.extend([os("--paper"), os("white")]);
+    let out = run(&with_paper);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.lines().next().unwrap().contains("\"flipped\":0"),
+        "{text}"
+    );
+}
+
+#[test]
 fn stats_describe_the_compatible_mesh_then_each_frame() {
     let dir = scratch("stats");
     let (a, b) = drawings(&dir);

@@ -3,6 +3,7 @@
 use std::io::Write;
 
 use bdmorph::inbetween::{CompatibleReport, Drawing, Inbetween, InbetweenOptions};
+use bdmorph::meshing::PictureOptions;
 use bdmorph::render::{raster, Image};
 
 use super::morph::{
@@ -52,7 +53,15 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
         .iter()
         .map(|p| read(p))
         .collect::<Result<_, _>>()?;
+    let mut picture = PictureOptions::default();
+    if let Some(paper) = args.paper {
+        picture = picture.with_background(paper);
+    }
+    if let Some(t) = args.threshold {
+        picture = picture.with_threshold(t);
+    }
     let options = InbetweenOptions::default()
+        .with_picture(picture)
         .with_vertices(args.vertices)
         .with_min_angle(args.min_angle)
         .with_morph(morph_options(&args.solver));

@@ -275,6 +275,7 @@ enum Command {
     ///   bdmorph inbetween a.png b.png --frames 30 --background transparent -o walk.webp
     ///   bdmorph inbetween a.png b.png --t 0.5 -o half.png
     ///   bdmorph inbetween a.png b.png c.png --frames 36 -o path.gif
+    ///   bdmorph inbetween scan1.jpg scan2.jpg --paper white --frames 24 -o walk.mp4
     #[command(verbatim_doc_comment)]
     Inbetween(InbetweenArgs),
     /// Describe a mesh file: counts, boundary loops, and whether it can be morphed.
@@ -444,6 +445,15 @@ struct InbetweenArgs {
     /// The smallest angle of A's triangles, in degrees (at most 33).
     #[arg(long, value_name = "DEG", default_value_t = bdmorph::meshing::DEFAULT_MIN_ANGLE)]
     min_angle: f64,
+    /// For opaque drawings (scans): the colour around the subject, as `mesh --background`
+    /// takes it (#rrggbb, #rgb, white, ..., or auto: the picture's border). Without it the
+    /// subject is the pictures' opaque part.
+    #[arg(long, value_name = "COLOR", value_parser = parse_background)]
+    paper: Option<bdmorph::meshing::Background>,
+    /// In [0, 1): the opacity above which a pixel is the subject (default 0.5); with
+    /// --paper, the colour difference (default 0.2).
+    #[arg(long, value_name = "L")]
+    threshold: Option<f64>,
     #[command(flatten)]
     out: OutputArgs,
     #[command(flatten)]

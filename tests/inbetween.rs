@@ -367,3 +367,74 @@ mod hostile {
         }
     }
 }
+
+/// The studio's case: a mesh made from drawing A by `mesh_picture` (not re-meshed) laid over
+/// drawing B, with one pair on the outline and one inside.
+#[test]
+fn a_picture_mesh_laid_over_another_drawing_keeps_its_triangles() {
+    use bdmorph::inbetween::fit_drawing;
+    use bdmorph::meshing::{mesh_picture, MeshOptions, PictureOptions};
+    let (a, b) = figure_pair();
+    let meshed = mesh_picture(
+        &a,
+        &PictureOptions::default(),
+        &MeshOptions::default().with_vertices(800),
+    )
+    .unwrap();
+    // The mesh in A's pixels, y up, from its texture coordinates.
+    let uv = meshed.texcoords.uv.clone();
+    let mut mesh = meshed.mesh.clone();
+    for (p, t) in mesh.positions.iter_mut().zip(&uv) {
+        *p = [t[0] * 256.0, t[1] * 256.0];
+    }
+    let plain = fit_drawing(&mesh, 256.0, &b, &[], &options(800)).unwrap();
+    let r = &plain.report;
+    assert_eq!(r.vertices, mesh.positions.len());
+    assert_eq!(r.flipped, 0);
+    assert!(mesh
+        .faces
+        .iter()
+        .all(|f| signed_area(&plain.positions, f) > 0.0));
+    // B's corners between the mesh's boundary vertices are cut by at most a few pixels.
+    assert!(
+        r.outline_error < 4.0,
+        "B's outline {} px from the mesh",
+        r.outline_error
+    );
+    assert!(r.max_distortion.is_finite());
+    for (p, t) in plain.positions.iter().zip(&plain.texcoords) {
+        assert!((p[0] / 256.0 - t[0]).abs() < 1e-12 && (p[1] / 256.0 - t[1]).abs() < 1e-12);
+    }
+    // An interior pair: the body's middle in A goes 6 px right in B.
+    let inside = Match {
+        a: [128.0, 150.0],
+        b: [134.0, 150.0],
+    };
+    let paired = fit_drawing(&mesh, 256.0, &b, &[inside], &options(800)).unwrap();
+    let report = &paired.report.pairs[0];
+    assert!(report.met && !report.on_outline, "{report:?}");
+    // The vertex used is the nearest to A's point; it lands at the same offset from B's.
+    let pa = [128.0, 256.0 - 150.0];
+    let v = (0..mesh.positions.len())
+        .min_by(|&i, &j| {
+            let d = |k: usize| {
+                let q = mesh.positions[k];
+                (q[0] - pa[0]).hypot(q[1] - pa[1])
+            };
+            d(i).total_cmp(&d(j))
+        })
+        .unwrap();
+    let q = mesh.positions[v];
+    let want = [134.0 + q[0] - pa[0], 256.0 - 150.0 + q[1] - pa[1]];
+    let got = paired.positions[v];
+    assert!(
+        (got[0] - want[0]).hypot(got[1] - want[1]) < 1e-6,
+        "{got:?} against {want:?}"
+    );
+    assert!((report.error - (q[0] - pa[0]).hypot(q[1] - pa[1])).abs() < 1e-9);
+    // A drawing with a hole is refused in one line.
+    let holed = ring(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
+    let e = fit_drawing(&mesh, 256.0, &holed, &[], &options(800)).unwrap_err();
+    assert!(e.to_string().contains("hole"), "{e}");
+    assert!(!e.to_string().contains('\n'));
+}

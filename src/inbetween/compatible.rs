@@ -92,7 +92,7 @@ impl CompatibleMesh {
 }
 
 /// A drawing's outline, simplified to fit about half the vertices of the mesh.
-fn shape_of(
+pub(super) fn shape_of(
     image: &Image,
     which: Drawing,
     options: &InbetweenOptions,
@@ -203,7 +203,7 @@ impl CompatiblePath {
 }
 
 /// What a point pair of the user's is, once read.
-enum PairKind {
+pub(super) enum PairKind {
     Outline,
     Interior([f64; 2], [f64; 2]),
     Unmet,
@@ -211,15 +211,15 @@ enum PairKind {
 
 /// The user's pairs, read: per loop of A the anchors on it, per pair what it is and its
 /// report.
-struct ReadPairs {
-    anchors: Vec<Vec<Anchor>>,
-    kinds: Vec<PairKind>,
-    reports: Vec<PairReport>,
+pub(super) struct ReadPairs {
+    pub anchors: Vec<Vec<Anchor>>,
+    pub kinds: Vec<PairKind>,
+    pub reports: Vec<PairReport>,
 }
 
 /// Reads the user's pairs between drawings A and B: the anchors they put on A's loops, the
 /// interior pairs, and a report for each.
-fn read_pairs(
+pub(super) fn read_pairs(
     shape_a: &Shape,
     shape_b: &Shape,
     pairs: &[(usize, usize)],
@@ -311,7 +311,7 @@ fn read_pairs(
 }
 
 /// Vertices held at targets: `(vertex, target)`.
-type Pins = Vec<(u32, [f64; 2])>;
+pub(super) type Pins = Vec<(u32, [f64; 2])>;
 
 /// Meshes the common polygons (A's places) with about `vertices` vertices, and returns the
 /// mesh and, per other drawing, the place of every boundary vertex over it.
@@ -512,39 +512,12 @@ pub fn compatible_path(
             }
             None => None,
         };
-        let mut layout = lay_over(&mesh, &pins, start)?;
+        let (layout, pins) = if k == 0 {
+            lay_out_with_pairs(&mesh, pins, &interior_pins, &mut reports, start)?
+        } else {
+            (lay_over(&mesh, &pins, start)?, pins)
+        };
         let flipped_before_untangling = layout.flipped_before;
-        if k == 0 && layout.flipped > 0 && !interior_pins.is_empty() {
-            // Let go of the interior pairs next to what stays flipped, and try again.
-            let near = near_flips(&mesh, &layout.positions, 3);
-            let dropped: Vec<usize> = interior_pins
-                .iter()
-                .filter(|&&(_, v, _)| near[v as usize])
-                .map(|&(k, _, _)| k)
-                .collect();
-            if !dropped.is_empty() {
-                let kept: Vec<(u32, [f64; 2])> = pins
-                    .iter()
-                    .copied()
-                    .filter(|(v, _)| {
-                        !interior_pins
-                            .iter()
-                            .any(|&(k, w, _)| w == *v && dropped.contains(&k))
-                    })
-                    .collect();
-                let retry = lay_over(&mesh, &kept, Some(layout.positions.clone()))?;
-                if retry.flipped < layout.flipped {
-                    for &k in &dropped {
-                        reports[k].met = false;
-                        reports[k].reason = Some(
-                            "no flip-free layout over drawing B meets it with the outline where it is; the other pairs are met".into(),
-                        );
-                    }
-                    layout = retry;
-                    pins = kept;
-                }
-            }
-        }
         if layout.flipped > 0 {
             return Err(InbetweenError::Flipped {
                 which: Drawing(k + 1),
@@ -698,7 +671,7 @@ const POLISH_ITERATIONS: u32 = 400;
 /// Lowers the largest distortion of a flip-free layout by the bounded-distortion mapping
 /// with the pins held: each round asks for [`POLISH_SHARE`] of the largest distortion and is
 /// kept when it gets there without a flip. Returns the rounds kept.
-fn polish(
+pub(super) fn polish(
     mesh: &PlanarMesh,
     pins: &[(u32, [f64; 2])],
     positions: &mut [[f64; 2]],
@@ -734,18 +707,67 @@ fn polish(
     Ok(kept)
 }
 
+/// Interior pins of the user's pairs: `(pair, vertex, target)`.
+pub(super) type InteriorPins = [(usize, u32, [f64; 2])];
+
+/// [`lay_over`] with `pins` (the boundary's and the interior pairs' `interior`); when
+/// triangles stay flipped, the interior pairs next to them are let go (and their reports say
+/// so) if that leaves fewer flips. Returns the layout and the pins it holds.
+pub(super) fn lay_out_with_pairs(
+    mesh: &PlanarMesh,
+    pins: Pins,
+    interior: &InteriorPins,
+    reports: &mut [PairReport],
+    start: Option<Vec<[f64; 2]>>,
+) -> Result<(Layout, Pins), InbetweenError> {
+    let mut pins = pins;
+    let mut layout = lay_over(mesh, &pins, start)?;
+    if layout.flipped > 0 && !interior.is_empty() {
+        // Let go of the interior pairs next to what stays flipped, and try again.
+        let near = near_flips(mesh, &layout.positions, 3);
+        let dropped: Vec<usize> = interior
+            .iter()
+            .filter(|&&(_, v, _)| near[v as usize])
+            .map(|&(k, _, _)| k)
+            .collect();
+        if !dropped.is_empty() {
+            let kept: Pins = pins
+                .iter()
+                .copied()
+                .filter(|(v, _)| {
+                    !interior
+                        .iter()
+                        .any(|&(k, w, _)| w == *v && dropped.contains(&k))
+                })
+                .collect();
+            let retry = lay_over(mesh, &kept, Some(layout.positions.clone()))?;
+            if retry.flipped < layout.flipped {
+                for &k in &dropped {
+                    reports[k].met = false;
+                    reports[k].reason = Some(
+                        "no flip-free layout over drawing B meets it with the outline where it is; the other pairs are met".into(),
+                    );
+                }
+                layout = retry;
+                pins = kept;
+            }
+        }
+    }
+    Ok((layout, pins))
+}
+
 /// A layout of the mesh over another drawing and how many of its triangles are flipped.
-struct Layout {
-    positions: Vec<[f64; 2]>,
-    flipped: usize,
+pub(super) struct Layout {
+    pub positions: Vec<[f64; 2]>,
+    pub flipped: usize,
     /// Triangles flipped before the untangling.
-    flipped_before: usize,
+    pub flipped_before: usize,
 }
 
 /// A layout with every pin at its target: from `start` when given, otherwise by ARAP from
 /// A's layout; then [`untangle`] with the same pins, and when flips remain the
 /// bounded-distortion mapping over the whole mesh.
-fn lay_over(
+pub(super) fn lay_over(
     mesh: &PlanarMesh,
     pins: &[(u32, [f64; 2])],
     start: Option<Vec<[f64; 2]>>,
@@ -823,21 +845,32 @@ pub(crate) fn flipped(faces: &[[u32; 3]], positions: &[[f64; 2]]) -> usize {
         .count()
 }
 
-/// The vertices on the mesh's boundary (on an edge of one triangle), ascending.
-fn boundary_vertices(mesh: &PlanarMesh) -> Vec<u32> {
-    let mut edges: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
-    for f in &mesh.faces {
+/// The mesh's boundary edges (edges of one triangle), directed as in their triangle: the
+/// outer loops run counter-clockwise, holes clockwise.
+pub(super) fn boundary_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut edges: std::collections::HashMap<(u32, u32), (u32, (u32, u32))> =
+        std::collections::HashMap::new();
+    for f in faces {
         for k in 0..3 {
             let (a, b) = (f[k], f[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            edges.entry((a.min(b), a.max(b))).or_insert((0, (a, b))).0 += 1;
         }
     }
+    let mut out: Vec<(u32, u32)> = edges
+        .into_values()
+        .filter(|&(count, _)| count == 1)
+        .map(|(_, e)| e)
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// The vertices on the mesh's boundary (on an edge of one triangle), ascending.
+pub(super) fn boundary_vertices(mesh: &PlanarMesh) -> Vec<u32> {
     let mut on = vec![false; mesh.positions.len()];
-    for ((a, b), count) in edges {
-        if count == 1 {
-            on[a as usize] = true;
-            on[b as usize] = true;
-        }
+    for (a, b) in boundary_edges(&mesh.faces) {
+        on[a as usize] = true;
+        on[b as usize] = true;
     }
     (0..mesh.positions.len() as u32)
         .filter(|&v| on[v as usize])
@@ -858,7 +891,7 @@ fn nearest_segment(segments: &[(&Corner, &Corner)], p: [f64; 2]) -> (usize, f64,
 }
 
 /// The interior vertex nearest `p` that is not pinned yet.
-fn nearest_free_vertex(
+pub(super) fn nearest_free_vertex(
     mesh: &PlanarMesh,
     boundary: &[bool],
     pins: &[u32],
@@ -910,18 +943,10 @@ fn near_flips(mesh: &PlanarMesh, positions: &[[f64; 2]], rings: usize) -> Vec<bo
 }
 
 /// The largest distance of a corner of B's outline from the boundary of the layout over B.
-fn outline_error(shape_b: &Shape, faces: &[[u32; 3]], positions: &[[f64; 2]]) -> f64 {
-    let mut edges: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
-    for f in faces {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-        }
-    }
-    let boundary: Vec<([f64; 2], [f64; 2])> = edges
+pub(super) fn outline_error(shape_b: &Shape, faces: &[[u32; 3]], positions: &[[f64; 2]]) -> f64 {
+    let boundary: Vec<([f64; 2], [f64; 2])> = boundary_edges(faces)
         .into_iter()
-        .filter(|&(_, c)| c == 1)
-        .map(|((a, b), _)| (positions[a as usize], positions[b as usize]))
+        .map(|(a, b)| (positions[a as usize], positions[b as usize]))
         .collect();
     let mut worst = 0.0f64;
     for l in &shape_b.loops {
@@ -937,7 +962,7 @@ fn outline_error(shape_b: &Shape, faces: &[[u32; 3]], positions: &[[f64; 2]]) ->
 }
 
 /// The largest conformal distortion of the unflipped triangles of the map.
-fn max_distortion_unflipped(mesh: &PlanarMesh, positions: &[[f64; 2]]) -> f64 {
+pub(super) fn max_distortion_unflipped(mesh: &PlanarMesh, positions: &[[f64; 2]]) -> f64 {
     let rest = crate::distortion::RestShape::new(&mesh.positions, &mesh.faces);
     let mut out = vec![0.0; mesh.faces.len()];
     rest.distortion_into(positions, &mut out);

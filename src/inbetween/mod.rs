@@ -57,12 +57,14 @@
 mod baseline;
 mod compatible;
 mod correspondence;
+mod fit;
 mod outline;
 
 pub use baseline::{linear_frame, ArapInterpolation};
 pub use compatible::{
     compatible_mesh, compatible_path, CompatibleMesh, CompatiblePath, CompatibleReport, PairReport,
 };
+pub use fit::{fit_drawing, DrawingFit};
 
 use crate::deform::DeformError;
 use crate::meshing::{MeshingError, PictureOptions, DEFAULT_MIN_ANGLE, MAX_VERTICES};

@@ -104,6 +104,7 @@ fn scrub(c: &mut Criterion) {
         easing: "linear".into(),
         positions: bent.positions.clone(),
         pins: Vec::new(),
+        drawing: None,
     });
     let mut group = c.benchmark_group(format!("studio_scrub/disk-{}", mesh.positions.len()));
     let mut session = Session::new(project, std::env::temp_dir(), None, None).expect("session");

@@ -7,7 +7,7 @@
 //! ```json
 //! {
 //!   "format": "bdmorph-studio",
-//!   "version": 2,
+//!   "version": 3,
 //!   "mesh": { "positions": [[0, 0], [1, 0], [0, 1]], "faces": [[0, 1, 2]], "texcoords": null },
 //!   "texture": null,
 //!   "method": { "name": "kvf", "weight": 100, "max_distortion": 3 },
@@ -20,7 +20,8 @@
 //! }
 //! ```
 //!
-//! Version 1 files (without `outline` and `picture`) are read as well. A file is refused whole,
+//! Version 1 files (without `outline` and `picture`) and version 2 files (without keyframes'
+//! drawings) are read as well. A file is refused whole,
 //! with the reason, when it is not JSON, is another program's or a newer version's, is damaged
 //! (a pose with the wrong number of points or a point that is not finite, a triangle naming a
 //! missing vertex, times out of order, an unknown easing, a pin out of range or twice, ...), or
@@ -35,8 +36,8 @@ use crate::mesh::PlanarMesh;
 
 /// The `format` field of every project file.
 pub const FORMAT: &str = "bdmorph-studio";
-/// The version this studio writes (it reads this one and version 1).
-pub const VERSION: u32 = 2;
+/// The version this studio writes (it reads this one and versions 1 and 2).
+pub const VERSION: u32 = 3;
 
 /// The most keyframes a project holds.
 pub const MAX_KEYFRAMES: usize = 1000;
@@ -420,6 +421,55 @@ pub struct Keyframe {
     pub positions: Vec<[f64; 2]>,
     /// The handles it was posed with (vertex numbers).
     pub pins: Vec<u32>,
+    /// The drawing it was made from, if any: its picture is cross-faded in over the segment
+    /// that ends here and out over the one that starts here.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drawing: Option<KeyframeDrawing>,
+}
+
+/// The most point pairs a keyframe's drawing keeps.
+pub const MAX_DRAWING_PAIRS: usize = 200;
+
+/// A keyframe made from a drawing of the subject: the rest mesh laid over the drawing's
+/// picture (see [`crate::inbetween::fit_drawing`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KeyframeDrawing {
+    /// The picture's file, relative to the project file (as [`Project::texture`]).
+    pub picture: String,
+    /// One texture coordinate per vertex in that picture (`x / width`, `y / height`, y up).
+    pub texcoords: Vec<[f64; 2]>,
+    /// The point pairs it was made with: a point in the rest picture and one in the drawing,
+    /// each in pixels from the top-left corner.
+    pub pairs: Vec<[[f64; 2]; 2]>,
+}
+
+/// Checks a keyframe's drawing against a mesh of `n` vertices.
+pub fn check_drawing(drawing: &KeyframeDrawing, n: usize) -> Result<(), String> {
+    if drawing.picture.is_empty() || drawing.picture.len() > 4096 {
+        return Err("a drawing's picture has no name, or one over 4096 bytes".into());
+    }
+    if drawing.texcoords.len() != n || drawing.texcoords.iter().flatten().any(|c| !c.is_finite()) {
+        return Err(format!(
+            "its drawing has {} texture coordinates for {n} vertices, or one not finite",
+            drawing.texcoords.len()
+        ));
+    }
+    if drawing.pairs.len() > MAX_DRAWING_PAIRS {
+        return Err(format!(
+            "its drawing has {} point pairs (at most {MAX_DRAWING_PAIRS})",
+            drawing.pairs.len()
+        ));
+    }
+    if drawing
+        .pairs
+        .iter()
+        .flatten()
+        .flatten()
+        .any(|c| !c.is_finite())
+    {
+        return Err("its drawing has a point pair that is not finite".into());
+    }
+    Ok(())
 }
 
 /// Why a project could not be read or written.
@@ -470,6 +520,7 @@ impl Project {
                 easing: "linear".into(),
                 positions: mesh.positions.clone(),
                 pins: Vec::new(),
+                drawing: None,
             }],
             loop_range: None,
             depth: None,
@@ -502,7 +553,7 @@ impl Project {
             other => return Err(ProjectError::Format(other.unwrap_or("none").into())),
         }
         match envelope.version {
-            Some(1 | VERSION) => {}
+            Some(1 | 2 | VERSION) => {}
             found => {
                 return Err(ProjectError::Version {
                     found: found.unwrap_or(0),
@@ -610,6 +661,11 @@ impl Project {
             if let Err(e) = check_pins(&key.pins, n) {
                 return damaged(format!("keyframe {shown}: {e}"));
             }
+            if let Some(d) = &key.drawing {
+                if let Err(e) = check_drawing(d, n) {
+                    return damaged(format!("keyframe {shown}: {e}"));
+                }
+            }
         }
         Ok(())
     }
@@ -648,7 +704,7 @@ pub fn path_of(
 /// let rest = bdmorph::generate::grid(4, 3, 0.0);
 /// let mut doc = Project::new(&rest, None);
 /// let moved: Vec<[f64; 2]> = rest.positions.iter().map(|p| [p[0] + 1.0, p[1]]).collect();
-/// doc.keyframes.push(Keyframe { time: 2.0, easing: "linear".into(), positions: moved, pins: vec![] });
+/// doc.keyframes.push(Keyframe { time: 2.0, easing: "linear".into(), positions: moved, pins: vec![], drawing: None });
 /// let mut animation = Animation::new(&doc)?;
 /// let mut frame = vec![[0.0; 2]; rest.positions.len()];
 /// assert_eq!(animation.frame_into(1.0, &mut frame)?, 1.0);
@@ -743,6 +799,11 @@ mod tests {
             easing: "ease-in-out".into(),
             positions: generate::bend(&mesh, 0.3).positions,
             pins: vec![0, 3],
+            drawing: Some(KeyframeDrawing {
+                picture: "b.png".into(),
+                texcoords: vec![[0.25, 0.5]; mesh.positions.len()],
+                pairs: vec![[[1.0, 2.0], [3.0, 4.0]]],
+            }),
         });
         let back = Project::from_json(&project.to_json()).expect("reads back");
         assert_eq!(back, project);
@@ -753,10 +814,12 @@ mod tests {
                 .expect_err("refused")
                 .to_string()
         };
-        assert!(broken("\"version\": 2", "\"version\": 3").contains("another version"));
+        assert!(broken("\"version\": 3", "\"version\": 4").contains("another version"));
         assert!(broken("bdmorph-studio", "something-else").contains("not a bdmorph studio"));
         assert!(broken("\"time\": 1.5", "\"time\": 0.0").contains("times start at 0"));
         assert!(broken("ease-in-out", "bouncy").contains("keyframe 2"));
+        assert!(broken("\"b.png\"", "\"\"").contains("picture has no name"));
+        assert!(broken("0.25", "1e999").contains("texture coordinates"));
         assert!(broken("\"name\": \"kvf\"", "\"name\": \"magic\"").contains("unknown method"));
         assert!(Project::from_json(b"{ not json").is_err());
         assert!(Project::from_json(&project.to_json()[..100]).is_err());
@@ -792,6 +855,12 @@ mod tests {
         object.remove("outline");
         object.remove("picture");
         object.insert("version".into(), 1.into());
+        let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
+        assert_eq!(back, project);
+        // Version 2 (outline and picture, no drawings) too.
+        let mut value: serde_json::Value =
+            serde_json::from_slice(&project.to_json()).expect("json");
+        value["version"] = 2.into();
         let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
         assert_eq!(back, project);
     }

@@ -54,6 +54,7 @@ fn project(dir: &Path) -> PathBuf {
         easing: "linear".into(),
         positions: bent,
         pins: vec![],
+        drawing: None,
     });
     let path = dir.join("wave.json");
     doc.write(&path).expect("project written");
@@ -400,6 +401,7 @@ fn the_draw_order_painted_in_the_project_decides_the_overlap() {
         easing: "linear".into(),
         positions: moved,
         pins: vec![],
+        drawing: None,
     });
     doc.fps = 2.0;
     // A picture: left half red, right half blue.

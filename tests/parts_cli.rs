@@ -165,6 +165,7 @@ fn render_draws_a_posed_character_with_its_parts_in_order() {
         easing: "linear".into(),
         positions: swung,
         pins: vec![],
+        drawing: None,
     });
     doc.fps = 10.0;
     doc.write(&dir.join("figure.json")).expect("saved");

@@ -454,6 +454,7 @@ fn exports_run_in_the_background_and_can_be_cancelled() {
         easing: "linear".into(),
         positions: generate::bend(&mesh, 0.8).positions,
         pins: Vec::new(),
+        drawing: None,
     });
     project.fps = 60.0;
     project.write(&dir.join("long.json")).expect("write");
@@ -496,8 +497,8 @@ fn damaged_and_foreign_projects_are_refused_at_start() {
     let text = String::from_utf8(good.to_json()).expect("utf8");
     for (name, body, said) in [
         (
-            "v3.json",
-            text.replacen("\"version\": 2", "\"version\": 3", 1),
+            "v4.json",
+            text.replacen("\"version\": 3", "\"version\": 4", 1),
             "another version",
         ),
         (

@@ -516,6 +516,7 @@ fn textured_project(dir: &Path, keys: usize, vertices: usize) -> (Project, bdmor
             easing: "linear".into(),
             positions: generate::bend(&meshed.mesh, 0.15 * k as f64).positions,
             pins: Vec::new(),
+            drawing: None,
         });
     }
     (project, image)
@@ -1066,6 +1067,7 @@ fn defect_8_exports_run_in_the_background() {
         easing: "linear".into(),
         positions: generate::bend(&mesh, 0.7).positions,
         pins: Vec::new(),
+        drawing: None,
     });
     project.write(&dir.join("long.json")).expect("write");
     let studio = Studio::start(&dir, Some("long.json"));
@@ -1528,6 +1530,7 @@ fn drag_and_scrub_rates_are_measured_in_the_browser() {
         easing: "linear".into(),
         positions: generate::bend(&large, 0.6).positions,
         pins: Vec::new(),
+        drawing: None,
     });
     project.write(&dir.join("disk10k.json")).expect("write");
     let studio = Studio::start(&dir, Some("disk5k.obj"));
@@ -2332,6 +2335,7 @@ fn limb_and_body(dir: &Path) -> (Project, usize) {
         easing: "linear".into(),
         positions: crossed,
         pins: Vec::new(),
+        drawing: None,
     });
     (project, limb_faces)
 }

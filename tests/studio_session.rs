@@ -53,6 +53,7 @@ fn animated(rings: usize, keys: usize) -> Project {
             easing: "linear".into(),
             positions: generate::bend(&mesh, 0.2 * k as f64).positions,
             pins: Vec::new(),
+            drawing: None,
         });
     }
     project
@@ -840,4 +841,183 @@ fn keyframe_poses_are_sent_with_revisions_that_follow_their_edits() {
         }
     )
     .is_some());
+}
+
+/// A keyframe from another drawing: the rest mesh laid over it in the background, added as
+/// one undoable step with the drawing's picture and texture coordinates, kept by a save and
+/// read back; a drawing that cannot be laid over leaves the document as it was and says why.
+#[test]
+fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
+    use bdmorph::render::raster;
+    let dir = scratch("drawing");
+    let write = |name: &str, arm: f64, bend: f64| {
+        let png = raster::encode_png(&generate::figure_picture(256, arm, bend)).expect("png");
+        std::fs::write(dir.join(name), png).expect("write");
+    };
+    write("a.png", 0.0, 0.0);
+    write("b.png", 2.0, 0.2);
+    let holed = generate::picture(256, 256, |x, y| {
+        let outer = generate::capsule_distance([x, y], [128.0, 128.0], [128.0, 128.0], 90.0);
+        outer.max(-generate::capsule_distance(
+            [x, y],
+            [128.0, 128.0],
+            [128.0, 128.0],
+            30.0,
+        ))
+    });
+    std::fs::write(dir.join("ring.png"), raster::encode_png(&holed).unwrap()).unwrap();
+    let mut s = Session::new(
+        Project::new(&generate::disk(4, 0.1), None),
+        dir.clone(),
+        None,
+        None,
+    )
+    .expect("a session");
+    // Without a picture there is nothing to lay over.
+    let refused = ask(
+        &mut s,
+        Request::DrawingKeyframe {
+            name: "b.png".into(),
+            pairs: vec![],
+            time: None,
+        },
+    );
+    assert!(refused.unwrap().contains("no picture"));
+    assert_eq!(
+        ask(
+            &mut s,
+            Request::Open {
+                name: "a.png".into()
+            }
+        ),
+        None
+    );
+    let before = s.project().to_json();
+    assert_eq!(s.project().keyframes.len(), 1);
+    // A pair inside: the body's middle moved 4 px right.
+    let pairs = vec![[[128.0, 150.0], [132.0, 150.0]]];
+    assert_eq!(
+        ask(
+            &mut s,
+            Request::DrawingKeyframe {
+                name: "b.png".into(),
+                pairs: pairs.clone(),
+                time: Some(2.0),
+            },
+        ),
+        None
+    );
+    let doc = s.project().clone();
+    assert_eq!(doc.keyframes.len(), 2);
+    let key = &doc.keyframes[1];
+    assert_eq!(key.time, 2.0);
+    let drawing = key.drawing.as_ref().expect("a drawing");
+    assert_eq!(drawing.picture, "b.png");
+    assert_eq!(drawing.pairs, pairs);
+    let n = doc.mesh.positions.len();
+    assert_eq!(drawing.texcoords.len(), n);
+    // Flip-free, and placed as the drawing is: the rest mesh's map from its picture's pixels
+    // applied to the layout over B.
+    let area = |p: &[[f64; 2]], f: &[u32; 3]| {
+        let (a, b, c) = (p[f[0] as usize], p[f[1] as usize], p[f[2] as usize]);
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    assert!(doc.mesh.faces.iter().all(|f| area(&key.positions, f) > 0.0));
+    let rest_uv = doc.mesh.texcoords.as_ref().expect("texcoords");
+    let (i, j) = (0, n - 1);
+    let scale =
+        (doc.mesh.positions[j][0] - doc.mesh.positions[i][0]) / (rest_uv[j][0] - rest_uv[i][0]);
+    for v in 0..n {
+        let want = [
+            doc.mesh.positions[i][0] + scale * (drawing.texcoords[v][0] - rest_uv[i][0]),
+            doc.mesh.positions[i][1] + scale * (drawing.texcoords[v][1] - rest_uv[i][1]),
+        ];
+        let got = key.positions[v];
+        assert!(
+            (got[0] - want[0]).hypot(got[1] - want[1]) < 1e-6 * scale,
+            "vertex {v}: {got:?} against {want:?}"
+        );
+    }
+    let state: serde_json::Value = serde_json::from_str(&s.state_json()).unwrap();
+    assert_eq!(state["keyframes"][1]["drawing"], "b.png");
+    assert!(s.drawing_picture(1).is_some());
+    assert_eq!(s.drawing_texcoords(1).map(|b| b.len()), Some(8 * n));
+    assert!(s.drawing_texcoords(0).is_none());
+    // One undo step.
+    ask(&mut s, Request::Undo);
+    assert_eq!(s.project().to_json(), before);
+    ask(&mut s, Request::Redo);
+    assert_eq!(s.project(), &doc);
+    // Saved and read back.
+    assert_eq!(
+        ask(
+            &mut s,
+            Request::Save {
+                name: Some("walk.json".into()),
+                overwrite: None
+            }
+        ),
+        None
+    );
+    let back = Project::read(&dir.join("walk.json")).expect("reads");
+    assert_eq!(back.keyframes[1].drawing, doc.keyframes[1].drawing);
+    // Opened again in a new studio: the drawing's picture is found.
+    let mut again = Session::new(
+        Project::new(&generate::disk(4, 0.1), None),
+        dir.clone(),
+        None,
+        None,
+    )
+    .expect("a session");
+    assert_eq!(
+        ask(
+            &mut again,
+            Request::Open {
+                name: "walk.json".into()
+            }
+        ),
+        None
+    );
+    assert_eq!(
+        again.project().keyframes[1].drawing,
+        doc.keyframes[1].drawing
+    );
+    assert!(again.drawing_picture(1).is_some());
+    // A drawing with a hole: the job fails, says why, and changes nothing.
+    let kept = s.project().to_json();
+    assert_eq!(
+        ask(
+            &mut s,
+            Request::DrawingKeyframe {
+                name: "ring.png".into(),
+                pairs: vec![],
+                time: None,
+            },
+        ),
+        None
+    );
+    assert_eq!(s.project().to_json(), kept);
+    let state: serde_json::Value = serde_json::from_str(&s.state_json()).unwrap();
+    let notes = state["notes"].to_string();
+    assert!(
+        notes.contains("ring.png") && notes.contains("hole"),
+        "{notes}"
+    );
+    // Refused before any work: a missing file, a time taken, too many pairs.
+    for (name, time, pairs) in [
+        ("nothing.png", None, 0),
+        ("b.png", Some(2.0), 0),
+        ("b.png", None, 201),
+    ] {
+        let refused = ask(
+            &mut s,
+            Request::DrawingKeyframe {
+                name: name.into(),
+                pairs: vec![[[1.0, 1.0], [1.0, 1.0]]; pairs],
+                time,
+            },
+        );
+        assert!(refused.is_some(), "{name} {time:?} {pairs}");
+        assert_eq!(s.project().to_json(), kept);
+    }
 }

@@ -130,6 +130,7 @@ fn random_edits_stay_within_a_memory_bound() {
             easing: "linear".into(),
             positions: generate::bend(&mesh, 0.04 * k as f64).positions,
             pins: Vec::new(),
+            drawing: None,
         });
     }
     project.write(&dir.join("soak.json")).expect("write");
@@ -191,6 +192,7 @@ fn scrubs_during_an_export_are_measured() {
         easing: "ease-in-out".into(),
         positions: generate::bend(&mesh, 0.7).positions,
         pins: Vec::new(),
+        drawing: None,
     });
     project.write(&dir.join("ten.json")).expect("write");
     let studio = Studio::start(&dir, Some("ten.json"));

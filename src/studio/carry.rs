@@ -9,7 +9,7 @@
 //! may have flipped triangles where a new triangle straddles a fold of an old pose; the caller
 //! counts them.
 
-use super::project::Keyframe;
+use super::project::{Keyframe, KeyframeDrawing};
 use crate::mesh::PlanarMesh;
 
 /// What [`carry`] made.
@@ -246,16 +246,20 @@ pub fn carry(old: &PlanarMesh, keyframes: &[Keyframe], new: &PlanarMesh) -> Carr
     let keyframes = keyframes
         .iter()
         .map(|key| {
-            let positions = located
-                .iter()
-                .map(|&(f, w)| {
-                    let [a, b, c] = old.faces[f as usize].map(|v| key.positions[v as usize]);
-                    [
-                        w[0] * a[0] + w[1] * b[0] + w[2] * c[0],
-                        w[0] * a[1] + w[1] * b[1] + w[2] * c[1],
-                    ]
-                })
-                .collect();
+            // Per-vertex values (a pose, a drawing's texture coordinates) at the new vertices.
+            let at_new = |values: &[[f64; 2]]| -> Vec<[f64; 2]> {
+                located
+                    .iter()
+                    .map(|&(f, w)| {
+                        let [a, b, c] = old.faces[f as usize].map(|v| values[v as usize]);
+                        [
+                            w[0] * a[0] + w[1] * b[0] + w[2] * c[0],
+                            w[0] * a[1] + w[1] * b[1] + w[2] * c[1],
+                        ]
+                    })
+                    .collect()
+            };
+            let positions = at_new(&key.positions);
             let places: Vec<[f64; 2]> = key
                 .pins
                 .iter()
@@ -274,6 +278,10 @@ pub fn carry(old: &PlanarMesh, keyframes: &[Keyframe], new: &PlanarMesh) -> Carr
                 easing: key.easing.clone(),
                 positions,
                 pins,
+                drawing: key.drawing.as_ref().map(|d| KeyframeDrawing {
+                    texcoords: at_new(&d.texcoords),
+                    ..d.clone()
+                }),
             }
         })
         .collect();
@@ -320,6 +328,7 @@ mod tests {
                 easing: "ease-in-out".into(),
                 positions: old.positions.iter().map(|&p| affine(p)).collect(),
                 pins: vec![0, (old.positions.len() - 1) as u32],
+                drawing: None,
             },
         ];
         let carried = carry(&old, &keyframes, &new);

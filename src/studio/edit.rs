@@ -670,6 +670,7 @@ pub fn keyframe_at(time: f64, positions: Vec<[f64; 2]>) -> Keyframe {
         easing: "linear".into(),
         positions,
         pins: Vec::new(),
+        drawing: None,
     }
 }
 

@@ -50,6 +50,8 @@ pub enum Work {
     Mesh(MeshWork),
     /// A file opened.
     Open(OpenWork),
+    /// A keyframe made from a drawing.
+    Drawing(Box<DrawingWork>),
 }
 
 /// What a job made.
@@ -75,6 +77,15 @@ pub enum Outcome {
         /// What was said about it.
         notes: Vec<String>,
     },
+    /// A keyframe made from a drawing (to add if the rest mesh is still `replaces`).
+    Drawn {
+        /// The keyframe.
+        keyframe: Box<crate::project::Keyframe>,
+        /// What was done, in words.
+        notes: Vec<String>,
+        /// The rest mesh it was made for.
+        replaces: Box<PlanarMesh>,
+    },
     /// A document opened.
     Opened {
         /// It.
@@ -96,6 +107,7 @@ impl Work {
             ),
             Work::Mesh(m) => format!("meshing ({} vertices)", m.vertices),
             Work::Open(o) => format!("opening {}", o.name),
+            Work::Drawing(d) => format!("laying the mesh over {}", d.name),
         }
     }
 
@@ -109,6 +121,7 @@ impl Work {
             Work::Export(e) => e.run(progress),
             Work::Mesh(m) => m.run(progress),
             Work::Open(o) => o.run(progress),
+            Work::Drawing(d) => d.run(progress),
         })
     }
 }
@@ -206,6 +219,81 @@ impl OpenWork {
         Ok(Outcome::Opened {
             opened: Box::new(opened),
             name: self.name,
+        })
+    }
+}
+
+/// A keyframe made from a drawing: its inputs, copied from the document when it starts.
+#[derive(Debug)]
+pub struct DrawingWork {
+    /// The drawing's name in the workspace.
+    pub name: String,
+    /// Its pixels.
+    pub drawing: Arc<Image>,
+    /// The rest mesh in the rest picture's pixels (y up).
+    pub mesh: PlanarMesh,
+    /// The rest picture's height in pixels.
+    pub picture_height: f64,
+    /// The map from the rest picture's pixels (y up) to the mesh's frame: `[a, b, c, d, e, f]`
+    /// takes `(x, y)` to `(a x + b y + c, d x + e y + f)`.
+    pub to_mesh: [f64; 6],
+    /// The point pairs (rest picture, drawing), pixels from the top-left corner.
+    pub pairs: Vec<[[f64; 2]; 2]>,
+    /// How the drawing's subject is told from its background.
+    pub picture: crate::meshing::PictureOptions,
+    /// When the keyframe goes.
+    pub time: f64,
+    /// The rest mesh it is made for.
+    pub replaces: PlanarMesh,
+}
+
+impl DrawingWork {
+    fn run(self, progress: &Progress) -> Result<Outcome, String> {
+        use crate::inbetween::{fit_drawing, InbetweenOptions, Match};
+        progress.total.store(0, Ordering::Relaxed);
+        progress.cancelled()?;
+        let matches: Vec<Match> = self.pairs.iter().map(|&[a, b]| Match { a, b }).collect();
+        let options = InbetweenOptions::default().with_picture(self.picture);
+        let fit = fit_drawing(
+            &self.mesh,
+            self.picture_height,
+            &self.drawing,
+            &matches,
+            &options,
+        )
+        .map_err(|e| format!("{}: {e}", self.name))?;
+        progress.cancelled()?;
+        let m = self.to_mesh;
+        let positions = fit
+            .positions
+            .iter()
+            .map(|p| {
+                [
+                    m[0] * p[0] + m[1] * p[1] + m[2],
+                    m[3] * p[0] + m[4] * p[1] + m[5],
+                ]
+            })
+            .collect();
+        let r = &fit.report;
+        let mut notes = vec![format!(
+            "{}: the mesh laid over it without a flipped triangle (largest distortion {:.2}; its outline within {:.1} px of the mesh's)",
+            self.name, r.max_distortion, r.outline_error
+        )];
+        for (k, pair) in r.pairs.iter().enumerate() {
+            if let Some(reason) = &pair.reason {
+                notes.push(format!("{}: pair {} not met: {reason}", self.name, k + 1));
+            }
+        }
+        let mut keyframe = super::edit::keyframe_at(self.time, positions);
+        keyframe.drawing = Some(crate::project::KeyframeDrawing {
+            picture: self.name,
+            texcoords: fit.texcoords,
+            pairs: self.pairs,
+        });
+        Ok(Outcome::Drawn {
+            keyframe: Box::new(keyframe),
+            notes,
+            replaces: Box::new(self.replaces),
         })
     }
 }

@@ -269,6 +269,15 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
     match ext.as_str() {
         "json" => {
             let mut project = Project::read(file).map_err(|e| format!("{shown}: {e}"))?;
+            // Keyframes' drawings, named as the workspace names them (read when shown).
+            let folder = file.parent().unwrap_or(Path::new("."));
+            for d in project
+                .keyframes
+                .iter_mut()
+                .filter_map(|k| k.drawing.as_mut())
+            {
+                d.picture = name_in(workspace, &folder.join(&d.picture));
+            }
             let texture = match project.texture.clone() {
                 Some(t) => {
                     let path = file.parent().unwrap_or(Path::new(".")).join(&t);

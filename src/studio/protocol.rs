@@ -309,6 +309,20 @@ pub enum Request {
         /// Its plain name.
         name: String,
     },
+    /// A keyframe made from another drawing of the subject (a picture of the workspace): the
+    /// rest mesh laid over it, in the background; the keyframe is added when it is done (one
+    /// undo step), at `time` or a second after the last keyframe.
+    DrawingKeyframe {
+        /// The drawing's plain name.
+        name: String,
+        /// Point pairs: a point in the rest picture and the same point in the drawing, each
+        /// in pixels from the top-left corner (at most [`crate::project::MAX_DRAWING_PAIRS`]).
+        #[serde(default)]
+        pairs: Vec<[[f64; 2]; 2]>,
+        /// When, in seconds (after the first keyframe).
+        #[serde(default)]
+        time: Option<f64>,
+    },
     /// Restore recovered work (one undo step).
     Recover {
         /// The recovery file's name, as listed.

@@ -20,7 +20,7 @@ use super::edit::{keyframe_at, Edit, Touched};
 use super::engine::{people, Engine};
 use super::export::{ExportFormat, ExportSettings};
 use super::history::History;
-use super::jobs::{ExportWork, MeshWork, OpenWork, Outcome, Progress, Work};
+use super::jobs::{DrawingWork, ExportWork, MeshWork, OpenWork, Outcome, Progress, Work};
 use super::open::{
     fitted_uv, per_vertex_uv, read_named_texture, read_texture, OpenOptions, Texture,
 };
@@ -857,6 +857,7 @@ impl Session {
         }
         let key = Keyframe {
             pins: source.pins.clone(),
+            drawing: source.drawing.clone(),
             ..keyframe_at(time, source.positions.clone())
         };
         let at = self.place_for(time);
@@ -1176,11 +1177,19 @@ impl Session {
             (None, None) => return Err("give the project a file name (.json)".into()),
         };
         let mut doc = self.doc.clone();
-        // The picture, relative to the project's folder (the workspace).
-        if let (Some(t), Some(dir)) = (&doc.texture, path.parent()) {
-            let absolute = self.workspace.root().join(t);
-            if let Ok(inside) = absolute.strip_prefix(dir) {
-                doc.texture = Some(inside.display().to_string());
+        // The pictures, relative to the project's folder (the workspace).
+        if let Some(dir) = path.parent() {
+            let relative = |name: &mut String| {
+                let absolute = self.workspace.root().join(&*name);
+                if let Ok(inside) = absolute.strip_prefix(dir) {
+                    *name = inside.display().to_string();
+                }
+            };
+            if let Some(t) = &mut doc.texture {
+                relative(t);
+            }
+            for d in doc.keyframes.iter_mut().filter_map(|k| k.drawing.as_mut()) {
+                relative(&mut d.picture);
             }
         }
         doc.write(&path).map_err(|e| e.to_string())?;
@@ -1375,6 +1384,129 @@ impl Session {
         )
     }
 
+    /// A picture of the workspace, read once and kept.
+    fn picture(&mut self, name: &str) -> Result<Arc<Texture>, String> {
+        if let Some(t) = self.textures.iter().find(|t| t.name == name) {
+            return Ok(t.clone());
+        }
+        let path = self.workspace.file(name, &[".png", ".jpg", ".jpeg"])?;
+        let texture = Arc::new(read_texture(&path, name).map_err(|e| format!("{name}: {e}"))?);
+        self.textures.push(texture.clone());
+        Ok(texture)
+    }
+
+    /// The picture of keyframe `k`'s drawing, if it has one that can be read.
+    pub fn drawing_picture(&mut self, k: usize) -> Option<Arc<Texture>> {
+        let name = self.doc.keyframes.get(k)?.drawing.as_ref()?.picture.clone();
+        self.picture(&name).ok()
+    }
+
+    /// Keyframe `k`'s drawing's texture coordinates as little-endian `f32` pairs (`u`, `v`
+    /// with v up), if it has a drawing.
+    pub fn drawing_texcoords(&self, k: usize) -> Option<Vec<u8>> {
+        let d = self.doc.keyframes.get(k)?.drawing.as_ref()?;
+        Some(
+            d.texcoords
+                .iter()
+                .flatten()
+                .flat_map(|&c| (c as f32).to_le_bytes())
+                .collect(),
+        )
+    }
+
+    /// The work that makes a keyframe from the drawing `name` with the point `pairs`.
+    fn drawing_work(
+        &mut self,
+        name: &str,
+        pairs: Vec<[[f64; 2]; 2]>,
+        time: Option<f64>,
+    ) -> Result<Work, String> {
+        use crate::project::MAX_DRAWING_PAIRS;
+        if self.doc.parts.is_some() {
+            return Err(
+                "a character in parts cannot take a drawing as a keyframe: pose it instead".into(),
+            );
+        }
+        let (Some(rest_picture), Some(uv)) =
+            (self.texture.clone(), self.doc.mesh.texcoords.clone())
+        else {
+            return Err("the rest mesh has no picture: open a picture of the subject first, then add other drawings of it".into());
+        };
+        if pairs.len() > MAX_DRAWING_PAIRS {
+            return Err(format!(
+                "{} point pairs: at most {MAX_DRAWING_PAIRS}",
+                pairs.len()
+            ));
+        }
+        if pairs.iter().flatten().flatten().any(|c| !c.is_finite()) {
+            return Err("a point pair that is not finite".into());
+        }
+        let time = time.unwrap_or(self.duration() + 1.0);
+        if !(time.is_finite() && time > 0.0 && time <= 1e6) {
+            return Err(format!(
+                "a keyframe at {time} s: give a time after the first keyframe"
+            ));
+        }
+        if self.keyframe_at_time(time).is_some() {
+            return Err(format!("there is already a keyframe at {time} s"));
+        }
+        let n = self.doc.mesh.positions.len();
+        super::project::check_limits(self.doc.keyframes.len() + 1, n)?;
+        let drawing = self.picture(name)?;
+        let (w, h) = (
+            f64::from(rest_picture.image.width),
+            f64::from(rest_picture.image.height),
+        );
+        let mesh = PlanarMesh {
+            positions: uv.iter().map(|t| [t[0] * w, t[1] * h]).collect(),
+            faces: self.doc.mesh.faces.clone(),
+        };
+        if mesh.faces.iter().any(|f| mesh.signed_area(f) <= 0.0) {
+            return Err("the rest mesh's texture coordinates are folded or mirrored: drawings are laid over a mesh made from its picture".into());
+        }
+        let to_mesh = affine_fit(&mesh.positions, &self.doc.mesh.positions)
+            .ok_or("the rest mesh is not its picture's shape (its texture coordinates are not an affine image of it): drawings are laid over a mesh made from its picture")?;
+        Ok(Work::Drawing(Box::new(DrawingWork {
+            name: name.to_owned(),
+            drawing: Arc::new(drawing.image.clone()),
+            mesh,
+            picture_height: h,
+            to_mesh,
+            pairs,
+            picture: self.doc.picture.options()?,
+            time,
+            replaces: self.doc.rest(),
+        })))
+    }
+
+    /// A keyframe made from a drawing, added if the rest mesh is still the one it was made for.
+    fn drawn(&mut self, keyframe: Keyframe, notes: Vec<String>, replaces: &PlanarMesh) -> Done {
+        if self.doc.mesh.positions != replaces.positions || self.doc.mesh.faces != replaces.faces {
+            return Err(
+                "the rest mesh changed while the drawing was laid over it: add the drawing again"
+                    .into(),
+            );
+        }
+        let time = keyframe.time;
+        if self.keyframe_at_time(time).is_some() {
+            return Err(format!("there is already a keyframe at {time} s"));
+        }
+        let name = keyframe
+            .drawing
+            .as_ref()
+            .map_or_else(String::new, |d| d.picture.clone());
+        let at = self.place_for(time);
+        self.commit(
+            format!("keyframe {} from {name}", nth(at)),
+            Edit::Insert { at, keyframe },
+        )?;
+        self.show_keyframe(at);
+        for n in notes {
+            self.note(n, false);
+        }
+        Ok(())
+    }
+
     fn recover(&mut self, name: &str) -> Done {
         let (project, source) = self.workspace.recovered_project(name)?;
         self.commit("restore recovered work", Edit::Document(Box::new(project)))?;
@@ -1399,7 +1531,13 @@ impl Session {
             .iter()
             .zip(&self.engine.flips)
             .map(|(k, &flipped)| {
-                serde_json::json!({"time": k.time, "easing": k.easing, "pins": k.pins.len(), "flipped": flipped})
+                serde_json::json!({
+                    "time": k.time,
+                    "easing": k.easing,
+                    "pins": k.pins.len(),
+                    "flipped": flipped,
+                    "drawing": k.drawing.as_ref().map(|d| &d.picture),
+                })
             })
             .zip(&self.pose_revs)
             .map(|(mut key, rev)| {
@@ -1599,6 +1737,11 @@ impl Session {
                 notes,
             }) => self.meshed(outline, *meshed, asked, &replaces, notes),
             Ok(Outcome::Opened { opened, name }) => self.opened(*opened, name),
+            Ok(Outcome::Drawn {
+                keyframe,
+                notes,
+                replaces,
+            }) => self.drawn(*keyframe, notes, &replaces),
         };
         if let Err(e) = applied {
             self.note(format!("{label}: {e}"), true);
@@ -1942,6 +2085,10 @@ impl Session {
                 reply.work = Some(self.start(work)?);
             }
             Request::AttachPicture { name } => self.attach_picture(&name)?,
+            Request::DrawingKeyframe { name, pairs, time } => {
+                let work = self.drawing_work(&name, pairs, time)?;
+                reply.work = Some(self.start(work)?);
+            }
             Request::Recover { name } => self.recover(&name)?,
             Request::Discard { name } => {
                 self.workspace.discard(&name)?;
@@ -1955,4 +2102,55 @@ impl Session {
         }
         Ok(reply)
     }
+}
+
+/// The affine map `[a, b, c, d, e, f]` (`(x, y)` to `(a x + b y + c, d x + e y + f)`) that
+/// takes `from` to `to` by least squares, if it does so to within a millionth of `to`'s size.
+fn affine_fit(from: &[[f64; 2]], to: &[[f64; 2]]) -> Option<[f64; 6]> {
+    if from.len() != to.len() || from.len() < 3 {
+        return None;
+    }
+    // Centred, for a well-conditioned 2x2 system.
+    let mean = |ps: &[[f64; 2]]| {
+        let n = ps.len() as f64;
+        let s = ps.iter().fold([0.0; 2], |a, p| [a[0] + p[0], a[1] + p[1]]);
+        [s[0] / n, s[1] / n]
+    };
+    let (mf, mt) = (mean(from), mean(to));
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    let mut r = [[0.0; 2]; 2];
+    for (p, q) in from.iter().zip(to) {
+        let (x, y) = (p[0] - mf[0], p[1] - mf[1]);
+        sxx += x * x;
+        sxy += x * y;
+        syy += y * y;
+        for (d, rd) in r.iter_mut().enumerate() {
+            let t = q[d] - mt[d];
+            rd[0] += x * t;
+            rd[1] += y * t;
+        }
+    }
+    let det = sxx * syy - sxy * sxy;
+    if det.abs() <= 1e-300 || det.is_nan() {
+        return None;
+    }
+    let mut m = [0.0; 6];
+    for d in 0..2 {
+        let a = (syy * r[d][0] - sxy * r[d][1]) / det;
+        let b = (sxx * r[d][1] - sxy * r[d][0]) / det;
+        m[3 * d] = a;
+        m[3 * d + 1] = b;
+        m[3 * d + 2] = mt[d] - a * mf[0] - b * mf[1];
+    }
+    let size = to
+        .iter()
+        .map(|q| (q[0] - mt[0]).hypot(q[1] - mt[1]))
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let fits = from.iter().zip(to).all(|(p, q)| {
+        let x = m[0] * p[0] + m[1] * p[1] + m[2];
+        let y = m[3] * p[0] + m[4] * p[1] + m[5];
+        (x - q[0]).hypot(y - q[1]) <= 1e-6 * size
+    });
+    (fits && m.iter().all(|c| c.is_finite())).then_some(m)
 }

@@ -240,6 +240,7 @@ fn project() -> Project {
         easing: "linear".into(),
         positions: generate::bend(&mesh, 0.3).positions,
         pins: Vec::new(),
+        drawing: None,
     });
     project
 }

@@ -542,3 +542,87 @@ fn morph_writes_the_same_production_formats_and_takes_a_depth_file() {
     assert!(!ok && err.contains("no transparency"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A keyframe made from a drawing brings its own picture: the frames cross-fade from the rest
+/// picture (red) to the drawing's (blue) along the segment; without the drawing's file, the
+/// rest picture is drawn and a note says so.
+#[test]
+fn a_keyframe_drawing_is_cross_faded_in_the_frames() {
+    use bdmorph::studio::project::KeyframeDrawing;
+    let dir = scratch("drawing-fade");
+    let solid = |rgb: [u8; 3]| Image {
+        width: 8,
+        height: 8,
+        rgba: [rgb[0], rgb[1], rgb[2], 255].repeat(64),
+    };
+    std::fs::write(
+        dir.join("red.png"),
+        raster::encode_png(&solid([255, 0, 0])).unwrap(),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("blue.png"),
+        raster::encode_png(&solid([0, 0, 255])).unwrap(),
+    )
+    .unwrap();
+    let rest = generate::grid(5, 5, 0.0);
+    let (lo, hi) = rest.bounds();
+    let uv: Vec<[f64; 2]> = rest
+        .positions
+        .iter()
+        .map(|p| {
+            [
+                (p[0] - lo[0]) / (hi[0] - lo[0]),
+                (p[1] - lo[1]) / (hi[1] - lo[1]),
+            ]
+        })
+        .collect();
+    let mut doc = Project::new(&rest, Some(uv.clone()));
+    doc.texture = Some("red.png".into());
+    doc.fps = 2.0;
+    doc.keyframes.push(Keyframe {
+        time: 1.0,
+        easing: "linear".into(),
+        positions: rest.positions.iter().map(|p| [p[0] + 0.1, p[1]]).collect(),
+        pins: vec![],
+        drawing: Some(KeyframeDrawing {
+            picture: "blue.png".into(),
+            texcoords: uv,
+            pairs: vec![],
+        }),
+    });
+    doc.write(&dir.join("fade.json")).unwrap();
+    let centre = |frame: &Path| {
+        let img = raster::decode_image(&std::fs::read(frame).unwrap()).unwrap();
+        let i = 4 * ((img.height / 2) * img.width + img.width / 2) as usize;
+        [img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]]
+    };
+    let run = |out: &str| {
+        let o = bdmorph()
+            .current_dir(&dir)
+            .args(["export", "fade.json", "--format", "frames", "-o", out])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    run("faded");
+    let colours: Vec<[u8; 3]> = (0..3)
+        .map(|k| centre(&dir.join(format!("faded/frame_{k:04}.png"))))
+        .collect();
+    assert!(colours[0][0] > 240 && colours[0][2] < 15, "{colours:?}");
+    assert!(colours[2][2] > 240 && colours[2][0] < 15, "{colours:?}");
+    // Half way (smooth fade of a linear segment: half and half).
+    assert!(
+        (100..156).contains(&colours[1][0]) && (100..156).contains(&colours[1][2]),
+        "{colours:?}"
+    );
+    std::fs::remove_file(dir.join("blue.png")).unwrap();
+    let said = run("plain");
+    assert!(
+        said.contains("keyframe 2") && said.contains("blue.png"),
+        "{said}"
+    );
+    let last = centre(&dir.join("plain/frame_0002.png"));
+    assert!(last[0] > 240 && last[2] < 15, "{last:?}");
+}

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::sync::atomic::Ordering;
 
-use bdmorph::studio::export::{export, ExportFormat, ExportSettings};
+use bdmorph::studio::export::{export_with_drawings, ExportFormat, ExportSettings};
 use bdmorph::studio::jobs::Progress;
 use bdmorph::studio::open::{open, OpenOptions};
 
@@ -117,6 +117,32 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
             }
         }
     }
+    // Keyframes' drawings (named as the workspace names them).
+    let folder = std::fs::canonicalize(workspace).unwrap_or_else(|_| workspace.to_path_buf());
+    let drawings: Vec<Option<bdmorph::render::Image>> = opened
+        .project
+        .keyframes
+        .iter()
+        .enumerate()
+        .map(|(k, key)| {
+            let d = key.drawing.as_ref()?;
+            match bdmorph::studio::open::read_texture(&folder.join(&d.picture), &d.picture) {
+                Ok(t) => Some(t.image),
+                Err(e) => {
+                    if !args.quiet {
+                        eprintln!(
+                            "bdmorph: note: keyframe {} is drawn with the rest picture: its drawing {} could not be read ({e})",
+                            k + 1,
+                            d.picture
+                        );
+                    }
+                    None
+                }
+            }
+        })
+        .collect();
+    let drawing_refs: Vec<Option<&bdmorph::render::Image>> =
+        drawings.iter().map(Option::as_ref).collect();
     let progress = Progress::default();
     let texture = opened.texture.as_ref().map(|t| &t.image);
     let finished = std::sync::atomic::AtomicBool::new(false);
@@ -133,7 +159,14 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
             }
             bar.finish_and_clear();
         });
-        let done = export(&opened.project, texture, &settings, &args.output, &progress);
+        let done = export_with_drawings(
+            &opened.project,
+            texture,
+            &drawing_refs,
+            &settings,
+            &args.output,
+            &progress,
+        );
         finished.store(true, Ordering::Relaxed);
         let _ = bar.join();
         done

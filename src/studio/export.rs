@@ -10,6 +10,11 @@
 //!
 //! Frames stream: each is computed, drawn and handed to its encoder before the next, so
 //! memory holds one picture and the encoded output (a sprite sheet holds the sheet).
+//! Keyframes made from drawings ([`crate::project::KeyframeDrawing`]) bring their own
+//! pictures: over a segment between two keyframes of different pictures, each frame is the
+//! two pictures drawn on the frame's mesh and cross-faded (smoothly, along the segment's
+//! eased time; [`export_with_drawings`]). HTML pages show the rest picture only.
+//!
 //! Nothing is left half-written: files are written under a temporary name and renamed
 //! whole, folders filled under a temporary name and moved into place.
 //!
@@ -363,6 +368,51 @@ pub fn export(
     path: &Path,
     progress: &Progress,
 ) -> Result<Exported, String> {
+    export_with_drawings(project, texture, &[], settings, path, progress)
+}
+
+/// Which picture a frame is drawn with, per segment: the first keyframe's and the second's
+/// (0 the rest picture, `k + 1` keyframe `k`'s drawing), and the second's share at `time`.
+fn blend_at(project: &Project, has_drawing: &[bool], time: f64) -> (usize, usize, f64) {
+    let keys = &project.keyframes;
+    let look = |k: usize| {
+        if has_drawing.get(k).copied().unwrap_or(false) {
+            k + 1
+        } else {
+            0
+        }
+    };
+    if keys.len() < 2 {
+        return (look(0), look(0), 0.0);
+    }
+    let k = keys[..keys.len() - 1]
+        .iter()
+        .rposition(|key| key.time <= time)
+        .unwrap_or(0);
+    let (t0, t1) = (keys[k].time, keys[k + 1].time);
+    let u = ((time - t0) / (t1 - t0)).clamp(0.0, 1.0);
+    let eased = keys[k]
+        .easing
+        .parse::<crate::Easing>()
+        .map_or(u, |e| e.apply(u));
+    (
+        look(k),
+        look(k + 1),
+        crate::inbetween::Crossfade::Smooth.weight(eased),
+    )
+}
+
+/// [`export`], with each keyframe's own picture: `drawings[k]` is keyframe `k`'s drawing's
+/// picture (`None`, or missing, for a keyframe without one or whose picture could not be
+/// read: it shows the rest picture).
+pub fn export_with_drawings(
+    project: &Project,
+    texture: Option<&Image>,
+    drawings: &[Option<&Image>],
+    settings: &ExportSettings,
+    path: &Path,
+    progress: &Progress,
+) -> Result<Exported, String> {
     settings.check()?;
     let (picks, count) = frames_kept(project, settings)?;
     let mut animation = Animation::new(project, count)?;
@@ -395,6 +445,24 @@ pub fn export(
         .as_ref()
         .map(|uv| faces.iter().map(|f| f.map(|v| uv[v as usize])).collect());
     let texture = texture.filter(|_| corner_uv.is_some());
+    // Each keyframe's drawing with its coordinates at each corner (when the rest picture is
+    // there to fade from).
+    let drawn: Vec<Option<(&Image, Vec<[[f64; 2]; 3]>)>> = project
+        .keyframes
+        .iter()
+        .enumerate()
+        .map(|(k, key)| {
+            let d = key.drawing.as_ref()?;
+            let image = (*drawings.get(k)?)?;
+            texture?;
+            let uv = faces
+                .iter()
+                .map(|f| f.map(|v| d.texcoords[v as usize]))
+                .collect();
+            Some((image, uv))
+        })
+        .collect();
+    let has_drawing: Vec<bool> = drawn.iter().map(Option::is_some).collect();
     let drawing = Drawing {
         faces,
         corner_uv: corner_uv.as_deref(),
@@ -462,7 +530,30 @@ pub fn export(
         for (k, &i) in picks.iter().enumerate() {
             progress.cancelled()?;
             let time = animation.frame(i, &mut frame)?;
-            let picture = || raster::render_on(&frame, &drawing, &view, size, background);
+            let picture = || {
+                let (first, second, weight) = blend_at(project, &has_drawing, time);
+                if first == second && first == 0 {
+                    return raster::render_on(&frame, &drawing, &view, size, background);
+                }
+                let textured = |look: usize| {
+                    let with = match look.checked_sub(1).and_then(|k| drawn[k].as_ref()) {
+                        Some((image, uv)) => Drawing {
+                            texture: Some(image),
+                            corner_uv: Some(uv),
+                            ..drawing
+                        },
+                        None => drawing,
+                    };
+                    raster::render_on(&frame, &with, &view, size, Background::Transparent)
+                };
+                let under = textured(first);
+                let over = if weight > 0.0 && second != first {
+                    textured(second)
+                } else {
+                    under.clone()
+                };
+                raster::crossfade(&under, &over, weight, background)
+            };
             match &mut sink {
                 Sink::Gif(encoder, _) => encoder.push(&picture()).map_err(|e| failed(&e))?,
                 #[cfg(feature = "video")]

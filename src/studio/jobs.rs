@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
-use super::export::{export, ExportSettings};
+use super::export::{export_with_drawings, ExportSettings};
 use super::open::{open, OpenOptions, Opened};
 use super::project::Project;
 use crate::mesh::PlanarMesh;
@@ -137,13 +137,17 @@ pub struct ExportWork {
     pub project: Project,
     /// The picture drawn on the mesh.
     pub texture: Option<Arc<Image>>,
+    /// Per keyframe, its drawing's picture (made from a drawing, and read).
+    pub drawings: Vec<Option<Arc<Image>>>,
 }
 
 impl ExportWork {
     fn run(self, progress: &Progress) -> Result<Outcome, String> {
-        let done = export(
+        let drawings: Vec<Option<&Image>> = self.drawings.iter().map(|d| d.as_deref()).collect();
+        let done = export_with_drawings(
             &self.project,
             self.texture.as_deref(),
+            &drawings,
             &self.settings,
             &self.path,
             progress,

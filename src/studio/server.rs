@@ -129,6 +129,7 @@ pub fn router(app: Arc<App>) -> Router {
         .route("/", get(page))
         .route("/s/{token}/{name}", get(file))
         .route("/texture", get(texture))
+        .route("/drawing", get(drawing))
         .route("/ws", get(socket))
         .fallback(not_found)
         .layer(middleware::from_fn_with_state(app.clone(), check))
@@ -255,6 +256,41 @@ async fn texture(State(app): State<Arc<App>>) -> Response {
             Body::from(t.bytes.clone()),
         )
             .into_response(),
+        None => not_found().await,
+    }
+}
+
+/// A keyframe's drawing: `?k=K` its picture as the file's bytes, `?k=K&uv=1` its texture
+/// coordinates as little-endian `f32` pairs.
+async fn drawing(State(app): State<Arc<App>>, request: HttpRequest) -> Response {
+    let query = request.uri().query().unwrap_or("");
+    let value = |name: &str| {
+        query
+            .split('&')
+            .filter_map(|pair| pair.split_once('='))
+            .find(|(k, _)| *k == name)
+            .map(|(_, v)| v)
+    };
+    let Some(k) = value("k").and_then(|k| k.parse::<usize>().ok()) else {
+        return text(StatusCode::BAD_REQUEST, "give the keyframe: ?k=N\n");
+    };
+    // The session's lock is let go before answering.
+    let found: Option<(&'static str, Vec<u8>)> = {
+        let mut session = app.session();
+        if value("uv").is_some() {
+            session
+                .drawing_texcoords(k)
+                .map(|bytes| ("application/octet-stream", bytes))
+        } else {
+            session
+                .drawing_picture(k)
+                .map(|t| (t.content_type, t.bytes.clone()))
+        }
+    };
+    match found {
+        Some((media, bytes)) => {
+            ([(header::CONTENT_TYPE, media)], Body::from(bytes)).into_response()
+        }
         None => not_found().await,
     }
 }

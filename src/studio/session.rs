@@ -1255,6 +1255,9 @@ impl Session {
             path,
             project: self.doc.clone(),
             texture: self.texture.as_ref().map(|t| Arc::new(t.image.clone())),
+            drawings: (0..self.doc.keyframes.len())
+                .map(|k| self.drawing_picture(k).map(|t| Arc::new(t.image.clone())))
+                .collect(),
         }))))
     }
 

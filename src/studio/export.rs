@@ -371,6 +371,9 @@ pub fn export(
     export_with_drawings(project, texture, &[], settings, path, progress)
 }
 
+/// Texture coordinates at each corner of each triangle.
+type CornerUv = Vec<[[f64; 2]; 3]>;
+
 /// Which picture a frame is drawn with, per segment: the first keyframe's and the second's
 /// (0 the rest picture, `k + 1` keyframe `k`'s drawing), and the second's share at `time`.
 fn blend_at(project: &Project, has_drawing: &[bool], time: f64) -> (usize, usize, f64) {
@@ -447,7 +450,7 @@ pub fn export_with_drawings(
     let texture = texture.filter(|_| corner_uv.is_some());
     // Each keyframe's drawing with its coordinates at each corner (when the rest picture is
     // there to fade from).
-    let drawn: Vec<Option<(&Image, Vec<[[f64; 2]; 3]>)>> = project
+    let drawn: Vec<Option<(&Image, CornerUv)>> = project
         .keyframes
         .iter()
         .enumerate()

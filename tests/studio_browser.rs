@@ -2834,3 +2834,186 @@ fn a_layered_character_poses_by_the_hand_and_exports_on_transparency() {
     );
     assert!(red > 200, "the forearm is in every frame");
 }
+
+/// A picture's pixels in one colour (their transparency kept).
+fn tinted(mut image: bdmorph::render::Image, rgb: [u8; 3]) -> bdmorph::render::Image {
+    for p in image.rgba.chunks_mut(4) {
+        p[..3].copy_from_slice(&rgb);
+    }
+    image
+}
+
+/// Another drawing of the subject made a keyframe from the page: a picture added from disk,
+/// two numbered pairs placed with the mouse on the two pictures side by side (one deleted and
+/// placed again, all kept across a reload), the keyframe made in the background as one
+/// undoable step; its picture is drawn on its keyframe and cross-faded with the rest picture
+/// while scrubbing; after the server is stopped and started again the unsaved keyframe comes
+/// back with its drawing.
+#[test]
+fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
+    let Some(browser) = browser() else { return };
+    let dir = scratch("drawing-keyframe");
+    write_png(
+        &dir.join("a.png"),
+        &tinted(generate::figure_picture(256, 0.0, 0.0), [220, 40, 30]),
+    );
+    std::fs::create_dir_all(dir.join("incoming")).expect("dir");
+    let from_disk = dir.join("incoming").join("b.png");
+    write_png(
+        &from_disk,
+        &tinted(generate::figure_picture(256, 2.0, 0.2), [30, 60, 230]),
+    );
+    let mut studio = Studio::start(&dir, Some("a.png"));
+    let page = PageTab::open(&browser, &studio.url, &dir);
+    page.wait("studio.state.textured && !!studio.texture", 30);
+    page.click_on("#drawing-open");
+    page.wait("document.getElementById('drawing-dialog').open", 10);
+    // From disk: stored in the workspace and chosen.
+    page.tab
+        .find_element("#drawing-file")
+        .expect("input")
+        .set_input_files(&[from_disk.to_str().expect("path")])
+        .expect("file");
+    page.wait(
+        "document.getElementById('drawing-name').value === 'b.png' && !document.getElementById('drawing-make').disabled",
+        30,
+    );
+    assert!(dir.join("b.png").is_file(), "stored in the workspace");
+    // Pairs: a click on the rest picture, then on the drawing (each 256 px in a 360 px box).
+    let k = 360.0 / 256.0;
+    let at = |side: &str, p: [f64; 2]| {
+        let r = page.rect(side);
+        [r[0] + 1.0 + k * p[0], r[1] + 1.0 + k * p[1]]
+    };
+    let pairs = [
+        ([128.0, 150.0], [132.0, 150.0]),
+        ([128.0, 120.0], [131.0, 121.0]),
+    ];
+    let place = |(a, b): ([f64; 2], [f64; 2])| {
+        page.click(at("#drawing-rest", a));
+        page.click(at("#drawing-new", b));
+    };
+    for &pair in &pairs {
+        place(pair);
+    }
+    page.wait(
+        "document.querySelectorAll('#drawing-pairs li').length === 2",
+        10,
+    );
+    let shot = page.shot("drawing-pairs.png");
+    // Numbered yellow dots on both pictures.
+    for &(a, b) in &pairs {
+        for (side, p) in [("#drawing-rest", a), ("#drawing-new", b)] {
+            let yellow =
+                shot.count_near(at(side, p), 7.0, |c| c[0] > 200 && c[1] > 170 && c[2] < 90);
+            assert!(yellow > 20, "a dot at {p:?} on {side}: {yellow} pixels");
+        }
+    }
+    // The second pair deleted, then placed again.
+    page.click_on("#drawing-pairs li:nth-child(2) button");
+    page.wait(
+        "document.querySelectorAll('#drawing-pairs li').length === 1",
+        10,
+    );
+    place(pairs[1]);
+    page.wait(
+        "document.querySelectorAll('#drawing-pairs li').length === 2",
+        10,
+    );
+    // A reload before the keyframe is made keeps the pairs.
+    page.reload();
+    page.click_on("#drawing-open");
+    page.wait("document.getElementById('drawing-dialog').open", 10);
+    page.set_value("#drawing-name", "b.png");
+    page.wait(
+        "document.querySelectorAll('#drawing-pairs li').length === 2 && !document.getElementById('drawing-make').disabled",
+        20,
+    );
+    page.set_value("#drawing-time", "2");
+    page.click_on("#drawing-make");
+    page.wait(
+        "studio.state.keyframes.length === 2 && studio.state.keyframes[1].drawing === 'b.png'",
+        120,
+    );
+    assert_eq!(page.eval("studio.state.undo"), "keyframe 2 from b.png");
+    // Each keyframe in its own picture, and the two cross-faded half way.
+    let view = page.canvas();
+    let red = |c: [u8; 3]| c[0] > 170 && c[1] < 90 && c[2] < 90;
+    let blue = |c: [u8; 3]| c[2] > 170 && c[0] < 90 && c[1] < 120;
+    let mixed = |c: [u8; 3]| c[0] > 70 && c[0] < 190 && c[2] > 70 && c[2] < 200 && c[1] < 110;
+    page.click_on("#keys .key:nth-child(2)");
+    page.wait("studio.state.current === 1 && studio.showing === 'pose' && studio.blend && studio.blend.a === 1", 20);
+    page.settle();
+    std::thread::sleep(Duration::from_millis(500));
+    let second = page.shot("drawing-key-2.png");
+    let (r2, b2) = (second.count_in(view, red), second.count_in(view, blue));
+    assert!(b2 > 2000 && r2 < b2 / 20, "keyframe 2: {b2} blue, {r2} red");
+    page.click_on("#keys .key:nth-child(1)");
+    page.wait(
+        "studio.state.current === 0 && studio.showing === 'pose' && studio.blend.a === -1",
+        20,
+    );
+    page.settle();
+    let first = page.shot("drawing-key-1.png");
+    let (r1, b1) = (first.count_in(view, red), first.count_in(view, blue));
+    assert!(r1 > 2000 && b1 < r1 / 10, "keyframe 1: {r1} red, {b1} blue");
+    page.slide_to(0.5);
+    page.wait(
+        "studio.showing === 'frame' && studio.blend.w > 0.3 && studio.blend.w < 0.7",
+        20,
+    );
+    page.settle();
+    let half = page.shot("drawing-half.png");
+    let m = half.count_in(view, mixed);
+    assert!(
+        m > 2000 && m > 4 * half.count_in(view, red) && m > 4 * half.count_in(view, blue),
+        "half way: {m} mixed"
+    );
+    // One undo step.
+    page.undo();
+    page.wait("studio.state.keyframes.length === 1", 10);
+    page.key("z", &[ModifierKey::Ctrl, ModifierKey::Shift]);
+    page.wait("studio.state.keyframes.length === 2", 10);
+    // The server stopped with the keyframe unsaved: started again, it offers it back.
+    let pid = studio.child.id().to_string();
+    assert!(std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .expect("kill")
+        .success());
+    page.wait("!studio.connected", 20);
+    let _ = studio.child.wait();
+    let again = Studio::start(&dir, None);
+    page.wait("studio.connected", 30);
+    page.wait("!document.getElementById('banner-recovered').hidden", 20);
+    page.click_on("#recovered-restore");
+    page.wait(
+        "studio.state.keyframes.length === 2 && studio.state.keyframes[1].drawing === 'b.png'",
+        20,
+    );
+    let back: serde_json::Value =
+        serde_json::from_slice(&document(&again, &dir, "back.json")).expect("json");
+    let drawing = &back["keyframes"][1]["drawing"];
+    assert_eq!(drawing["picture"], "b.png");
+    assert_eq!(
+        drawing["texcoords"].as_array().map(Vec::len),
+        back["mesh"]["positions"].as_array().map(Vec::len)
+    );
+    let got = drawing["pairs"].as_array().expect("pairs");
+    assert_eq!(got.len(), 2);
+    for (got, want) in got.iter().zip(&pairs) {
+        for (g, w) in [(&got[0], want.0), (&got[1], want.1)] {
+            let g = [g[0].as_f64().unwrap(), g[1].as_f64().unwrap()];
+            assert!(
+                (g[0] - w[0]).abs() < 1.5 && (g[1] - w[1]).abs() < 1.5,
+                "{g:?} for {w:?}"
+            );
+        }
+    }
+    assert_eq!(
+        page.eval("studio.pageErrors.length === 0"),
+        true,
+        "{}",
+        page.eval("studio.pageErrors")
+    );
+}

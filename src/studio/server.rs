@@ -20,7 +20,7 @@ use std::time::Duration;
 
 use axum::body::Body;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
-use axum::extract::{Path as UrlPath, Request as HttpRequest, State};
+use axum::extract::{Path as UrlPath, Query, Request as HttpRequest, State};
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
@@ -69,6 +69,12 @@ const FILES: &[(&str, &str, &str)] = &[
         "text/javascript",
     ),
     ("files.js", include_str!("page/files.js"), "text/javascript"),
+    ("looks.js", include_str!("page/looks.js"), "text/javascript"),
+    (
+        "drawing.js",
+        include_str!("page/drawing.js"),
+        "text/javascript",
+    ),
     ("onion.js", include_str!("page/onion.js"), "text/javascript"),
     (
         "easing.js",
@@ -130,6 +136,7 @@ pub fn router(app: Arc<App>) -> Router {
         .route("/s/{token}/{name}", get(file))
         .route("/texture", get(texture))
         .route("/drawing", get(drawing))
+        .route("/picture", get(picture))
         .route("/ws", get(socket))
         .fallback(not_found)
         .layer(middleware::from_fn_with_state(app.clone(), check))
@@ -260,17 +267,39 @@ async fn texture(State(app): State<Arc<App>>) -> Response {
     }
 }
 
+/// The value of `name` in a query string (as sent: not decoded).
+fn query_value<'a>(query: &'a str, name: &str) -> Option<&'a str> {
+    query
+        .split('&')
+        .filter_map(|pair| pair.split_once('='))
+        .find(|(k, _)| *k == name)
+        .map(|(_, v)| v)
+}
+
+/// A picture of the workspace, `?name=NAME` (a plain name), as the file's bytes.
+async fn picture(
+    State(app): State<Arc<App>>,
+    Query(query): Query<std::collections::HashMap<String, String>>,
+) -> Response {
+    let Some(name) = query.get("name") else {
+        return text(StatusCode::BAD_REQUEST, "give the picture: ?name=NAME\n");
+    };
+    let found = app.session().workspace_picture(name);
+    match found {
+        Ok(t) => (
+            [(header::CONTENT_TYPE, t.content_type)],
+            Body::from(t.bytes.clone()),
+        )
+            .into_response(),
+        Err(_) => not_found().await,
+    }
+}
+
 /// A keyframe's drawing: `?k=K` its picture as the file's bytes, `?k=K&uv=1` its texture
 /// coordinates as little-endian `f32` pairs.
 async fn drawing(State(app): State<Arc<App>>, request: HttpRequest) -> Response {
     let query = request.uri().query().unwrap_or("");
-    let value = |name: &str| {
-        query
-            .split('&')
-            .filter_map(|pair| pair.split_once('='))
-            .find(|(k, _)| *k == name)
-            .map(|(_, v)| v)
-    };
+    let value = |name: &str| query_value(query, name);
     let Some(k) = value("k").and_then(|k| k.parse::<usize>().ok()) else {
         return text(StatusCode::BAD_REQUEST, "give the keyframe: ?k=N\n");
     };

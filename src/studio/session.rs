@@ -1398,6 +1398,30 @@ impl Session {
         Ok(texture)
     }
 
+    /// The workspace's files (and recovered work) for the pages; `stored`: the file just
+    /// stored.
+    fn files_json(&self, stored: Option<&str>) -> String {
+        serde_json::json!({
+            "type": "files",
+            "files": self.workspace.list(),
+            "recovered": self.workspace.recovered(),
+            "workspace": self.workspace.root().display().to_string(),
+            "stored": stored,
+        })
+        .to_string()
+    }
+
+    /// A picture of the workspace by its plain name (read once and kept).
+    ///
+    /// # Errors
+    /// When it is not a picture of the workspace or cannot be read.
+    pub fn workspace_picture(&mut self, name: &str) -> Result<Arc<Texture>, String> {
+        if !super::workspace::is_plain(name) {
+            return Err(format!("{name}: not a plain file name"));
+        }
+        self.picture(name)
+    }
+
     /// The picture of keyframe `k`'s drawing, if it has one that can be read.
     pub fn drawing_picture(&mut self, k: usize) -> Option<Arc<Texture>> {
         let name = self.doc.keyframes.get(k)?.drawing.as_ref()?.picture.clone();
@@ -1790,7 +1814,11 @@ impl Session {
             match header.then.as_str() {
                 "open" => self.try_handle(Request::Open { name }),
                 "attach" => self.try_handle(Request::AttachPicture { name }),
-                "store" => Ok(Reply::default()),
+                // Kept only: the list of files comes back, naming it.
+                "store" => Ok(Reply {
+                    answers: vec![Answer::Text(self.files_json(Some(&name)))],
+                    work: None,
+                }),
                 other => Err(format!("unknown upload action '{other}'")),
             }
         })();
@@ -2061,15 +2089,7 @@ impl Session {
                 None => return Err("nothing is running".into()),
             },
             Request::ListFiles => {
-                reply.answers.push(Answer::Text(
-                    serde_json::json!({
-                        "type": "files",
-                        "files": self.workspace.list(),
-                        "recovered": self.workspace.recovered(),
-                        "workspace": self.workspace.root().display().to_string(),
-                    })
-                    .to_string(),
-                ));
+                reply.answers.push(Answer::Text(self.files_json(None)));
             }
             Request::Open { name } => {
                 if kind_of(&name) == Some("outline") {

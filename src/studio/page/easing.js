@@ -11,7 +11,7 @@ const W = 200, H = 150, M = 18; // the curve's box: x in [0,1] maps to [M, W-M],
 const PRESETS = { linear: [0, 0, 1, 1], "ease-in-out": [0.42, 0, 0.58, 1] };
 let editing = null; // { handle: 0|1, points } while a handle is dragged
 
-function parse(easing) {
+export function parse(easing) {
   if (PRESETS[easing]) return PRESETS[easing].slice();
   const m = /^cubic-bezier[(:]\s*([^,]+),([^,]+),([^,]+),([^,)]+)\)?$/.exec(easing.replace(/\s+/g, ""));
   return m ? m.slice(1, 5).map(Number) : [0, 0, 1, 1];

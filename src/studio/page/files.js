@@ -11,8 +11,10 @@ import { sliderTime } from "./timeline.js";
 const when = (seconds) => new Date(seconds * 1000).toLocaleString();
 
 // The Open dialog: files by kind, and recovered work with Restore / Put aside.
-$("open").onclick = () => send({ op: "list_files" });
+$("open").onclick = () => { S.filesFor = "open"; send({ op: "list_files" }); };
 on("files", (msg) => {
+  // A list asked for by the drawing dialog is its own.
+  if (S.filesFor === "drawing") { S.filesFor = null; return; }
   const list = $("open-list");
   list.textContent = "";
   const rows = [];

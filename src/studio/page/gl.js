@@ -3,29 +3,35 @@
 // ramp (or samples the picture) and draws the edges from the barycentrics, in one pass. A
 // second pass draws flipped triangles on top in a strong colour, whatever else is shown, so
 // a fold is never hidden under the picture or under the triangles that cover it.
+//
+// Keyframes made from drawings bring their own pictures ("looks": a texture and coordinates
+// per keyframe, looks.js loads them): between two keyframes of different pictures the two are
+// sampled and cross-faded by S.blend = { a, b, w } (a look's keyframe, or -1 for the rest
+// picture, and the second's share).
 
 import { S, $ } from "./view.js";
 
 const glCanvas = $("gl");
 const gl = glCanvas.getContext("webgl2", { antialias: false, premultipliedAlpha: false });
 
-const none = { kind: "2d", ready: () => false, setMesh() {}, setTexture() {}, draw() {} };
+const none = { kind: "2d", ready: () => false, setMesh() {}, setTexture() {}, setLook() {}, dropLook() {}, looks: () => [], draw() {} };
 
 function make() {
   if (!gl) return none;
   const vs = `#version 300 es
-    in vec2 position; in float distortion; in vec3 bary; in vec2 uv;
+    in vec2 position; in float distortion; in vec3 bary; in vec2 uv; in vec2 uv2;
     uniform vec3 view; uniform vec2 size;
-    out float d; out vec3 b; out vec2 t;
+    out float d; out vec3 b; out vec2 t; out vec2 t2;
     void main() {
       vec2 p = vec2(view.y + view.x * position.x, view.z - view.x * position.y);
       gl_Position = vec4(2.0 * p.x / size.x - 1.0, 1.0 - 2.0 * p.y / size.y, 0.0, 1.0);
-      d = distortion; b = bary; t = uv;
+      d = distortion; b = bary; t = uv; t2 = uv2;
     }`;
   const fs = `#version 300 es
     precision highp float;
-    in float d; in vec3 b; in vec2 t;
+    in float d; in vec3 b; in vec2 t; in vec2 t2;
     uniform float top; uniform int mode; uniform bool edges; uniform float alpha; uniform sampler2D picture;
+    uniform sampler2D picture2; uniform float fade;
     out vec4 colour;
     vec3 ramp(float s) {
       vec3 c0 = vec3(68, 1, 84) / 255.0, c1 = vec3(59, 82, 139) / 255.0, c2 = vec3(33, 145, 140) / 255.0,
@@ -49,7 +55,16 @@ function make() {
       }
       if (!(d < 1e30)) c = vec3(1.0, 0.0, 0.8);
       else if (mode == 1) c = ramp(log(max(d, 1.0)) / log(max(top, 1.05)));
-      else if (mode == 2) { vec4 s = texture(picture, t); c = mix(vec3(1.0), s.rgb, s.a); }
+      else if (mode == 2) {
+        vec4 s = texture(picture, t);
+        if (fade > 0.0) {
+          // Mixed in premultiplied space: a transparent part fades rather than darkens.
+          vec4 s2 = texture(picture2, t2);
+          vec4 m = mix(vec4(s.rgb * s.a, s.a), vec4(s2.rgb * s2.a, s2.a), fade);
+          s = m.a > 0.0 ? vec4(m.rgb / m.a, m.a) : vec4(0.0);
+        }
+        c = mix(vec3(1.0), s.rgb, s.a);
+      }
       else c = vec3(0.725, 0.827, 0.933);
       if (edges) {
         vec3 w = fwidth(b);
@@ -81,6 +96,8 @@ function make() {
   const loc = (n) => gl.getAttribLocation(program, n);
   const uni = (n) => gl.getUniformLocation(program, n);
   const buffers = { position: gl.createBuffer(), distortion: gl.createBuffer(), bary: gl.createBuffer(), uv: gl.createBuffer(), rest: gl.createBuffer() };
+  // Keyframe k's look: { texture, buffer (its coordinates per corner), uv (per vertex) }.
+  const looks = new Map();
   let corners = 0, pos = null, dis = null, restPos = null, texture = null;
   const attrib = (buffer, name, size) => {
     const l = loc(name);
@@ -102,9 +119,47 @@ function make() {
       out[2 * c + 1] = src[2 * v + 1];
     }
   };
+  // Per-vertex texture coordinates (v up) expanded to the corners (v down), into `buffer`.
+  const fillUv = (buffer, perVertex) => {
+    const uv = new Float32Array(2 * corners);
+    if (perVertex && perVertex.length === 2 * S.n) {
+      for (let c = 0; c < corners; c++) {
+        const v = vertexOf(c);
+        uv[2 * c] = perVertex[2 * v];
+        uv[2 * c + 1] = 1 - perVertex[2 * v + 1];
+      }
+    }
+    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+    gl.bufferData(gl.ARRAY_BUFFER, uv, gl.STATIC_DRAW);
+  };
+  const makeTexture = (img) => {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA, gl.RGBA, gl.UNSIGNED_BYTE, img);
+    gl.generateMipmap(gl.TEXTURE_2D);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR_MIPMAP_LINEAR);
+    return t;
+  };
+  // The texture and coordinate buffer of look `k` (-1 or a keyframe without one: the rest
+  // picture's).
+  const lookOf = (k) => looks.get(k) || { texture, buffer: buffers.uv };
   return {
     kind: "webgl2",
     ready: () => corners > 0,
+    setLook(k, img, uv) {
+      this.dropLook(k);
+      const look = { texture: makeTexture(img), buffer: gl.createBuffer(), uv };
+      looks.set(k, look);
+      fillUv(look.buffer, uv);
+    },
+    dropLook(k) {
+      const look = looks.get(k);
+      if (!look) return;
+      gl.deleteTexture(look.texture);
+      gl.deleteBuffer(look.buffer);
+      looks.delete(k);
+    },
+    looks: () => [...looks.keys()],
     setMesh() {
       if (S.order && S.order.length !== S.m) S.order = null;
       corners = 3 * S.m;
@@ -115,16 +170,8 @@ function make() {
       for (let c = 0; c < corners; c++) bary[3 * c + (c % 3)] = 1;
       gl.bindBuffer(gl.ARRAY_BUFFER, buffers.bary);
       gl.bufferData(gl.ARRAY_BUFFER, bary, gl.STATIC_DRAW);
-      const uv = new Float32Array(2 * corners);
-      if (S.uv) {
-        for (let c = 0; c < corners; c++) {
-          const v = vertexOf(c);
-          uv[2 * c] = S.uv[2 * v];
-          uv[2 * c + 1] = 1 - S.uv[2 * v + 1];
-        }
-      }
-      gl.bindBuffer(gl.ARRAY_BUFFER, buffers.uv);
-      gl.bufferData(gl.ARRAY_BUFFER, uv, gl.STATIC_DRAW);
+      fillUv(buffers.uv, S.uv);
+      for (const look of looks.values()) fillUv(look.buffer, look.uv);
       expand(S.rest, restPos);
       gl.bindBuffer(gl.ARRAY_BUFFER, buffers.rest);
       gl.bufferData(gl.ARRAY_BUFFER, restPos, gl.STATIC_DRAW);
@@ -133,11 +180,7 @@ function make() {
       if (texture) gl.deleteTexture(texture);
       texture = null;
       if (!img) return;
-      texture = gl.createTexture();
-      gl.bindTexture(gl.TEXTURE_2D, texture);
-      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA, gl.RGBA, gl.UNSIGNED_BYTE, img);
-      gl.generateMipmap(gl.TEXTURE_2D);
-      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR_MIPMAP_LINEAR);
+      texture = makeTexture(img);
     },
     draw() {
       gl.viewport(0, 0, glCanvas.width, glCanvas.height);
@@ -158,9 +201,17 @@ function make() {
       const textured = $("texture").checked && texture && S.uv;
       const mode = textured ? 2 : $("colours").checked ? 1 : 0;
       gl.uniform1i(uni("mode"), mode);
-      if (texture) { gl.activeTexture(gl.TEXTURE0); gl.bindTexture(gl.TEXTURE_2D, texture); gl.uniform1i(uni("picture"), 0); }
+      // The pictures of what is shown: its keyframe's, or the two of its segment.
+      const blend = S.blend || { a: -1, b: -1, w: 0 };
+      const first = lookOf(blend.a), second = lookOf(blend.b);
+      const fading = textured && blend.w > 0 && first !== second && second.texture;
+      if (first.texture) { gl.activeTexture(gl.TEXTURE0); gl.bindTexture(gl.TEXTURE_2D, first.texture); gl.uniform1i(uni("picture"), 0); }
+      if (fading) { gl.activeTexture(gl.TEXTURE1); gl.bindTexture(gl.TEXTURE_2D, second.texture); gl.uniform1i(uni("picture2"), 1); }
+      gl.activeTexture(gl.TEXTURE0);
+      gl.uniform1f(uni("fade"), fading ? blend.w : 0);
       attrib(buffers.bary, "bary", 3);
-      attrib(buffers.uv, "uv", 2);
+      attrib(first.buffer, "uv", 2);
+      attrib(fading ? second.buffer : first.buffer, "uv2", 2);
       if ($("overlay").checked) {
         // The rest shape's edges, faint, under the pose.
         attrib(buffers.rest, "position", 2);

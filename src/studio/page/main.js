@@ -14,6 +14,8 @@ import { drawKeyPanel } from "./easing.js";
 import "./shortcuts.js";
 import { setPaint } from "./paint.js";
 import { drawPartsPanel } from "./parts.js";
+import "./looks.js";
+import "./drawing.js";
 
 on("paint", ({ depth, stiffness }) => {
   setPaint(depth, stiffness);

@@ -33,6 +33,11 @@ export function upload(name, bytes, then) {
 }
 
 export function textureUrl(rev) { return `texture?token=${encodeURIComponent(token)}&rev=${rev}`; }
+// Keyframe k's drawing: its picture, or (uv) its texture coordinates; `rev` only tells
+// versions apart.
+export function drawingUrl(k, uv, rev) { return `drawing?token=${encodeURIComponent(token)}&k=${k}${uv ? "&uv=1" : ""}&rev=${encodeURIComponent(rev)}`; }
+// A picture of the workspace by name.
+export function pictureUrl(name) { return `picture?token=${encodeURIComponent(token)}&name=${encodeURIComponent(name)}`; }
 
 export function connect() {
   clearTimeout(retry);

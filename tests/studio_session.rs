@@ -279,8 +279,19 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
             1 => Request::OutlinePoint { point: point(rng) },
             _ => Request::OutlineClose,
         },
-        28 => Request::Repair {
-            keyframe: Some(k(rng)),
+        28 => match rng.below(4) {
+            // A drawing keyframe on a project without a picture, or of a missing file:
+            // refused, whatever the pairs and time.
+            0 => Request::DrawingKeyframe {
+                name: ["b.png", "../x.png", "", "a.obj"][rng.below(4)].into(),
+                pairs: (0..rng.below(4))
+                    .map(|_| [point(rng), point(rng)])
+                    .collect(),
+                time: Some(time(rng)),
+            },
+            _ => Request::Repair {
+                keyframe: Some(k(rng)),
+            },
         },
         29 => {
             let m = doc.mesh.faces.len() as u32;
@@ -855,7 +866,12 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         std::fs::write(dir.join(name), png).expect("write");
     };
     write("a.png", 0.0, 0.0);
-    write("b.png", 2.0, 0.2);
+    // The drawing in blue, to tell its picture from the rest picture's in a still.
+    let mut blue = generate::figure_picture(256, 2.0, 0.2);
+    for p in blue.rgba.chunks_mut(4) {
+        p[..3].copy_from_slice(&[20, 40, 240]);
+    }
+    std::fs::write(dir.join("b.png"), raster::encode_png(&blue).expect("png")).expect("write");
     let holed = generate::picture(256, 256, |x, y| {
         let outer = generate::capsule_distance([x, y], [128.0, 128.0], [128.0, 128.0], 90.0);
         outer.max(-generate::capsule_distance(
@@ -943,6 +959,30 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
     assert!(s.drawing_picture(1).is_some());
     assert_eq!(s.drawing_texcoords(1).map(|b| b.len()), Some(8 * n));
     assert!(s.drawing_texcoords(0).is_none());
+    // A still of the keyframe, and of the animation half way: its drawing's picture, then
+    // the two pictures cross-faded.
+    let still = |s: &mut Session, time: Option<f64>, name: &str| {
+        let request = Request::Export {
+            format: "still".into(),
+            name: name.into(),
+            frames: None,
+            time,
+            size: Some([200, 200]),
+            range: None,
+            background: Some("transparent".into()),
+        };
+        assert_eq!(ask(s, request), None);
+        let image = raster::decode_image(&std::fs::read(dir.join(name)).unwrap()).unwrap();
+        let opaque: Vec<&[u8]> = image.rgba.chunks(4).filter(|p| p[3] == 255).collect();
+        let blue = opaque.iter().filter(|p| p[2] > 200 && p[0] < 60).count();
+        (blue as f64 / opaque.len() as f64, opaque.len())
+    };
+    let (keyed, covered) = still(&mut s, Some(2.0), "key.png");
+    assert!(covered > 1000 && keyed > 0.95, "{keyed} of {covered}");
+    let (start, _) = still(&mut s, Some(0.0), "start.png");
+    assert!(start < 0.01, "{start}");
+    let (half, _) = still(&mut s, Some(1.0), "half.png");
+    assert!(half < 0.01, "half way neither picture alone: {half}");
     // One undo step.
     ask(&mut s, Request::Undo);
     assert_eq!(s.project().to_json(), before);

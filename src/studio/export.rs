@@ -374,9 +374,92 @@ pub fn export(
 /// Texture coordinates at each corner of each triangle.
 type CornerUv = Vec<[[f64; 2]; 3]>;
 
+/// Keyframes' drawings, ready to draw frames with: per keyframe its picture and its
+/// coordinates at each corner (`None`: the rest picture).
+pub struct Looks<'a> {
+    drawn: Vec<Option<(&'a Image, CornerUv)>>,
+    /// Per keyframe, whether it is drawn with its own drawing.
+    pub has_drawing: Vec<bool>,
+}
+
+impl<'a> Looks<'a> {
+    /// The looks of `project`'s keyframes: `drawings[k]` is keyframe `k`'s drawing's picture
+    /// (used when the rest picture, `textured`, is there to fade from).
+    pub fn new(project: &Project, textured: bool, drawings: &[Option<&'a Image>]) -> Looks<'a> {
+        let faces = &project.mesh.faces;
+        let drawn: Vec<Option<(&Image, CornerUv)>> = project
+            .keyframes
+            .iter()
+            .enumerate()
+            .map(|(k, key)| {
+                let d = key.drawing.as_ref()?;
+                let image = (*drawings.get(k)?)?;
+                if !textured {
+                    return None;
+                }
+                let uv = faces
+                    .iter()
+                    .map(|f| f.map(|v| d.texcoords[v as usize]))
+                    .collect();
+                Some((image, uv))
+            })
+            .collect();
+        let has_drawing = drawn.iter().map(Option::is_some).collect();
+        Looks { drawn, has_drawing }
+    }
+
+    /// `positions` drawn as `drawing` says, with the pictures of `blend` (as [`blend_at`]
+    /// gives it) cross-faded.
+    pub fn render(
+        &self,
+        positions: &[[f64; 2]],
+        drawing: &Drawing<'_>,
+        blend: (usize, usize, f64),
+        view: &Viewport,
+        size: ImageSize,
+        background: Background,
+    ) -> Image {
+        let (first, second, weight) = blend;
+        if first == second && first == 0 {
+            return raster::render_on(positions, drawing, view, size, background);
+        }
+        let textured = |look: usize| {
+            let with = match look
+                .checked_sub(1)
+                .and_then(|k| self.drawn.get(k)?.as_ref())
+            {
+                Some((image, uv)) => Drawing {
+                    texture: Some(image),
+                    corner_uv: Some(uv),
+                    ..*drawing
+                },
+                None => *drawing,
+            };
+            raster::render_on(positions, &with, view, size, Background::Transparent)
+        };
+        let under = textured(first);
+        let over = if weight > 0.0 && second != first {
+            textured(second)
+        } else {
+            under.clone()
+        };
+        raster::crossfade(&under, &over, weight, background)
+    }
+}
+
+/// The look of keyframe `k` alone (as [`blend_at`] gives looks).
+pub fn keyframe_look(has_drawing: &[bool], k: usize) -> (usize, usize, f64) {
+    let look = if has_drawing.get(k).copied().unwrap_or(false) {
+        k + 1
+    } else {
+        0
+    };
+    (look, look, 0.0)
+}
+
 /// Which picture a frame is drawn with, per segment: the first keyframe's and the second's
 /// (0 the rest picture, `k + 1` keyframe `k`'s drawing), and the second's share at `time`.
-fn blend_at(project: &Project, has_drawing: &[bool], time: f64) -> (usize, usize, f64) {
+pub fn blend_at(project: &Project, has_drawing: &[bool], time: f64) -> (usize, usize, f64) {
     let keys = &project.keyframes;
     let look = |k: usize| {
         if has_drawing.get(k).copied().unwrap_or(false) {
@@ -448,24 +531,7 @@ pub fn export_with_drawings(
         .as_ref()
         .map(|uv| faces.iter().map(|f| f.map(|v| uv[v as usize])).collect());
     let texture = texture.filter(|_| corner_uv.is_some());
-    // Each keyframe's drawing with its coordinates at each corner (when the rest picture is
-    // there to fade from).
-    let drawn: Vec<Option<(&Image, CornerUv)>> = project
-        .keyframes
-        .iter()
-        .enumerate()
-        .map(|(k, key)| {
-            let d = key.drawing.as_ref()?;
-            let image = (*drawings.get(k)?)?;
-            texture?;
-            let uv = faces
-                .iter()
-                .map(|f| f.map(|v| d.texcoords[v as usize]))
-                .collect();
-            Some((image, uv))
-        })
-        .collect();
-    let has_drawing: Vec<bool> = drawn.iter().map(Option::is_some).collect();
+    let looks = Looks::new(project, texture.is_some(), drawings);
     let drawing = Drawing {
         faces,
         corner_uv: corner_uv.as_deref(),
@@ -534,28 +600,14 @@ pub fn export_with_drawings(
             progress.cancelled()?;
             let time = animation.frame(i, &mut frame)?;
             let picture = || {
-                let (first, second, weight) = blend_at(project, &has_drawing, time);
-                if first == second && first == 0 {
-                    return raster::render_on(&frame, &drawing, &view, size, background);
-                }
-                let textured = |look: usize| {
-                    let with = match look.checked_sub(1).and_then(|k| drawn[k].as_ref()) {
-                        Some((image, uv)) => Drawing {
-                            texture: Some(image),
-                            corner_uv: Some(uv),
-                            ..drawing
-                        },
-                        None => drawing,
-                    };
-                    raster::render_on(&frame, &with, &view, size, Background::Transparent)
-                };
-                let under = textured(first);
-                let over = if weight > 0.0 && second != first {
-                    textured(second)
-                } else {
-                    under.clone()
-                };
-                raster::crossfade(&under, &over, weight, background)
+                looks.render(
+                    &frame,
+                    &drawing,
+                    blend_at(project, &looks.has_drawing, time),
+                    &view,
+                    size,
+                    background,
+                )
             };
             match &mut sink {
                 Sink::Gif(encoder, _) => encoder.push(&picture()).map_err(|e| failed(&e))?,

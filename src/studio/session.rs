@@ -1271,16 +1271,20 @@ impl Session {
         size: Option<ImageSize>,
         background: Background,
     ) -> Done {
-        let positions = match time {
+        let (positions, at) = match time {
             Some(t) => {
                 if !(t.is_finite() && t >= 0.0) {
                     return Err(format!("time {t}: give one of 0 or more seconds"));
                 }
-                self.engine.compute(&self.doc, t.min(self.duration()))?;
-                self.engine.frame.clone()
+                let t = self.engine.compute(&self.doc, t.min(self.duration()))?;
+                (self.engine.frame.clone(), Some(t))
             }
-            None => self.current_key().positions.clone(),
+            None => (self.current_key().positions.clone(), None),
         };
+        // Keyframes' drawings, read (or kept) before the rest is borrowed.
+        let pictures: Vec<Option<Arc<Texture>>> = (0..self.doc.keyframes.len())
+            .map(|k| self.drawing_picture(k))
+            .collect();
         self.engine.measure(&positions);
         let faces = &self.engine.rest.faces;
         let corner_uv: Option<Vec<[[f64; 2]; 3]>> = self
@@ -1311,7 +1315,16 @@ impl Session {
         };
         let view = Viewport::fit(std::iter::once(positions.as_slice()));
         let size = size.unwrap_or_else(|| ImageSize::fitting(&view, 800));
-        let image = raster::render_on(&positions, &drawing, &view, size, background);
+        let images: Vec<Option<&crate::render::Image>> = pictures
+            .iter()
+            .map(|p| p.as_ref().map(|t| &t.image))
+            .collect();
+        let looks = super::export::Looks::new(&self.doc, texture.is_some(), &images);
+        let blend = match at {
+            Some(t) => super::export::blend_at(&self.doc, &looks.has_drawing, t),
+            None => super::export::keyframe_look(&looks.has_drawing, self.view.current),
+        };
+        let image = looks.render(&positions, &drawing, blend, &view, size, background);
         let bytes = raster::encode_png(&image).map_err(|e| format!("export: {e}"))?;
         crate::io::write_bytes_atomic(path, &bytes).map_err(|e| format!("export: {e}"))
     }

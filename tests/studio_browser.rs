@@ -2857,6 +2857,16 @@ fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
         &dir.join("a.png"),
         &tinted(generate::figure_picture(256, 0.0, 0.0), [220, 40, 30]),
     );
+    let ring = generate::picture(256, 256, |x, y| {
+        let outer = generate::capsule_distance([x, y], [128.0, 128.0], [128.0, 128.0], 90.0);
+        outer.max(-generate::capsule_distance(
+            [x, y],
+            [128.0, 128.0],
+            [128.0, 128.0],
+            30.0,
+        ))
+    });
+    write_png(&dir.join("ring.png"), &ring);
     std::fs::create_dir_all(dir.join("incoming")).expect("dir");
     let from_disk = dir.join("incoming").join("b.png");
     write_png(
@@ -2879,6 +2889,38 @@ fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
         30,
     );
     assert!(dir.join("b.png").is_file(), "stored in the workspace");
+    // The automatic correspondence shown as matching marks around both outlines.
+    page.wait(
+        "document.getElementById('drawing-status').textContent.includes('Marks of one colour')",
+        30,
+    );
+    let marks = page.shot("drawing-marks.png");
+    let saturated = |c: [u8; 3]| {
+        let (hi, lo) = (
+            c.iter().max().copied().unwrap_or(0),
+            c.iter().min().copied().unwrap_or(0),
+        );
+        hi > 200
+            && lo < 80
+            && !(c[0] > 170 && c[1] < 90 && c[2] < 90)
+            && !(c[2] > 170 && c[0] < 90 && c[1] < 120)
+    };
+    for side in ["#drawing-rest", "#drawing-new"] {
+        let n = marks.count_in(page.rect(side), saturated);
+        assert!(n > 200, "correspondence marks on {side}: {n} pixels");
+    }
+    // A drawing with a hole cannot be matched: said in the dialog, and not made.
+    page.set_value("#drawing-name", "ring.png");
+    page.wait(
+        "document.getElementById('drawing-status').textContent.includes('hole') && document.getElementById('drawing-make').disabled",
+        30,
+    );
+    page.shot("drawing-refused.png");
+    page.set_value("#drawing-name", "b.png");
+    page.wait(
+        "document.getElementById('drawing-status').textContent.includes('Marks of one colour') && !document.getElementById('drawing-make').disabled",
+        30,
+    );
     // Pairs: a click on the rest picture, then on the drawing (each 256 px in a 360 px box).
     let k = 360.0 / 256.0;
     let at = |side: &str, p: [f64; 2]| {

@@ -65,6 +65,125 @@ fn boundary_loops(faces: &[[u32; 3]], n: usize) -> Result<Vec<Vec<u32>>, Inbetwe
     Ok(loops)
 }
 
+/// What the layout over B starts from: the mesh's boundary loops, B's outline, the user's
+/// pairs read, and every boundary vertex's place on B's outline.
+struct Setup {
+    loops: Vec<Vec<u32>>,
+    shape_b: Shape,
+    tolerance_b: f64,
+    kinds: Vec<PairKind>,
+    reports: Vec<super::compatible::PairReport>,
+    /// The boundary vertices and their places over B.
+    pins: Pins,
+}
+
+/// The correspondence of the mesh's boundary with B's outline (see [`fit_drawing`]).
+fn setup(
+    mesh: &PlanarMesh,
+    a_height: f64,
+    b: &Image,
+    matches: &[Match],
+    options: &InbetweenOptions,
+) -> Result<Setup, InbetweenError> {
+    options.validate()?;
+    mesh.validate()?;
+    if !(a_height.is_finite() && a_height > 0.0) {
+        return Err(InbetweenError::BadOption(format!(
+            "drawing A's height {a_height}: give a positive number of pixels"
+        )));
+    }
+    let n = mesh.positions.len();
+    let loops = boundary_loops(&mesh.faces, n)?;
+    let shape_a = Shape::from_loops(
+        loops
+            .iter()
+            .map(|l| Loop::new(l.iter().map(|&v| mesh.positions[v as usize]).collect()))
+            .collect(),
+    );
+    // B's outline simplified to about as many corners as the mesh has boundary vertices.
+    let boundary = boundary_vertices(mesh).len();
+    let (shape_b, tolerance_b) = shape_of(b, Drawing(1), &options.with_vertices(2 * boundary))?;
+    let loop_pairs = pair_loops(&shape_a, &shape_b, Drawing(1))?;
+    let points: Vec<([f64; 2], [f64; 2])> = matches
+        .iter()
+        .map(|m| {
+            (
+                [m.a[0], a_height - m.a[1]],
+                [m.b[0], f64::from(b.height) - m.b[1]],
+            )
+        })
+        .collect();
+    let ReadPairs {
+        anchors,
+        kinds,
+        reports,
+    } = read_pairs(&shape_a, &shape_b, &loop_pairs, &points)?;
+    let main = shape_a.pieces[0];
+    let partner_of = |la: usize| {
+        loop_pairs
+            .iter()
+            .find(|p| p.0 == la)
+            .map(|p| p.1)
+            .ok_or_else(|| InbetweenError::Internal(format!("loop {la} of A is not paired")))
+    };
+    let (angle, _) = rigid_alignment(
+        &shape_a,
+        &shape_a.loops[main],
+        &shape_b,
+        &shape_b.loops[partner_of(main)?],
+    );
+    // The boundary onto B's outline.
+    let mut pins: Pins = Vec::with_capacity(boundary + matches.len());
+    for (la, l) in loops.iter().enumerate() {
+        let (loop_a, loop_b) = (&shape_a.loops[la], &shape_b.loops[partner_of(la)?]);
+        let map = arc_map(&shape_a, loop_a, &shape_b, loop_b, angle, &anchors[la])?;
+        for (i, &v) in l.iter().enumerate() {
+            pins.push((v, loop_b.at(map.forward(loop_a.cum[i]))));
+        }
+    }
+    Ok(Setup {
+        loops,
+        shape_b,
+        tolerance_b,
+        kinds,
+        reports,
+        pins,
+    })
+}
+
+/// Where the mesh's boundary goes on drawing B, to check before laying the mesh over it: for
+/// each boundary loop, `per_loop` of its vertices evenly spaced along it, each as its point in
+/// A and its place on B's outline, both in pixels from the pictures' top-left corners. The
+/// arguments are [`fit_drawing`]'s, and so are the errors.
+pub fn outline_correspondence(
+    mesh: &PlanarMesh,
+    a_height: f64,
+    b: &Image,
+    matches: &[Match],
+    options: &InbetweenOptions,
+    per_loop: usize,
+) -> Result<Vec<Vec<[[f64; 2]; 2]>>, InbetweenError> {
+    let Setup { loops, pins, .. } = setup(mesh, a_height, b, matches, options)?;
+    let b_height = f64::from(b.height);
+    let mut at = 0;
+    let mut out = Vec::with_capacity(loops.len());
+    for l in &loops {
+        let count = per_loop.clamp(1, l.len());
+        let here = &pins[at..at + l.len()];
+        out.push(
+            (0..count)
+                .map(|i| {
+                    let (v, q) = here[i * l.len() / count];
+                    let p = mesh.positions[v as usize];
+                    [[p[0], a_height - p[1]], [q[0], b_height - q[1]]]
+                })
+                .collect(),
+        );
+        at += l.len();
+    }
+    Ok(out)
+}
+
 /// Lays `mesh` (drawing A's, in A's picture: pixels, y up; every triangle counter-clockwise)
 /// over drawing `b`: its boundary vertices go onto B's outline by the correspondence of the
 /// two outlines (the rigid alignment and arc-length warping [`super::compatible_mesh`] uses,
@@ -110,62 +229,15 @@ pub fn fit_drawing(
     options: &InbetweenOptions,
 ) -> Result<DrawingFit, InbetweenError> {
     let started = Instant::now();
-    options.validate()?;
-    mesh.validate()?;
-    if !(a_height.is_finite() && a_height > 0.0) {
-        return Err(InbetweenError::BadOption(format!(
-            "drawing A's height {a_height}: give a positive number of pixels"
-        )));
-    }
-    let n = mesh.positions.len();
-    let loops = boundary_loops(&mesh.faces, n)?;
-    let shape_a = Shape::from_loops(
-        loops
-            .iter()
-            .map(|l| Loop::new(l.iter().map(|&v| mesh.positions[v as usize]).collect()))
-            .collect(),
-    );
-    // B's outline simplified to about as many corners as the mesh has boundary vertices.
-    let boundary = boundary_vertices(mesh).len();
-    let (shape_b, tolerance_b) = shape_of(b, Drawing(1), &options.with_vertices(2 * boundary))?;
-    let loop_pairs = pair_loops(&shape_a, &shape_b, Drawing(1))?;
-    let points: Vec<([f64; 2], [f64; 2])> = matches
-        .iter()
-        .map(|m| {
-            (
-                [m.a[0], a_height - m.a[1]],
-                [m.b[0], f64::from(b.height) - m.b[1]],
-            )
-        })
-        .collect();
-    let ReadPairs {
-        anchors,
+    let Setup {
+        shape_b,
+        tolerance_b,
         kinds,
         mut reports,
-    } = read_pairs(&shape_a, &shape_b, &loop_pairs, &points)?;
-    let main = shape_a.pieces[0];
-    let partner_of = |la: usize| {
-        loop_pairs
-            .iter()
-            .find(|p| p.0 == la)
-            .map(|p| p.1)
-            .ok_or_else(|| InbetweenError::Internal(format!("loop {la} of A is not paired")))
-    };
-    let (angle, _) = rigid_alignment(
-        &shape_a,
-        &shape_a.loops[main],
-        &shape_b,
-        &shape_b.loops[partner_of(main)?],
-    );
-    // The boundary onto B's outline.
-    let mut pins: Pins = Vec::with_capacity(boundary + matches.len());
-    for (la, l) in loops.iter().enumerate() {
-        let (loop_a, loop_b) = (&shape_a.loops[la], &shape_b.loops[partner_of(la)?]);
-        let map = arc_map(&shape_a, loop_a, &shape_b, loop_b, angle, &anchors[la])?;
-        for (i, &v) in l.iter().enumerate() {
-            pins.push((v, loop_b.at(map.forward(loop_a.cum[i]))));
-        }
-    }
+        mut pins,
+        ..
+    } = setup(mesh, a_height, b, matches, options)?;
+    let n = mesh.positions.len();
     // Interior pairs pin the nearest interior vertex, keeping its offset from A's point.
     let mut is_boundary = vec![false; n];
     for &(v, _) in &pins {

@@ -64,7 +64,7 @@ pub use baseline::{linear_frame, ArapInterpolation};
 pub use compatible::{
     compatible_mesh, compatible_path, CompatibleMesh, CompatiblePath, CompatibleReport, PairReport,
 };
-pub use fit::{fit_drawing, DrawingFit};
+pub use fit::{fit_drawing, outline_correspondence, DrawingFit};
 
 use crate::deform::DeformError;
 use crate::meshing::{MeshingError, PictureOptions, DEFAULT_MIN_ANGLE, MAX_VERTICES};

@@ -323,6 +323,17 @@ pub enum Request {
         #[serde(default)]
         time: Option<f64>,
     },
+    /// Where the rest mesh's outline goes on a drawing (the correspondence a drawing keyframe
+    /// would use, with these pairs), answered to the asking page only with
+    /// `{"type": "correspondence", "name", "loops": [[[ax, ay], [bx, by]], ...]}` (pixels from
+    /// the top-left corners), or refused with the reason (different pieces or holes, ...).
+    DrawingPreview {
+        /// The drawing's plain name.
+        name: String,
+        /// Point pairs, as [`Request::DrawingKeyframe`] takes them.
+        #[serde(default)]
+        pairs: Vec<[[f64; 2]; 2]>,
+    },
     /// Restore recovered work (one undo step).
     Recover {
         /// The recovery file's name, as listed.

@@ -130,6 +130,8 @@ pub const MIN_MESH_VERTICES: usize = 50;
 pub const MAX_MESH_VERTICES: usize = 200_000;
 /// How far (in mesh diameters, from the rest mesh's centre) a drag target may go.
 pub const MAX_DRAG_REACH: f64 = 20.0;
+/// Points of each outline loop a drawing's correspondence preview shows.
+const CORRESPONDENCE_POINTS: usize = 24;
 /// The most notes kept (the oldest go first).
 const MAX_NOTES: usize = 20;
 
@@ -2121,6 +2123,30 @@ impl Session {
                 reply.work = Some(self.start(work)?);
             }
             Request::AttachPicture { name } => self.attach_picture(&name)?,
+            Request::DrawingPreview { name, pairs } => {
+                let Work::Drawing(w) = self.drawing_work(&name, pairs, None)? else {
+                    return Err("no drawing to preview".into());
+                };
+                let matches: Vec<crate::inbetween::Match> = w
+                    .pairs
+                    .iter()
+                    .map(|&[a, b]| crate::inbetween::Match { a, b })
+                    .collect();
+                let options = crate::inbetween::InbetweenOptions::default().with_picture(w.picture);
+                let loops = crate::inbetween::outline_correspondence(
+                    &w.mesh,
+                    w.picture_height,
+                    &w.drawing,
+                    &matches,
+                    &options,
+                    CORRESPONDENCE_POINTS,
+                )
+                .map_err(|e| format!("{name}: {e}"))?;
+                reply.answers.push(Answer::Text(
+                    serde_json::json!({"type": "correspondence", "name": name, "loops": loops})
+                        .to_string(),
+                ));
+            }
             Request::DrawingKeyframe { name, pairs, time } => {
                 let work = self.drawing_work(&name, pairs, time)?;
                 reply.work = Some(self.start(work)?);

@@ -11,7 +11,35 @@ import { send, upload, on, pictureUrl } from "./net.js";
 
 const SIDE = 360;               // each picture's box, in CSS pixels
 const stored = (name) => `bdmorph-drawing-pairs:${name}`;
-const D = { name: "", pairs: [], pending: null, drawing: null, listing: false };
+const D = { name: "", pairs: [], pending: null, drawing: null, listing: false, preview: null, asked: null };
+
+// The correspondence the keyframe would use, asked for again (at most every 300 ms) when the
+// drawing or the pairs change: matching coloured marks around both outlines.
+let previewTimer = null;
+function askPreview() {
+  clearTimeout(previewTimer);
+  D.preview = null;
+  if (!D.name) return;
+  previewTimer = setTimeout(() => {
+    D.asked = D.name;
+    send({ op: "drawing_preview", name: D.name, pairs: D.pairs.map((p) => [p.a, p.b]) });
+    $("drawing-status").textContent = "matching the outlines…";
+  }, 300);
+}
+on("correspondence", (msg) => {
+  if (msg.name !== D.name) return;
+  D.asked = null;
+  D.preview = msg.loops;
+  draw();
+});
+// A drawing that cannot be matched says why here.
+on("error", (msg) => {
+  if (!D.asked || !$("drawing-dialog").open) return;
+  D.asked = null;
+  D.problem = msg.message;
+  msg.handled = true;
+  draw();
+});
 
 function keep() {
   if (!D.name) return;
@@ -64,6 +92,19 @@ function drawSide(canvas, img, which) {
     c.textBaseline = "middle";
     c.fillText(label, x, y + 0.5);
   };
+  // The outline's correspondence: the same colour at the same place of both outlines.
+  for (const loop of D.preview || []) {
+    loop.forEach((pq, i) => {
+      const q = pq[which === "a" ? 0 : 1];
+      c.beginPath();
+      c.arc(p.x + p.k * q[0], p.y + p.k * q[1], 4, 0, 2 * Math.PI);
+      c.fillStyle = `hsl(${(360 * i) / loop.length}, 90%, 50%)`;
+      c.fill();
+      c.lineWidth = 1.5;
+      c.strokeStyle = "#fff";
+      c.stroke();
+    });
+  }
   D.pairs.forEach((pair, i) => dot(pair[which], String(i + 1), false));
   if (D.pending && D.pending[which]) dot(D.pending[which], String(D.pairs.length + 1), true);
 }
@@ -80,14 +121,17 @@ function draw() {
     const x = document.createElement("button");
     x.textContent = "×";
     x.title = `Delete pair ${i + 1}`;
-    x.onclick = () => { D.pairs.splice(i, 1); keep(); draw(); };
+    x.onclick = () => { D.pairs.splice(i, 1); changed(); };
     li.appendChild(x);
     list.appendChild(li);
   });
   const hint = D.pending ? `pair ${D.pairs.length + 1}: now click the same point on the ${D.pending.a ? "drawing" : "rest picture"}` :
-    D.pairs.length ? `${D.pairs.length} pair${D.pairs.length === 1 ? "" : "s"}` : "no pairs: the outlines are matched automatically";
+    D.problem ? D.problem :
+    (D.pairs.length ? `${D.pairs.length} pair${D.pairs.length === 1 ? "" : "s"}. ` : "No pairs: the outlines are matched automatically. ") +
+    (D.preview ? "Marks of one colour are matched points of the two outlines." : "");
   $("drawing-status").textContent = hint;
-  $("drawing-make").disabled = !D.name || !D.drawing || !S.texture;
+  $("drawing-status").classList.toggle("problem", !!D.problem && !D.pending);
+  $("drawing-make").disabled = !D.name || !D.drawing || !S.texture || !!D.problem;
 }
 
 // A click on one side: the pending pair's point there (in the picture's pixels).
@@ -101,18 +145,29 @@ function clicked(which, img, e) {
   if (D.pending.a && D.pending.b) {
     D.pairs.push(D.pending);
     D.pending = null;
-    keep();
+    changed();
+    return;
   }
   draw();
 }
 $("drawing-rest").addEventListener("click", (e) => clicked("a", S.texture, e));
 $("drawing-new").addEventListener("click", (e) => clicked("b", D.drawing, e));
 
+// The pairs changed: kept, and the correspondence asked for again.
+function changed() {
+  keep();
+  D.problem = null;
+  askPreview();
+  draw();
+}
+
 function choose(name) {
   D.name = name;
   D.pairs = name ? restore(name) : [];
   D.pending = null;
   D.drawing = null;
+  D.problem = null;
+  askPreview();
   draw();
   if (!name) return;
   const img = new Image();
@@ -162,7 +217,7 @@ export function openDrawing() {
 }
 $("drawing-open").onclick = openDrawing;
 $("drawing-close").onclick = () => $("drawing-dialog").close();
-$("drawing-clear").onclick = () => { D.pairs = []; D.pending = null; keep(); draw(); };
+$("drawing-clear").onclick = () => { D.pairs = []; D.pending = null; changed(); };
 $("drawing-upload").onclick = () => $("drawing-file").click();
 $("drawing-file").addEventListener("change", async () => {
   const file = $("drawing-file").files[0];

@@ -582,6 +582,22 @@ pub fn capsule_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2], radius: f64) -> f
     (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy) - radius
 }
 
+/// A disk of radius `r` about `centre` with a round hole of radius `hole_r` about
+/// `hole_centre`, on a `size` x `size` [`picture`] (pixels from the top-left corner): one
+/// piece with one hole.
+pub fn ring_picture(
+    size: u32,
+    centre: [f64; 2],
+    r: f64,
+    hole_centre: [f64; 2],
+    hole_r: f64,
+) -> Image {
+    picture(size, size, move |x, y| {
+        let outer = capsule_distance([x, y], centre, centre, r);
+        outer.max(-capsule_distance([x, y], hole_centre, hole_centre, hole_r))
+    })
+}
+
 /// A figure drawn with capsules on a `size` x `size` [`picture`]: a head, a body, two arms and
 /// two legs, one piece without holes. `arm` raises the figure's right arm (on the picture's
 /// left) from hanging down (0) by that angle in radians (π: straight up); `bend` leans the

@@ -17,15 +17,6 @@ fn figure_pair() -> (Image, Image) {
     )
 }
 
-/// A disk with a round hole: centre, radius, the hole's centre and radius (pixels).
-fn ring(size: u32, c: [f64; 2], r: f64, hc: [f64; 2], hr: f64) -> Image {
-    generate::picture(size, size, move |x, y| {
-        let outer = generate::capsule_distance([x, y], c, c, r);
-        let hole = generate::capsule_distance([x, y], hc, hc, hr);
-        outer.max(-hole)
-    })
-}
-
 fn options(vertices: usize) -> InbetweenOptions {
     InbetweenOptions::default().with_vertices(vertices)
 }
@@ -153,8 +144,8 @@ fn frames_at_0_and_1_look_like_the_pictures() {
 
 #[test]
 fn a_shape_with_a_hole_in_both_drawings() {
-    let a = ring(200, [100.0, 100.0], 70.0, [100.0, 100.0], 25.0);
-    let b = ring(200, [110.0, 95.0], 65.0, [85.0, 110.0], 20.0);
+    let a = generate::ring_picture(200, [100.0, 100.0], 70.0, [100.0, 100.0], 25.0);
+    let b = generate::ring_picture(200, [110.0, 95.0], 65.0, [85.0, 110.0], 20.0);
     let mut inbetween = Inbetween::new(&a, &b, &[], &options(800)).unwrap();
     let c = inbetween.compatible().clone();
     check_compatible(&c);
@@ -169,7 +160,7 @@ fn different_topology_is_refused_in_one_line() {
     let disk = generate::picture(160, 160, |x, y| {
         generate::capsule_distance([x, y], [80.0, 80.0], [80.0, 80.0], 60.0)
     });
-    let holed = ring(160, [80.0, 80.0], 60.0, [80.0, 80.0], 20.0);
+    let holed = generate::ring_picture(160, [80.0, 80.0], 60.0, [80.0, 80.0], 20.0);
     let e = compatible_mesh(&disk, &holed, &[], &options(400)).unwrap_err();
     assert!(matches!(e, InbetweenError::Topology(_)));
     let text = e.to_string();
@@ -433,7 +424,7 @@ fn a_picture_mesh_laid_over_another_drawing_keeps_its_triangles() {
     );
     assert!((report.error - (q[0] - pa[0]).hypot(q[1] - pa[1])).abs() < 1e-9);
     // A drawing with a hole is refused in one line.
-    let holed = ring(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
+    let holed = generate::ring_picture(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
     let e = fit_drawing(&mesh, 256.0, &holed, &[], &options(800)).unwrap_err();
     assert!(e.to_string().contains("hole"), "{e}");
     assert!(!e.to_string().contains('\n'));

@@ -1015,12 +1015,7 @@ fn defect_7_files_save_and_a_restart_reconnects() {
         "studio.state.keyframes.length === 4 && studio.state.dirty",
         10,
     );
-    let pid = studio.child.id().to_string();
-    assert!(std::process::Command::new("kill")
-        .args(["-INT", &pid])
-        .status()
-        .expect("kill")
-        .success());
+    studio.interrupt();
     page.wait("!studio.connected", 20);
     page.wait("!document.getElementById('banner-connection').hidden", 10);
     let said = page.eval("document.getElementById('banner-connection').textContent");
@@ -1028,7 +1023,6 @@ fn defect_7_files_save_and_a_restart_reconnects() {
         said.as_str().unwrap_or("").contains("reconnects by itself"),
         "{said}"
     );
-    let _ = studio.child.wait();
     page.shot("7-stopped.png");
     let again = Studio::start(&dir, None);
     assert_eq!(again.url, studio.url, "the same port and token");
@@ -2857,15 +2851,7 @@ fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
         &dir.join("a.png"),
         &tinted(generate::figure_picture(256, 0.0, 0.0), [220, 40, 30]),
     );
-    let ring = generate::picture(256, 256, |x, y| {
-        let outer = generate::capsule_distance([x, y], [128.0, 128.0], [128.0, 128.0], 90.0);
-        outer.max(-generate::capsule_distance(
-            [x, y],
-            [128.0, 128.0],
-            [128.0, 128.0],
-            30.0,
-        ))
-    });
+    let ring = generate::ring_picture(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
     write_png(&dir.join("ring.png"), &ring);
     std::fs::create_dir_all(dir.join("incoming")).expect("dir");
     let from_disk = dir.join("incoming").join("b.png");
@@ -3017,14 +3003,8 @@ fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
     page.key("z", &[ModifierKey::Ctrl, ModifierKey::Shift]);
     page.wait("studio.state.keyframes.length === 2", 10);
     // The server stopped with the keyframe unsaved: started again, it offers it back.
-    let pid = studio.child.id().to_string();
-    assert!(std::process::Command::new("kill")
-        .args(["-INT", &pid])
-        .status()
-        .expect("kill")
-        .success());
+    studio.interrupt();
     page.wait("!studio.connected", 20);
-    let _ = studio.child.wait();
     let again = Studio::start(&dir, None);
     page.wait("studio.connected", 30);
     page.wait("!document.getElementById('banner-recovered').hidden", 20);

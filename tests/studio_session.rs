@@ -872,15 +872,7 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         p[..3].copy_from_slice(&[20, 40, 240]);
     }
     std::fs::write(dir.join("b.png"), raster::encode_png(&blue).expect("png")).expect("write");
-    let holed = generate::picture(256, 256, |x, y| {
-        let outer = generate::capsule_distance([x, y], [128.0, 128.0], [128.0, 128.0], 90.0);
-        outer.max(-generate::capsule_distance(
-            [x, y],
-            [128.0, 128.0],
-            [128.0, 128.0],
-            30.0,
-        ))
-    });
+    let holed = generate::ring_picture(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
     std::fs::write(dir.join("ring.png"), raster::encode_png(&holed).unwrap()).unwrap();
     let mut s = Session::new(
         Project::new(&generate::disk(4, 0.1), None),

@@ -20,6 +20,17 @@ pub struct Studio {
 }
 
 impl Studio {
+    /// Stops the studio as Ctrl+C does (it writes its autosave) and waits for it.
+    pub fn interrupt(&mut self) {
+        let pid = self.child.id().to_string();
+        assert!(Command::new("kill")
+            .args(["-INT", &pid])
+            .status()
+            .expect("kill")
+            .success());
+        let _ = self.child.wait();
+    }
+
     /// `bdmorph studio ARGS...` in `dir`.
     pub fn start_with(dir: &Path, args: &[&str]) -> Studio {
         Studio::start_env(dir, args, &[])

@@ -3,7 +3,10 @@
 //!
 //! Groups: `inbetween_compatible_mesh/<N>` (the whole [`compatible_mesh`] at about N
 //! vertices: outlines, correspondence, meshing, the layout over B, untangling, polishing)
-//! and `inbetween_frame/<method>` (one in-between at about 2K vertices, t alternating
+//! `inbetween_fit_drawing/<N>` (the studio's "Drawing…": an existing mesh of A, made by
+//! [`bdmorph::meshing::mesh_picture`], laid over B by [`fit_drawing`], to compare with the
+//! compatible mesh's build at the same size; and `correspondence`, the preview of where its
+//! outline goes), and `inbetween_frame/<method>` (one in-between at about 2K vertices, t alternating
 //! between 0.3 and 0.7 so that no frame is a repeat: BDMORPH against the as-rigid-as-possible
 //! interpolation and straight lines on the same compatible mesh). See BENCHMARKS.md.
 
@@ -12,8 +15,10 @@ use std::time::Duration;
 
 use bdmorph::generate;
 use bdmorph::inbetween::{
-    compatible_mesh, linear_frame, ArapInterpolation, Inbetween, InbetweenOptions,
+    compatible_mesh, fit_drawing, linear_frame, outline_correspondence, ArapInterpolation,
+    Inbetween, InbetweenOptions,
 };
+use bdmorph::meshing::{mesh_picture, MeshOptions, PictureOptions};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
 fn benches(c: &mut Criterion) {
@@ -31,6 +36,43 @@ fn benches(c: &mut Criterion) {
         group.bench_function(BenchmarkId::from_parameter(n), |bench| {
             bench.iter(|| compatible_mesh(black_box(&a), &b, &[], &options).expect("compatible"));
         });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("inbetween_fit_drawing");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
+    for n in [1_000usize, 10_000] {
+        let meshed = mesh_picture(
+            &a,
+            &PictureOptions::default(),
+            &MeshOptions::default().with_vertices(n),
+        )
+        .expect("meshed");
+        let mut mesh = meshed.mesh;
+        for (p, t) in mesh.positions.iter_mut().zip(&meshed.texcoords.uv) {
+            *p = [t[0] * 1024.0, t[1] * 1024.0];
+        }
+        let options = InbetweenOptions::default();
+        let fit = fit_drawing(&mesh, 1024.0, &b, &[], &options).expect("fit");
+        eprintln!(
+            "[bdmorph fit_drawing {}] {:?}",
+            mesh.positions.len(),
+            fit.report
+        );
+        group.bench_function(BenchmarkId::from_parameter(n), |bench| {
+            bench.iter(|| fit_drawing(&mesh, 1024.0, black_box(&b), &[], &options).expect("fit"));
+        });
+        if n == 1_000 {
+            group.bench_function("correspondence", |bench| {
+                bench.iter(|| {
+                    outline_correspondence(&mesh, 1024.0, black_box(&b), &[], &options, 24)
+                        .expect("correspondence")
+                });
+            });
+        }
     }
     group.finish();
 

@@ -1015,6 +1015,49 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         doc.keyframes[1].drawing
     );
     assert!(again.drawing_picture(1).is_some());
+    // Without the drawing's file: opened, and said so; an export says so too.
+    std::fs::copy(dir.join("b.png"), dir.join("b.kept")).unwrap();
+    std::fs::remove_file(dir.join("b.png")).unwrap();
+    let mut third = Session::new(
+        Project::new(&generate::disk(4, 0.1), None),
+        dir.clone(),
+        None,
+        None,
+    )
+    .expect("a session");
+    assert_eq!(
+        ask(
+            &mut third,
+            Request::Open {
+                name: "walk.json".into()
+            }
+        ),
+        None
+    );
+    let said = serde_json::from_str::<serde_json::Value>(&third.state_json()).unwrap()["notes"]
+        .to_string();
+    assert!(
+        said.contains("keyframe 2's (b.png)") && said.contains("not there"),
+        "{said}"
+    );
+    assert!(third.drawing_picture(1).is_none());
+    let export = Request::Export {
+        format: "gif".into(),
+        name: "anim.gif".into(),
+        frames: Some(3),
+        time: None,
+        size: Some([64, 64]),
+        range: None,
+        background: None,
+    };
+    assert_eq!(ask(&mut third, export), None);
+    let said = serde_json::from_str::<serde_json::Value>(&third.state_json()).unwrap()["notes"]
+        .to_string();
+    assert!(
+        said.contains("could not be read") && said.contains("exported"),
+        "{said}"
+    );
+    std::fs::rename(dir.join("b.kept"), dir.join("b.png")).unwrap();
     // A drawing with a hole: the job fails, says why, and changes nothing.
     let kept = s.project().to_json();
     assert_eq!(

@@ -271,12 +271,22 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
             let mut project = Project::read(file).map_err(|e| format!("{shown}: {e}"))?;
             // Keyframes' drawings, named as the workspace names them (read when shown).
             let folder = file.parent().unwrap_or(Path::new("."));
-            for d in project
-                .keyframes
-                .iter_mut()
-                .filter_map(|k| k.drawing.as_mut())
-            {
-                d.picture = name_in(workspace, &folder.join(&d.picture));
+            let mut missing = Vec::new();
+            for (k, key) in project.keyframes.iter_mut().enumerate() {
+                let Some(d) = key.drawing.as_mut() else {
+                    continue;
+                };
+                let path = folder.join(&d.picture);
+                if !path.is_file() {
+                    missing.push(format!("keyframe {}'s ({})", k + 1, d.picture));
+                }
+                d.picture = name_in(workspace, &path);
+            }
+            if !missing.is_empty() {
+                notes.push(format!(
+                    "{shown}: the drawing of {} is not there: drawn with the rest picture until it is",
+                    missing.join(", ")
+                ));
             }
             let texture = match project.texture.clone() {
                 Some(t) => {

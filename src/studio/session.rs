@@ -1252,14 +1252,36 @@ impl Session {
             return Err("add a second keyframe to export an animation".into());
         }
         super::export::frames_kept(&self.doc, &settings)?;
+        let drawings: Vec<Option<Arc<crate::render::Image>>> = (0..self.doc.keyframes.len())
+            .map(|k| self.drawing_picture(k).map(|t| Arc::new(t.image.clone())))
+            .collect();
+        let unread: Vec<String> = self
+            .doc
+            .keyframes
+            .iter()
+            .zip(&drawings)
+            .enumerate()
+            .filter_map(|(k, (key, read))| {
+                let d = key.drawing.as_ref()?;
+                read.is_none()
+                    .then(|| format!("keyframe {}'s ({})", k + 1, d.picture))
+            })
+            .collect();
+        if !unread.is_empty() {
+            self.note(
+                format!(
+                    "the drawing of {} could not be read: the export draws the rest picture there",
+                    unread.join(", ")
+                ),
+                false,
+            );
+        }
         Ok(Some(Work::Export(Box::new(ExportWork {
             settings,
             path,
             project: self.doc.clone(),
             texture: self.texture.as_ref().map(|t| Arc::new(t.image.clone())),
-            drawings: (0..self.doc.keyframes.len())
-                .map(|k| self.drawing_picture(k).map(|t| Arc::new(t.image.clone())))
-                .collect(),
+            drawings,
         }))))
     }
 

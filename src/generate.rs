@@ -319,6 +319,90 @@ pub fn annulus(max_area: f64) -> PlanarMesh {
     )
 }
 
+/// A figure with a hand on its hip: a body (1 wide, 4 tall, from the origin up) with a head,
+/// and an arm (0.4 wide) from the shoulder (`y` 3 to 3.4) down to the hand, which rests on
+/// the hip (`y` 0.6 to 1): the arm and the body enclose a hole (`x` 1 to 1.6, `y` 1 to 3),
+/// as in a picture of such a figure meshed. Outlines are sampled every 0.05; triangles of area
+/// at most `max_area` (`0.005` gives about 1,000 vertices). See [`arm_across`].
+pub fn hand_on_hip(max_area: f64) -> PlanarMesh {
+    // The head: a circle on the neck (the body's top, `x` from `0.5 - w` to `0.5 + w`).
+    let (centre, r) = ([0.5, 4.45], 0.5);
+    let w = (r * r - (4.0f64 - centre[1]).powi(2)).sqrt();
+    let mut outline = polyline(
+        &[
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 0.6],
+            [2.0, 0.6],
+            [2.0, 3.4],
+            [1.0, 3.4],
+            [1.0, 4.0],
+            [0.5 + w, 4.0],
+        ],
+        0.05,
+    );
+    let from = (4.0 - centre[1]).atan2(w);
+    let sweep = TAU - 2.0 * (std::f64::consts::FRAC_PI_2 + from);
+    let steps = 64;
+    for i in 1..steps {
+        let a = from + sweep * f64::from(i) / f64::from(steps);
+        outline.push([centre[0] + r * a.cos(), centre[1] + r * a.sin()]);
+    }
+    let mut back = polyline(&[[0.5 - w, 4.0], [0.0, 4.0], [0.0, 0.0]], 0.05);
+    back.pop();
+    outline.extend(back);
+    let mut hole = polyline(
+        &[[1.0, 1.0], [1.0, 3.0], [1.6, 3.0], [1.6, 1.0], [1.0, 1.0]],
+        0.05,
+    );
+    hole.pop();
+    polygons(&[outline, hole], max_area)
+}
+
+/// The polyline through `corners`, sampled every `step` or less, both ends included.
+fn polyline(corners: &[[f64; 2]], step: f64) -> Vec<[f64; 2]> {
+    let mut out = Vec::new();
+    for w in corners.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let k = ((a[0] - b[0]).hypot(a[1] - b[1]) / step).ceil().max(1.0) as usize;
+        for j in 0..k {
+            let s = j as f64 / k as f64;
+            out.push([a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]);
+        }
+    }
+    out.extend(corners.last().copied());
+    out
+}
+
+/// [`hand_on_hip`]'s arm swung across the body by `reach` at the elbow (mid-height of the
+/// hole), the hand and the shoulder staying: every vertex right of the hole's middle
+/// (`x > 1.3`) moves left by `reach` times a smooth bump over the hole's height. That is a
+/// shear of the arm, so no triangle flips; from `reach > 0.6` the arm lies over the body and
+/// the hole's outline crosses itself.
+pub fn arm_across(figure: &PlanarMesh, reach: f64) -> PlanarMesh {
+    let bump = |y: f64| {
+        if y <= 1.0 || y >= 3.0 {
+            0.0
+        } else {
+            (std::f64::consts::PI * (y - 1.0) / 2.0).sin().powi(2)
+        }
+    };
+    PlanarMesh {
+        positions: figure
+            .positions
+            .iter()
+            .map(|&[x, y]| {
+                if x > 1.3 {
+                    [x - reach * bump(y), y]
+                } else {
+                    [x, y]
+                }
+            })
+            .collect(),
+        faces: figure.faces.clone(),
+    }
+}
+
 /// A plate, 3 by 1.2, with two round holes, triangles of area at most `max_area` (`0.005`
 /// gives about 600 vertices).
 pub fn plate_with_two_holes(max_area: f64) -> PlanarMesh {

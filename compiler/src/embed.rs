@@ -16,7 +16,9 @@ pub(crate) fn emit(
     slot_of_edge: &[u32],
     edges: &[[u32; 2]],
     root_he: u32,
+    inert: &[bool],
 ) -> (EmbedRoot, Vec<EmbedStep>) {
+    // The walk never enters an inert face (marked visited from the start).
     let nf = topo.faces.len();
     let slot = |he: u32| slot_of_edge[topo.edge_of[he as usize] as usize];
     let root = EmbedRoot {
@@ -27,7 +29,9 @@ pub(crate) fn emit(
     let mut placed = vec![false; topo.n_vertices()];
     placed[root.p0 as usize] = true;
     placed[root.p1 as usize] = true;
-    let mut visited = vec![false; nf];
+    let mut visited: Vec<bool> = (0..nf)
+        .map(|f| inert.get(f).copied().unwrap_or(false))
+        .collect();
     visited[root_he as usize / 3] = true;
     let mut queue = VecDeque::from([root_he]);
     let mut steps = Vec::with_capacity(nf);

@@ -49,6 +49,17 @@ pub enum CompileError {
         /// The vertex.
         vertex: VertexId,
     },
+    /// Inert-face flags given for another number of faces.
+    #[error("{flags} inert-face flags given for a mesh of {faces} faces")]
+    InertCount {
+        /// Flags given.
+        flags: usize,
+        /// Faces.
+        faces: usize,
+    },
+    /// Every face is inert: nothing would lay the mesh out.
+    #[error("every face is inert: a program needs at least one face that is laid out")]
+    AllInert,
     /// The position array and the faces disagree on the number of vertices.
     #[error("{positions} positions given for a mesh of {n_vertices} vertices")]
     PositionCount {

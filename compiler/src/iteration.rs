@@ -53,7 +53,9 @@ pub(crate) fn bfs_vertices(topo: &Topology, root: u32) -> Vec<u32> {
     order
 }
 
-pub(crate) fn emit(topo: &Topology, order: &[u32]) -> Emitted {
+/// `inert` is empty or one flag per face: the inert ones are emitted as
+/// `TRIANGLE.INERT`.
+pub(crate) fn emit(topo: &Topology, order: &[u32], inert: &[bool]) -> Emitted {
     let nv = topo.n_vertices();
     let nf = topo.faces.len();
 
@@ -116,7 +118,12 @@ pub(crate) fn emit(topo: &Topology, order: &[u32]) -> Emitted {
             let back = |he: u32| n_slots - slot_of_edge[topo.edge_of[he as usize] as usize];
             // Corner c lies between half-edges 3f+c (leaving it) and prev (entering it),
             // opposite next(3f+c): TRIANGLE's corner c.
-            code.push(Op::Triangle as u16);
+            let op = if inert.get(f as usize).copied().unwrap_or(false) {
+                Op::TriangleInert
+            } else {
+                Op::Triangle
+            };
+            code.push(op as u16);
             for c in 0..3 {
                 let he = f * 3 + c;
                 operand::push(&mut code, back(he));

@@ -52,6 +52,48 @@ pub const ORDERING_MIN_UNKNOWNS: usize = 800;
 /// unknowns, the fill-reducing ordering of the unknowns ([`nested_dissection`]). Any positions
 /// with the same faces can be morphed by the program.
 pub fn compile(positions: &[[f64; 2]], faces: &[[u32; 3]]) -> Result<Program, CompileError> {
+    compile_with_inert(positions, faces, &[])
+}
+
+/// Compiles as [`compile`] does, with some faces *inert*: `inert` is empty (none) or holds one
+/// flag per face. An inert face is part of the topology (the mesh with it must be a disk) but
+/// not of the geometry: its corners add nothing to the gradient, the Hessian or the energy
+/// ([`bdmorph_isa::Op::TriangleInert`]), and the layout never walks through it, so its
+/// vertices are placed through the other faces. A hole of a mesh filled with inert faces is
+/// thus solved as a free boundary: its vertices are unknowns whose angle sums are those of the
+/// other faces alone (a caller sets their targets, see the VM's gradient offsets). The
+/// faces that are not inert must be connected through their edges; the anchor is the vertex
+/// nearest the centre of the bounding box of the vertices of those faces.
+///
+/// ```
+/// // A square ring (8 vertices, 8 triangles) whose hole is filled by two inert triangles.
+/// let positions = [
+///     [0.0, 0.0], [3.0, 0.0], [3.0, 3.0], [0.0, 3.0],
+///     [1.0, 1.0], [2.0, 1.0], [2.0, 2.0], [1.0, 2.0],
+/// ];
+/// let mut faces = vec![
+///     [0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5],
+///     [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7],
+/// ];
+/// faces.extend([[4, 5, 6], [4, 6, 7]]);
+/// let mut inert = vec![false; 8];
+/// inert.extend([true, true]);
+/// let program = bdmorph_compiler::compile_with_inert(&positions, &faces, &inert)?;
+/// assert_eq!(program.n_unknowns(), 4);           // the hole's vertices
+/// assert_eq!(program.embed().len(), 8);          // the ring's triangles only
+/// # Ok::<(), bdmorph_compiler::CompileError>(())
+/// ```
+pub fn compile_with_inert(
+    positions: &[[f64; 2]],
+    faces: &[[u32; 3]],
+    inert: &[bool],
+) -> Result<Program, CompileError> {
+    if !inert.is_empty() && inert.len() != faces.len() {
+        return Err(CompileError::InertCount {
+            flags: inert.len(),
+            faces: faces.len(),
+        });
+    }
     for (v, p) in positions.iter().enumerate() {
         if !(p[0].is_finite() && p[1].is_finite()) {
             return Err(CompileError::NonFinitePosition {
@@ -60,8 +102,22 @@ pub fn compile(positions: &[[f64; 2]], faces: &[[u32; 3]]) -> Result<Program, Co
         }
     }
     let topo = Topology::new(positions.len(), faces)?;
-    let anchor = nearest_to_centre(positions);
-    compile_topology(&topo, anchor, Some(positions))
+    if !inert.is_empty() && inert.iter().all(|&i| i) {
+        return Err(CompileError::AllInert);
+    }
+    let anchor = if inert.iter().any(|&i| i) {
+        // Vertices of the faces that are laid out.
+        let mut laid = vec![false; positions.len()];
+        for (f, &i) in faces.iter().zip(inert) {
+            if !i {
+                f.iter().for_each(|&v| laid[v as usize] = true);
+            }
+        }
+        nearest_to_centre_of(positions, |v| laid[v])
+    } else {
+        nearest_to_centre(positions)
+    };
+    compile_topology(&topo, anchor, Some(positions), inert)
 }
 
 /// Compiles with an explicit anchor vertex instead of choosing it from positions. Without
@@ -75,18 +131,24 @@ pub fn compile_with_anchor(
     if anchor.0 as usize >= n_vertices {
         return Err(CompileError::AnchorOutOfRange { anchor, n_vertices });
     }
-    compile_topology(&topo, anchor.0, None)
+    compile_topology(&topo, anchor.0, None, &[])
 }
 
+/// `inert` is empty or one flag per face, not all set; the anchor has a face that is not.
 fn compile_topology(
     topo: &Topology,
     anchor: u32,
     positions: Option<&[[f64; 2]]>,
+    inert: &[bool],
 ) -> Result<Program, CompileError> {
+    let is_inert = |he: u32| inert.get(he as usize / 3).copied().unwrap_or(false);
     let order = iteration::bfs_vertices(topo, anchor);
-    let it = iteration::emit(topo, &order);
-    let root_he = topo.first_out[anchor as usize];
-    let (root, steps) = embed::emit(topo, &it.slot_of_edge, &it.edges, root_he);
+    let it = iteration::emit(topo, &order, inert);
+    let root_he = topo
+        .fan(anchor)
+        .find(|&he| !is_inert(he))
+        .unwrap_or(topo.first_out[anchor as usize]);
+    let (root, steps) = embed::emit(topo, &it.slot_of_edge, &it.edges, root_he, inert);
     let ordering = positions
         .filter(|_| it.unknown_vertex.len() >= ORDERING_MIN_UNKNOWNS.max(1))
         .map(|p| ordering::order(&it.hessian, &it.unknown_vertex, p, LEAF_SIZE));
@@ -107,9 +169,20 @@ fn compile_topology(
 
 /// The vertex nearest the centre of the bounding box of `positions` (0 when empty).
 fn nearest_to_centre(positions: &[[f64; 2]]) -> u32 {
+    nearest_to_centre_of(positions, |_| true)
+}
+
+/// The vertex nearest the centre of the bounding box of the positions of the vertices `of`
+/// accepts, among those (lowest index on ties; 0 when there is none).
+fn nearest_to_centre_of(positions: &[[f64; 2]], of: impl Fn(usize) -> bool) -> u32 {
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
-    for p in positions {
+    for p in positions
+        .iter()
+        .enumerate()
+        .filter(|(v, _)| of(*v))
+        .map(|(_, p)| p)
+    {
         for d in 0..2 {
             lo[d] = lo[d].min(p[d]);
             hi[d] = hi[d].max(p[d]);
@@ -117,7 +190,7 @@ fn nearest_to_centre(positions: &[[f64; 2]]) -> u32 {
     }
     let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
     let mut best = (f64::INFINITY, 0u32);
-    for (v, p) in positions.iter().enumerate() {
+    for (v, p) in positions.iter().enumerate().filter(|(v, _)| of(*v)) {
         let d = (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2);
         if d < best.0 {
             best = (d, v as u32);

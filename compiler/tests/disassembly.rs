@@ -78,3 +78,37 @@ fn four_by_four_grid_writes_off_diagonal_slots() {
     let p = compile(&pos, &faces).expect("compiles");
     insta::assert_snapshot!(disassemble(&p));
 }
+
+/// A square ring (outer 0-3, hole 4-7) whose hole is filled by two inert triangles: the hole's
+/// four vertices are the unknowns (u0..u3), the two filling triangles are
+/// `triangle.inert` (their temporaries add nothing), and the embed stream walks the ring's
+/// eight triangles only, placing every vertex through them.
+#[test]
+fn ring_with_an_inert_filling() {
+    let positions = [
+        [0.0, 0.0],
+        [3.0, 0.0],
+        [3.0, 3.0],
+        [0.0, 3.0],
+        [1.0, 1.0],
+        [2.0, 1.0],
+        [2.0, 2.0],
+        [1.0, 2.0],
+    ];
+    let mut faces = vec![
+        [0, 1, 5],
+        [0, 5, 4],
+        [1, 2, 6],
+        [1, 6, 5],
+        [2, 3, 7],
+        [2, 7, 6],
+        [3, 0, 4],
+        [3, 4, 7],
+    ];
+    faces.extend([[4, 5, 6], [4, 6, 7]]);
+    let mut inert = vec![false; 8];
+    inert.extend([true, true]);
+    let p = bdmorph_compiler::compile_with_inert(&positions, &faces, &inert).expect("compiles");
+    assert_eq!(p.embed().len(), 8);
+    insta::assert_snapshot!(disassemble(&p));
+}

@@ -61,7 +61,7 @@ pub fn disassemble(p: &Program) -> String {
                 let _ = writeln!(out, "  {at:04}  {:<12} {args:<24} -> L{li}", op.mnemonic());
                 li += 1;
             }
-            Instr::Triangle { back } => {
+            Instr::Triangle { back, inert } => {
                 let args = format!(
                     "L{} L{} L{}",
                     li - i64::from(back[0]),
@@ -71,7 +71,11 @@ pub fn disassemble(p: &Program) -> String {
                 let _ = writeln!(
                     out,
                     "  {at:04}  {:<12} {args:<24} -> T{ti}..T{}",
-                    Op::Triangle.mnemonic(),
+                    if inert {
+                        Op::TriangleInert.mnemonic()
+                    } else {
+                        Op::Triangle.mnemonic()
+                    },
                     ti + 2
                 );
                 ti += 3;

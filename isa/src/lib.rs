@@ -69,6 +69,12 @@ pub enum Op {
     /// angle, scaled by a positive factor of at most 1, and the cotangent of its angle. All
     /// three from one square root (the inradius), with no trigonometric call.
     Triangle = 4,
+    /// `TRIANGLE.INERT e0 e1 e2`: a triangle that is there for the topology only (a hole's
+    /// filling whose outline closes by its own turning, not by its triangles' metric). Its
+    /// operands are `Triangle`'s, but its three temporaries are inert corners: a half angle of
+    /// 0 (direction `(1, 0)`) and a cotangent of 0, so it adds nothing to any gradient entry
+    /// or Hessian value, and nothing to the energy. The embed stream never walks through it.
+    TriangleInert = 7,
     /// `VERTEX_INFO n m  i_1..i_n  (a_1 b_1)..(a_n b_n)`: interior vertex `k` of valence `n`.
     /// `i_*` are the temporaries of its `n` corners (back-offsets into `T`), giving
     /// `g[k] = pi - sum(half angles)`; each pair `(a_j, b_j)` are the two corners opposite edge
@@ -87,6 +93,7 @@ impl Op {
             3 => Op::EdgeLenBb,
             4 => Op::Triangle,
             6 => Op::VertexInfo,
+            7 => Op::TriangleInert,
             _ => return None,
         })
     }
@@ -98,6 +105,7 @@ impl Op {
             Op::EdgeLenIb => "edge_len.ib",
             Op::EdgeLenBb => "edge_len.bb",
             Op::Triangle => "triangle",
+            Op::TriangleInert => "triangle.inert",
             Op::VertexInfo => "vertex_info",
         }
     }
@@ -114,13 +122,14 @@ mod tests {
             Op::EdgeLenIb,
             Op::EdgeLenBb,
             Op::Triangle,
+            Op::TriangleInert,
             Op::VertexInfo,
         ] {
             assert_eq!(Op::from_word(op as u16), Some(op));
         }
         assert_eq!(Op::from_word(0), None);
         assert_eq!(Op::from_word(5), None, "retired: HALF_TAN.COT");
-        assert_eq!(Op::from_word(7), None);
+        assert_eq!(Op::from_word(8), None);
     }
 
     #[test]

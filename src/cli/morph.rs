@@ -272,12 +272,17 @@ impl Animation {
         }
     }
 
+    /// What the solver found: pieces, holes, inverted triangles.
+    fn structure(&self) -> &bdmorph::morph::Structure {
+        match self {
+            Animation::Morph(m) => m.structure(),
+            Animation::Path(p) => p.structure(),
+        }
+    }
+
     /// Per keyframe, its inverted triangles (allowed by --allow-inverted).
     fn inverted(&self) -> &[Vec<usize>] {
-        match self {
-            Animation::Morph(m) => &m.structure().inverted,
-            Animation::Path(p) => &p.structure().inverted,
-        }
+        &self.structure().inverted
     }
 
     /// The time of each keyframe.
@@ -358,6 +363,20 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
         engines.push(build(program.clone()).map_err(|e| inputs.setup_error(e))?);
     }
 
+    if !args.out.quiet {
+        for v in engines[0]
+            .structure()
+            .pieces
+            .iter()
+            .flat_map(|p| &p.free_holes)
+        {
+            eprintln!(
+                "bdmorph: note: the hole at vertex {v} (0-based) crosses itself or changes too \
+                 much between keyframes for one filling: it is solved as a free boundary, \
+                 closed at every frame (keyframes are still reached exactly)"
+            );
+        }
+    }
     let colour = args.out.color_by.is_some();
     // Keyframes with inverted triangles (--allow-inverted), by the time they are at.
     let inverted = engines[0].inverted().to_vec();

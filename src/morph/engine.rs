@@ -9,10 +9,11 @@
 //! the squared lengths of Euclidean triangles form a convex cone. Outside it the metric is
 //! checked triangle by triangle first, and a broken one is named in a typed error.
 
-use bdmorph_vm::{Program, VmError};
+use bdmorph_vm::{NewtonOptions, Program, VmError};
 
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
+use crate::morph::closure::{Closure, ClosureError, ClosureReport};
 use crate::morph::predictor::{predictor_weights, useful_nodes, NODES};
 
 use crate::morph::{FrameAt, FrameStats, MorphError, MorphOptions};
@@ -77,6 +78,8 @@ struct Solved {
     /// `du/ds` at the solution, when `has_du` (empty unless the options predict with tangents).
     du: Vec<f64>,
     has_du: bool,
+    /// The free holes' closing unknowns at the solution (empty without free holes).
+    a: Vec<f64>,
 }
 
 /// The shared solver.
@@ -108,6 +111,13 @@ pub(crate) struct Engine {
     rate: Vec<f64>,
     /// The start `u` of the frame being solved.
     start: Vec<f64>,
+    /// The free holes and their closing ([`crate::morph::closure`]); `None` without any.
+    closure: Option<Closure>,
+    /// The start of the closing unknowns of the frame being solved.
+    a_start: Vec<f64>,
+    /// Faces that carry a metric (the user's, then hidden ones filling holes); the rest are
+    /// inert, filling free holes.
+    real_faces: usize,
 }
 
 impl std::fmt::Debug for Engine {
@@ -160,13 +170,23 @@ impl Engine {
     /// Prepares the solver for already validated keyframes (at least one) from a program
     /// compiled for their connectivity. The first `visible` faces are the user's (their
     /// distortion is measured); any after them are hidden ones filling holes.
+    ///
+    /// Faces from `real_faces` on are inert (the program was compiled with them so), filling
+    /// the free holes `free` (each a loop of the piece's vertices in the order its boundary
+    /// runs), which are closed by [`Closure`].
     pub(crate) fn new(
         program: Program,
         keyframes: &[PlanarMesh],
         visible: usize,
+        real_faces: usize,
+        free: &[Vec<u32>],
         unwrap: Unwrap,
-        options: MorphOptions,
+        mut options: MorphOptions,
     ) -> Result<Engine, MorphError> {
+        if !free.is_empty() {
+            // A tangent would miss the targets' change along the line: predictions use values.
+            options.tangents = false;
+        }
         let solver = |source| MorphError::Solver {
             at: FrameAt::Time(0.0),
             source,
@@ -174,7 +194,7 @@ impl Engine {
         };
         let mut vm = bdmorph_vm::Vm::new(program).map_err(solver)?;
         vm.set_factor_precision(options.factor_precision);
-        let squared = keyframes
+        let mut squared = keyframes
             .iter()
             .map(|k| vm.squared_lengths(&k.positions))
             .collect::<Result<Vec<_>, _>>()
@@ -206,6 +226,24 @@ impl Engine {
                 },
             )
             .collect::<Result<Vec<_>, _>>()?;
+        let real_faces = real_faces.min(faces.len());
+        let closure = if free.is_empty() {
+            None
+        } else {
+            // Edges of inert triangles alone are never read: one length in every keyframe
+            // keeps the metric valid where two hole vertices meet in a keyframe.
+            let mut read = vec![false; squared[0].len()];
+            for f in &face_slots[..real_faces] {
+                f.iter().for_each(|&e| read[e as usize] = true);
+            }
+            for sq in &mut squared {
+                for (v, _) in sq.iter_mut().zip(&read).filter(|(_, r)| !**r) {
+                    *v = 1.0;
+                }
+            }
+            Some(Closure::new(&mut vm, free, &squared, |a, b| slots.get(a, b)).map_err(solver)?)
+        };
+        let n_closing = closure.as_ref().map_or(0, |c| c.a.len());
         let n_unknowns = vm.u().len();
         let n_vertices = keyframes[0].positions.len();
         let n_slots = squared[0].len();
@@ -232,13 +270,24 @@ impl Engine {
                     Vec::new()
                 },
                 has_du: false,
+                a: vec![0.0; n_closing],
             }),
             solved: 0,
             pending_tangent: None,
             rate: vec![0.0; n_slots],
             start: vec![0.0; n_unknowns],
+            closure,
+            a_start: vec![0.0; n_closing],
+            real_faces,
             vm,
         })
+    }
+
+    /// A vertex (the piece's numbering) on each free hole.
+    pub(crate) fn free_holes(&self) -> Vec<u32> {
+        self.closure
+            .as_ref()
+            .map_or_else(Vec::new, |c| c.hole_vertices().collect())
     }
 
     /// The compiled program.
@@ -364,30 +413,36 @@ impl Engine {
             .options
             .newton
             .with_tangent_follows(line.is_some() && self.predicts_with_tangents());
-        let mut result = self.vm.newton(&newton);
+        let mut result = self.flatten(weights, &newton);
         if result.is_err() && extrapolated {
             // An extrapolated start is a guess: fall back to the last solution before failing.
             self.vm
                 .set_u(&self.history[HISTORY - 1].u)
                 .expect("history has one value per unknown");
-            result = self.vm.newton(&newton);
+            self.a_start.copy_from_slice(&self.history[HISTORY - 1].a);
+            result = self.flatten(weights, &newton);
         }
         let report = result.map_err(|e| {
             let worst = self.vm.failure_triangles().to_vec();
             match e {
-                VmError::NotConverged {
+                ClosureError::Vm(VmError::NotConverged {
                     iterations,
                     gradient_norm,
-                } => MorphError::NotConverged {
+                }) => MorphError::NotConverged {
                     at: at(weights),
                     iterations,
                     gradient_norm,
                     worst,
                 },
-                other => MorphError::Solver {
+                ClosureError::Vm(other) => MorphError::Solver {
                     at: at(weights),
                     source: other,
                     worst,
+                },
+                ClosureError::Open { vertex, gap } => MorphError::HoleOpen {
+                    at: at(weights),
+                    vertex,
+                    gap,
                 },
             }
         })?;
@@ -416,6 +471,30 @@ impl Engine {
             max_conformal_distortion,
             seconds: started.elapsed().as_secs_f64(),
         })
+    }
+
+    /// Flattens the frame's metric from the start chosen: Newton's method, and with free
+    /// holes, their closing around it.
+    fn flatten(
+        &mut self,
+        weights: &[f64],
+        newton: &NewtonOptions,
+    ) -> Result<ClosureReport, ClosureError> {
+        match &mut self.closure {
+            Some(closure) => {
+                closure.solve(&mut self.vm, weights, &self.metric, &self.a_start, newton)
+            }
+            None => {
+                let r = self.vm.newton(newton).map_err(ClosureError::Vm)?;
+                Ok(ClosureReport {
+                    iterations: r.iterations,
+                    factorizations: r.factorizations,
+                    cg_iterations: r.cg_iterations,
+                    gradient_norm: r.gradient_norm,
+                    steps: 0,
+                })
+            }
+        }
     }
 
     /// Refuses weights that are not one finite number per keyframe summing to 1.
@@ -465,7 +544,8 @@ impl Engine {
         };
         // The first triangle to break: (fraction of the way, face).
         let mut first: Option<(f64, usize)> = None;
-        for (face, slots) in self.face_slots.iter().enumerate() {
+        // Inert faces (filling free holes) have no metric to break.
+        for (face, slots) in self.face_slots[..self.real_faces].iter().enumerate() {
             let end = slots.map(|s| blend(weights, s));
             if euclidean(end) {
                 // The valid set is convex: valid at both ends means valid all the way.
@@ -559,7 +639,12 @@ impl Engine {
     fn choose_start(&mut self, line: Option<Line>) -> bool {
         if !self.options.warm_start {
             self.vm.reset_u();
+            self.a_start.fill(0.0);
             return false;
+        }
+        if let Some(c) = &self.closure {
+            // The last solution's, unless a solved frame says better below.
+            self.a_start.copy_from_slice(&c.a);
         }
         if self.solved == 0 {
             return false;
@@ -584,6 +669,7 @@ impl Engine {
                 self.vm
                     .set_u(&self.history[nodes[0]].u)
                     .expect("history has one value per unknown");
+                self.a_start.copy_from_slice(&self.history[nodes[0]].a);
                 return true;
             }
             if count >= 2 {
@@ -624,13 +710,18 @@ impl Engine {
             self.vm
                 .set_u(&self.history[last].u)
                 .expect("history has one value per unknown");
+            self.a_start.copy_from_slice(&self.history[last].a);
             return false;
         };
         self.start.fill(0.0);
+        self.a_start.fill(0.0);
         for (j, &i) in nodes[..used].iter().enumerate() {
             let node = &self.history[i];
             for (s, u) in self.start.iter_mut().zip(&node.u) {
                 *s += alpha[j] * u;
+            }
+            for (s, a) in self.a_start.iter_mut().zip(&node.a) {
+                *s += alpha[j] * a;
             }
             if beta[j] != 0.0 {
                 for (s, d) in self.start.iter_mut().zip(&node.du) {
@@ -652,6 +743,9 @@ impl Engine {
         let Some(line) = line else {
             let newest = &mut self.history[last];
             newest.u.copy_from_slice(self.vm.u());
+            if let Some(c) = &self.closure {
+                newest.a.copy_from_slice(&c.a);
+            }
             newest.line = (usize::MAX, usize::MAX);
             newest.has_du = false;
             self.solved = 1;
@@ -673,6 +767,9 @@ impl Engine {
         newest.line = key;
         newest.s = line.s;
         newest.u.copy_from_slice(self.vm.u());
+        if let Some(c) = &self.closure {
+            newest.a.copy_from_slice(&c.a);
+        }
         // A solution of the same metric again keeps its tangent: both solve it to the
         // tolerance.
         if !newest.has_du {

@@ -14,6 +14,9 @@
 //! triangles added, is a valid flat disk with the same triangles, and the morph's metric
 //! blends them like any others: the hole stays closed (no crack) and, while no hidden
 //! triangle flips, nothing overlaps across it.
+//!
+//! A hole that has no such triangulation (its outline crosses itself in a keyframe) is a free
+//! one ([`super::closure`]): [`fill_topology`] then fills it for the topology alone.
 
 use std::collections::HashSet;
 
@@ -33,41 +36,39 @@ fn quality(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// Smallest quality a hidden triangle may have in any keyframe (well away from round-off).
 const MIN_QUALITY: f64 = 1e-9;
 
-/// Why a hole could not be filled.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Unfillable {
-    /// The keyframes in which, taken alone, the hole's polygon has no counter-clockwise
-    /// triangulation (it crosses itself, or runs clockwise); empty when each keyframe alone
-    /// has one but no triangulation suits them all.
-    pub keyframes: Vec<usize>,
-}
-
 /// Triangulates the hole whose boundary, counter-clockwise around the hole, is `polygon`
 /// (vertex indices into each keyframe's `positions`), counter-clockwise in every keyframe,
-/// without using an edge in `taken` (edges the piece already has, as `(lo, hi)`). Returns
-/// `polygon.len() - 2` triangles.
+/// without using an edge in `taken` (edges the piece already has, as `(lo, hi)`): its
+/// `polygon.len() - 2` triangles, or `None` when there is no such triangulation (the hole is
+/// then a free one, see [`crate::morph`]).
 pub(crate) fn fill(
     polygon: &[u32],
     keyframes: &[&[[f64; 2]]],
     taken: &HashSet<(u32, u32)>,
-) -> Result<Vec<[u32; 3]>, Unfillable> {
-    match triangulate(polygon, keyframes, taken) {
-        Some(t) => Ok(t),
-        None => {
-            let alone = (0..keyframes.len())
-                .filter(|&k| triangulate(polygon, &keyframes[k..=k], taken).is_none())
-                .collect();
-            Err(Unfillable { keyframes: alone })
-        }
-    }
+) -> Option<Vec<[u32; 3]>> {
+    triangulate(polygon, keyframes, taken, MIN_QUALITY)
+}
+
+/// Triangulates the hole `polygon` for the topology alone (its triangles will be inert, see
+/// [`crate::morph`]'s free holes): over its own vertices, without an edge in `taken`, by the
+/// triangulation with the best worst shape in `reference` (the first keyframe), clockwise
+/// triangles allowed. `None` only when every triangulation needs a diagonal in `taken`.
+pub(crate) fn fill_topology(
+    polygon: &[u32],
+    reference: &[[f64; 2]],
+    taken: &HashSet<(u32, u32)>,
+) -> Option<Vec<[u32; 3]>> {
+    triangulate(polygon, &[reference], taken, f64::NEG_INFINITY)
 }
 
 /// The dynamic programme: `best[i][j]` is the best triangulation of the sub-polygon
-/// `i, i + 1, ..., j` (closed by the diagonal `(i, j)`), as (worst quality, total quality).
+/// `i, i + 1, ..., j` (closed by the diagonal `(i, j)`), as (worst quality, total quality),
+/// among those whose every triangle has at least `min_quality` in every keyframe.
 fn triangulate(
     polygon: &[u32],
     keyframes: &[&[[f64; 2]]],
     taken: &HashSet<(u32, u32)>,
+    min_quality: f64,
 ) -> Option<Vec<[u32; 3]>> {
     let n = polygon.len();
     if n < 3 {
@@ -117,7 +118,7 @@ fn triangulate(
                     continue;
                 }
                 let tq = q(i, k, j);
-                if tq < MIN_QUALITY {
+                if tq < min_quality {
                     continue;
                 }
                 let candidate = (worst_here.min(tq), left.1 + right.1 + tq);
@@ -187,8 +188,11 @@ mod tests {
     fn a_polygon_clockwise_in_one_keyframe_cannot_be_filled() {
         let a = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
         let b = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]];
-        let err = fill(&[0, 1, 2, 3], &[&a, &b], &HashSet::new()).unwrap_err();
-        assert_eq!(err.keyframes, [1]);
+        assert!(fill(&[0, 1, 2, 3], &[&a, &b], &HashSet::new()).is_none());
+        // For the topology alone it can: the first keyframe's shape chooses.
+        let t = fill_topology(&[0, 1, 2, 3], &a, &HashSet::new()).unwrap();
+        assert_eq!(t.len(), 2);
+        assert!(t.iter().all(|&t| area(&a, t) > 0.0));
     }
 
     #[test]
@@ -201,6 +205,7 @@ mod tests {
             "{t:?}"
         );
         let both: HashSet<_> = [(0, 2), (1, 3)].into_iter().collect();
-        assert!(fill(&[0, 1, 2, 3], &[&p], &both).is_err());
+        assert!(fill(&[0, 1, 2, 3], &[&p], &both).is_none());
+        assert!(fill_topology(&[0, 1, 2, 3], &p, &both).is_none());
     }
 }

@@ -3,6 +3,7 @@
 use bdmorph_vm::{FactorPrecision, NewtonOptions, Program, TriangleReport, VmError};
 
 pub mod blend;
+mod closure;
 pub(crate) mod engine;
 mod holes;
 pub mod path;
@@ -359,9 +360,21 @@ pub enum MorphError {
         /// The triangles closest to breaking the triangle inequality where the solver failed.
         worst: Vec<TriangleReport>,
     },
-    /// A hole cannot be filled with triangles that are counter-clockwise in every keyframe
-    /// (see [`crate::morph`]'s notes on holes).
-    #[error("{}", HoleText { piece: *.piece, vertex: *.vertex, boundary_vertices: *.boundary_vertices, keyframes })]
+    /// The outline of a free hole (see [`PieceInfo::free_holes`]) could not be closed at a
+    /// frame: its end misses its start by `gap` of its length after the closing steps.
+    #[error("frame {at}: the outline of the hole at vertex {vertex} (0-based) does not close (its ends miss by {gap:.1e} of its length)")]
+    HoleOpen {
+        /// The frame.
+        at: FrameAt,
+        /// A vertex on the hole's outline.
+        vertex: u32,
+        /// How far the outline's end misses its start, over its length.
+        gap: f64,
+    },
+    /// A hole that cannot be filled, even for the topology alone, without an edge the mesh
+    /// already has (every triangulation of its outline uses a diagonal that is an edge of the
+    /// mesh outside it: possible only when that outline is not simple in the first keyframe).
+    #[error("the hole at vertex {vertex} (0-based; piece {piece}, {boundary_vertices} vertices around it) cannot be filled for the solve: every triangulation of its outline uses an edge the mesh already has outside it")]
     HoleUnfillable {
         /// The piece (0-based, in the order of its first face).
         piece: usize,
@@ -369,9 +382,6 @@ pub enum MorphError {
         vertex: u32,
         /// Vertices on the hole's boundary.
         boundary_vertices: usize,
-        /// The keyframes where the hole's outline, taken alone, cannot be filled (it crosses
-        /// itself or runs clockwise); empty when each can be alone but no filling suits all.
-        keyframes: Vec<usize>,
     },
     /// [`MorphOptions::threads`] cannot be used.
     #[error(transparent)]
@@ -384,40 +394,6 @@ pub enum MorphError {
         /// Buffer length.
         got: usize,
     },
-}
-
-/// The message of [`MorphError::HoleUnfillable`].
-struct HoleText<'a> {
-    piece: usize,
-    vertex: u32,
-    boundary_vertices: usize,
-    keyframes: &'a [usize],
-}
-
-impl std::fmt::Display for HoleText<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "the hole at vertex {} (0-based; piece {}, {} vertices around it) cannot be filled \
-             for the solve: ",
-            self.vertex, self.piece, self.boundary_vertices
-        )?;
-        match self.keyframes {
-            [] => write!(
-                f,
-                "its outline changes too much between keyframes for one triangulation without \
-                 inner points to suit them all"
-            ),
-            [k] => write!(f, "its outline crosses itself in keyframe {k} (0-based)"),
-            ks => {
-                write!(f, "its outline crosses itself in keyframes")?;
-                for (i, k) in ks.iter().enumerate() {
-                    write!(f, "{}{k}", if i == 0 { " " } else { ", " })?;
-                }
-                write!(f, " (0-based)")
-            }
-        }
-    }
 }
 
 /// How many of a failed frame's worst triangles its message shows.

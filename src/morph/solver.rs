@@ -11,14 +11,24 @@
 //!   alone, and a frame is all of them.
 //! - **Holes.** Each hole of a piece (every boundary loop but the outer one, the loop of
 //!   largest signed area in the first keyframe) is filled with hidden triangles over its own
-//!   boundary vertices ([`holes`](super::holes)), counter-clockwise in every keyframe. The
-//!   filled piece is a disk: its metric is blended like any other (the hidden triangles'
-//!   squared lengths too), flattened and laid out, so the layout closes around the hole (no
-//!   crack) and the paper's bound holds for every triangle, hidden or not. The hidden
-//!   triangles are never drawn or written; a hidden triangle that flips (the hole's outline
-//!   crossing itself) is counted in [`FrameStats::flipped_triangles`]. Cost: `n - 2` more
-//!   triangles and `n` more unknowns per hole of `n` boundary vertices (its vertices become
-//!   interior to the filled disk), and an `O(n³)` set-up per hole.
+//!   boundary vertices ([`holes`](super::holes)), counter-clockwise in every keyframe, when
+//!   one triangulation is so. The filled piece is a disk: its metric is blended like any
+//!   other (the hidden triangles' squared lengths too), flattened and laid out, so the layout
+//!   closes around the hole (no crack) and the paper's bound holds for every triangle, hidden
+//!   or not. The hidden triangles are never drawn or written; a hidden triangle that flips
+//!   is counted in [`FrameStats::flipped_triangles`]. Cost: `n - 2` more triangles and `n`
+//!   more unknowns per hole of `n` boundary vertices (its vertices become interior to the
+//!   filled disk), and an `O(n³)` set-up per hole.
+//! - **Free holes.** A hole whose outline no triangulation suits in every keyframe (it
+//!   crosses itself in one, where a limb lies over the body, or changes too much) is a
+//!   *free hole* ([`PieceInfo::free_holes`]): filled with inert triangles for the topology
+//!   only, its vertices are unknowns whose angle sums blend the keyframes' as the metric
+//!   blends their lengths, and the outline is closed by two more unknowns per hole
+//!   ([`closure`](super::closure)). Every keyframe is reached exactly whatever its hole
+//!   looks like, and frames are continuous; the paper's bound covers the user's triangles of
+//!   the flattened metric as before, but nothing keeps the hole open between keyframes (it
+//!   may overlap itself, as it does in the keyframes). Cost: two (or more) flattenings and
+//!   two solves per free hole per frame.
 //! - **Inverted triangles.** With [`MorphOptions::allow_inverted`] a keyframe may have a few
 //!   clockwise triangles: their side lengths enter the metric as they are (it stays
 //!   Euclidean), so the frame at that keyframe is the nearest flat shape with those lengths
@@ -54,8 +64,13 @@ pub struct PieceInfo {
     /// Its holes (boundary loops besides the outer one).
     pub holes: usize,
     /// The hidden triangles that fill its holes for the solve (vertices of the mesh,
-    /// counter-clockwise in every keyframe).
+    /// counter-clockwise in every keyframe), free holes' excepted.
     pub hidden: Vec<[u32; 3]>,
+    /// Its free holes, a vertex (of the mesh) on each: holes whose outline no one filling
+    /// suits in every keyframe (it crosses itself where a limb lies over the body, or changes
+    /// too much between keyframes). They are solved as free boundaries that close by their
+    /// own turning ([`crate::morph`]'s notes on holes); keyframes are still reached exactly.
+    pub free_holes: Vec<u32>,
     /// Its anchor vertex (0-based, in the mesh): the frame places it, and the direction of
     /// its first edge, by blending the keyframes' rigid motions.
     pub anchor: u32,
@@ -219,6 +234,9 @@ impl Solver {
                 })
                 .collect();
             let holes = piece.loops.len() - 1;
+            // Free holes: their inert filling (after every other face) and their loops.
+            let mut inert: Vec<[u32; 3]> = Vec::new();
+            let mut free: Vec<Vec<u32>> = Vec::new();
             if holes > 0 {
                 let outer = (0..piece.loops.len())
                     .max_by(|&a, &b| {
@@ -239,16 +257,28 @@ impl Solver {
                     // The loop runs with the piece on its left: reversed, it runs
                     // counter-clockwise around the hole.
                     let polygon: Vec<u32> = l.iter().rev().map(|&v| local[v as usize]).collect();
-                    let hidden = holes::fill(&polygon, &views, &taken).map_err(|e| {
+                    if let Some(hidden) = holes::fill(&polygon, &views, &taken) {
+                        faces.extend(hidden);
+                        continue;
+                    }
+                    // No filling suits every keyframe: a free hole.
+                    let topology = holes::fill_topology(&polygon, views[0], &taken).ok_or(
                         MorphError::HoleUnfillable {
                             piece: p,
                             vertex: l[0],
                             boundary_vertices: l.len(),
-                            keyframes: e.keyframes,
-                        }
-                    })?;
-                    faces.extend(hidden);
+                        },
+                    )?;
+                    inert.extend(topology);
+                    free.push(l.iter().map(|&v| local[v as usize]).collect());
                 }
+            }
+            let real_faces = faces.len();
+            let mut flags = Vec::new();
+            if !inert.is_empty() {
+                flags = vec![false; real_faces];
+                flags.resize(real_faces + inert.len(), true);
+                faces.extend(inert);
             }
             let local_meshes: Vec<PlanarMesh> = local_keyframes
                 .into_iter()
@@ -257,21 +287,36 @@ impl Solver {
                     faces: faces.clone(),
                 })
                 .collect();
-            let program = bdmorph_compiler::compile(&local_meshes[0].positions, &faces)
-                // Pieces are disks with holes (checked above) and the hidden triangles add
-                // no edge the piece has: this compiles. A piece alone is numbered as the mesh.
-                .map_err(MeshError::from)?;
+            let program =
+                bdmorph_compiler::compile_with_inert(&local_meshes[0].positions, &faces, &flags)
+                    // Pieces are disks with holes (checked above) and the hidden triangles
+                    // add no edge the piece has: this compiles. A piece alone is numbered as
+                    // the mesh.
+                    .map_err(MeshError::from)?;
             let root = program.embed_root();
             let anchor = piece.vertices[root.p0 as usize];
             let anchor_edge = [anchor, piece.vertices[root.p1 as usize]];
-            let engine = Engine::new(program, &local_meshes, visible, unwrap, options)?;
+            let engine = Engine::new(
+                program,
+                &local_meshes,
+                visible,
+                real_faces,
+                &free,
+                unwrap,
+                options,
+            )?;
             infos.push(PieceInfo {
                 vertices: piece.vertices.len(),
                 faces: visible,
                 holes,
-                hidden: faces[visible..]
+                hidden: faces[visible..real_faces]
                     .iter()
                     .map(|f| f.map(|v| piece.vertices[v as usize]))
+                    .collect(),
+                free_holes: engine
+                    .free_holes()
+                    .into_iter()
+                    .map(|v| piece.vertices[v as usize])
                     .collect(),
                 anchor,
                 anchor_edge,
@@ -329,7 +374,8 @@ impl Solver {
         let n = first.positions.len();
         let root = program.embed_root();
         let anchor = root.p0;
-        let engine = Engine::new(program, keyframes, first.faces.len(), unwrap, options)?;
+        let m = first.faces.len();
+        let engine = Engine::new(program, keyframes, m, m, &[], unwrap, options)?;
         Ok(Solver {
             direct: true,
             positions: Vec::new(),
@@ -349,6 +395,7 @@ impl Solver {
                     faces: first.faces.len(),
                     holes: 0,
                     hidden: Vec::new(),
+                    free_holes: Vec::new(),
                     anchor,
                     anchor_edge: [root.p0, root.p1],
                 }],
@@ -597,6 +644,11 @@ fn to_mesh(e: MorphError, piece: &PieceSolver, hidden_base: usize) -> MorphError
             at,
             source,
             worst: reports(worst),
+        },
+        MorphError::HoleOpen { at, vertex: v, gap } => MorphError::HoleOpen {
+            at,
+            vertex: vertex(v),
+            gap,
         },
         other => other,
     }

@@ -21,6 +21,19 @@ pub enum VmError {
         /// The iteration.
         iteration: u32,
     },
+    /// [`crate::Vm::solve_hessian`] did not reach its residual even with a factor of the
+    /// current Hessian (a Hessian too ill-conditioned for it).
+    #[error("a solve with the Hessian did not converge in {iterations} iterations")]
+    SolveNotConverged {
+        /// Conjugate-gradient iterations of the last try.
+        iterations: u32,
+    },
+    /// A gradient offset is NaN or infinite.
+    #[error("the gradient offset of unknown {unknown} is not finite")]
+    OffsetNotFinite {
+        /// The unknown.
+        unknown: usize,
+    },
     /// The Hessian was not numerically positive definite.
     #[error("the Hessian is not positive definite (pivot {pivot} of the factorisation)")]
     NotPositiveDefinite {

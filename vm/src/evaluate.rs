@@ -4,13 +4,14 @@
 
 use bdmorph_isa::{operand, Op, Program};
 
-use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners, Corner};
+use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners, Corner, INERT_CORNER};
 use crate::lobachevsky::lobachevsky;
 
 const EDGE_LEN_II: u16 = Op::EdgeLenIi as u16;
 const EDGE_LEN_IB: u16 = Op::EdgeLenIb as u16;
 const EDGE_LEN_BB: u16 = Op::EdgeLenBb as u16;
 const TRIANGLE: u16 = Op::Triangle as u16;
+const TRIANGLE_INERT: u16 = Op::TriangleInert as u16;
 const VERTEX_INFO: u16 = Op::VertexInfo as u16;
 
 /// Buffers the iteration stream writes; all sized once from the program.
@@ -126,6 +127,14 @@ pub(crate) fn run<const ENERGY: bool>(program: &Program, r: Registers<'_>) -> En
                     }
                 }
                 temps[ti..ti + 3].copy_from_slice(&corners);
+                ti += 3;
+            }
+            TRIANGLE_INERT => {
+                // Its operands name edges it does not read: the corners are inert.
+                for _ in 0..3 {
+                    operand::read(code, &mut pc);
+                }
+                temps[ti..ti + 3].fill(INERT_CORNER);
                 ti += 3;
             }
             VERTEX_INFO => {

@@ -41,6 +41,10 @@ pub fn half_angle_and_cot(a: f64, b: f64, c: f64, with_angle: bool) -> [f64; 2] 
 /// `(cos h, sin h)` scaled by a factor in (0, 1], and the cotangent of the full angle.
 pub type Corner = [f64; 3];
 
+/// The corner a `TRIANGLE.INERT` writes: a half angle of 0 (direction `(1, 0)`) and a
+/// cotangent of 0, which add nothing to a vertex's angle sum or Hessian weights.
+pub const INERT_CORNER: Corner = [1.0, 0.0, 0.0];
+
 /// The three corners of a triangle with sides `l[0]`, `l[1]`, `l[2]`, corner `c` opposite
 /// side `l[(c + 1) % 3]` (the `TRIANGLE` instruction's convention).
 ///

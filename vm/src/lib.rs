@@ -99,6 +99,10 @@ pub struct Vm {
     u_saved: Vec<f64>,
     u_base: Vec<f64>,
     grad: Vec<f64>,
+    /// Added to the gradient (and `offsets . u` to the energy) after every evaluation: the
+    /// targets of vertices whose angle sum is not `2 pi` ([`Vm::set_gradient_offsets`]);
+    /// empty when there are none.
+    offsets: Vec<f64>,
     hvals: Vec<f64>,
     step: Vec<f64>,
     cg: cg::CgBuffers,
@@ -160,6 +164,7 @@ impl Vm {
             u_saved: vec![0.0; n],
             u_base: vec![0.0; n],
             grad: vec![0.0; n],
+            offsets: Vec::new(),
             hvals: vec![0.0; h.nnz()],
             step: vec![0.0; n],
             cg: cg::CgBuffers::new(n),
@@ -261,7 +266,35 @@ impl Vm {
             value: f64::NAN,
             magnitude: f64::NAN,
         };
+        for (g, o) in self.grad.iter_mut().zip(&self.offsets) {
+            *g += o;
+        }
         self.evaluated = true;
+    }
+
+    /// Sets a constant added to each unknown's gradient entry (one per unknown; an empty slice
+    /// removes them), with `offsets . u` added to the energy, so that the energy stays the
+    /// convex function whose gradient that is. An unknown's entry is `pi - (1/2) sum of its
+    /// corner angles`, which vanishes where the angles sum to `2 pi`; with an offset `o` it
+    /// vanishes where they sum to `2 pi + 2 o`: the target angle sum of a vertex on a free
+    /// boundary (a hole filled with inert triangles, whose own angles add nothing; see
+    /// `bdmorph_compiler::compile_with_inert`). The next solve starts from the current `u`.
+    pub fn set_gradient_offsets(&mut self, offsets: &[f64]) -> Result<(), VmError> {
+        if !offsets.is_empty() {
+            self.check_len("gradient offsets", self.u.len(), offsets.len())?;
+        }
+        if let Some(unknown) = offsets.iter().position(|o| !o.is_finite()) {
+            return Err(VmError::OffsetNotFinite { unknown });
+        }
+        self.evaluated = false;
+        self.offsets.clear();
+        self.offsets.extend_from_slice(offsets);
+        Ok(())
+    }
+
+    /// The gradient offsets set by [`Vm::set_gradient_offsets`] (empty when none).
+    pub fn gradient_offsets(&self) -> &[f64] {
+        &self.offsets
     }
 
     /// `scale = exp(u / 2)` per unknown (its last entry, for boundary vertices, stays 1).
@@ -299,6 +332,11 @@ impl Vm {
                 hvals: &mut self.hvals,
             },
         );
+        for ((g, o), u) in self.grad.iter_mut().zip(&self.offsets).zip(&self.u) {
+            *g += o;
+            self.energy.value += o * u;
+            self.energy.magnitude += (o * u).abs();
+        }
         self.evaluated = true;
     }
 
@@ -526,11 +564,161 @@ mod tests {
         }
     }
 
-    /// A jittered grid of `side` x `side` vertices (interior, boundary and mixed edges, every
-    /// valence), a metric that is not flat and a u that is not zero: the same bits from the
-    /// plan (in the current pool, of `threads` threads) and the interpreter.
-    fn plan_matches_interpreter(side: u32, threads: usize) {
-        assert_eq!(rayon::current_num_threads(), threads);
+    #[test]
+    fn inert_triangles_compute_the_same_bits_in_the_plan_and_add_nothing() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("pool");
+        pool.install(|| plan_matches_interpreter_with(9, 1, true));
+    }
+
+    type Faces = Vec<[u32; 3]>;
+
+    /// A 9 x 9 jittered grid with the two triangles of one middle cell inert (a hole filled for
+    /// the topology): a VM with those triangles inert, and one of the grid with the cell cut
+    /// out (for comparison), the grid's positions, and the cell's vertices.
+    fn grid_with_an_inert_cell() -> (Vm, Vec<[f64; 2]>, Faces, Vec<bool>) {
+        let side = 9u32;
+        let (a, faces) = jittered_grid(side);
+        // The cell at (4, 4): its two triangles are the last ones of that cell's pair.
+        let cell = (4 * (side - 1) + 4) as usize;
+        let mut inert = vec![false; faces.len()];
+        inert[2 * cell] = true;
+        inert[2 * cell + 1] = true;
+        let vm = Vm::new(bdmorph_compiler::compile_with_inert(&a, &faces, &inert).expect("ok"))
+            .expect("vm");
+        (vm, a, faces, inert)
+    }
+
+    #[test]
+    fn a_hole_filled_with_inert_triangles_is_a_free_boundary() {
+        let (mut vm, a, faces, inert) = grid_with_an_inert_cell();
+        assert_eq!(vm.program().embed().len(), faces.len() - 2);
+        // The ring alone (the cell cut out) has the same gradient at the hole's vertices as
+        // a free boundary's: pi minus half the angles of its own triangles.
+        let sq = vm.squared_lengths(&a).expect("a");
+        vm.set_metric(&sq).expect("metric");
+        vm.evaluate();
+        let cut: Vec<usize> = (0..faces.len()).filter(|&f| inert[f]).collect();
+        let hole: Vec<u32> = cut.iter().flat_map(|&f| faces[f]).collect();
+        for (k, &v) in vm.program().unknown_vertex().iter().enumerate() {
+            let angles: f64 = faces
+                .iter()
+                .zip(&inert)
+                .filter(|(f, &i)| !i && f.contains(&v))
+                .map(|(f, _)| {
+                    let at = f.iter().position(|&x| x == v).expect("corner");
+                    let [p, q, r] =
+                        [f[at], f[(at + 1) % 3], f[(at + 2) % 3]].map(|x| a[x as usize]);
+                    let (u, w) = ([q[0] - p[0], q[1] - p[1]], [r[0] - p[0], r[1] - p[1]]);
+                    (u[0] * w[1] - u[1] * w[0]).atan2(u[0] * w[0] + u[1] * w[1])
+                })
+                .sum();
+            let expected = std::f64::consts::PI - 0.5 * angles;
+            let g = vm.gradient()[k];
+            assert!(
+                (g - expected).abs() < 1e-12,
+                "vertex {v}: {g} vs {expected}"
+            );
+            // Flat inside, a target to meet on the hole.
+            if hole.contains(&v) {
+                assert!(g.abs() > 0.1, "vertex {v} is on the hole: {g}");
+            } else {
+                assert!(g.abs() < 1e-12, "vertex {v}: {g}");
+            }
+        }
+        // With the offsets that make this metric a solution, Newton takes no step, and the
+        // layout reproduces the grid without ever walking through the cell.
+        let offsets: Vec<f64> = vm.gradient().iter().map(|g| -g).collect();
+        vm.set_gradient_offsets(&offsets).expect("finite");
+        let report = vm.newton(&NewtonOptions::default()).expect("solved");
+        assert_eq!(report.iterations, 0);
+        let root = vm.program().embed_root();
+        let (p0, p1) = (a[root.p0 as usize], a[root.p1 as usize]);
+        let mut out = vec![[0.0; 2]; a.len()];
+        vm.embed(p0, [p1[0] - p0[0], p1[1] - p0[1]], &mut out)
+            .expect("embeds");
+        for (p, q) in out.iter().zip(&a) {
+            assert!((p[0] - q[0]).hypot(p[1] - q[1]) < 1e-12, "{p:?} vs {q:?}");
+        }
+        assert_eq!(vm.count_flipped(&out), 0);
+    }
+
+    #[test]
+    fn gradient_offsets_are_the_gradient_of_the_energy_and_the_hessian_solves() {
+        let (mut vm, a, _, _) = grid_with_an_inert_cell();
+        let b: Vec<[f64; 2]> = a
+            .iter()
+            .map(|p| [p[0] * (1.0 + 0.05 * p[1]), p[1] + 0.03 * p[0] * p[0]])
+            .collect();
+        let (sa, sb) = (
+            vm.squared_lengths(&a).unwrap(),
+            vm.squared_lengths(&b).unwrap(),
+        );
+        vm.set_metric_lerp(&sa, &sb, 0.5).unwrap();
+        let n = vm.u().len();
+        let offsets: Vec<f64> = (0..n).map(|k| 0.01 * (k as f64).cos()).collect();
+        vm.set_gradient_offsets(&offsets).unwrap();
+        assert!(matches!(
+            vm.set_gradient_offsets(&[1.0]),
+            Err(VmError::Length { .. })
+        ));
+        let mut bad = offsets.clone();
+        bad[3] = f64::NAN;
+        assert_eq!(
+            vm.set_gradient_offsets(&bad),
+            Err(VmError::OffsetNotFinite { unknown: 3 })
+        );
+        assert_eq!(
+            vm.gradient_offsets(),
+            &offsets[..],
+            "a refused set changes nothing"
+        );
+        let u: Vec<f64> = (0..n).map(|k| 0.05 * (k as f64 * 0.3).sin()).collect();
+        let energy = |vm: &mut Vm, u: &[f64]| {
+            vm.set_u(u).unwrap();
+            vm.evaluate();
+            vm.energy()
+        };
+        energy(&mut vm, &u);
+        let g = vm.gradient().to_vec();
+        let h = 1e-6;
+        for k in [0, n / 2, n - 1] {
+            let (mut up, mut down) = (u.clone(), u.clone());
+            up[k] += h;
+            down[k] -= h;
+            let central = (energy(&mut vm, &up) - energy(&mut vm, &down)) / (2.0 * h);
+            assert!(
+                (central - g[k]).abs() < 1e-6,
+                "unknown {k}: {central} vs {}",
+                g[k]
+            );
+        }
+        // The solution has the offsets' targets; a solve with its Hessian is exact.
+        vm.set_u(&u).unwrap();
+        vm.newton(&NewtonOptions::default()).expect("converges");
+        let rhs: Vec<f64> = (0..n).map(|k| (k as f64 * 0.9).sin()).collect();
+        let x = vm.solve_hessian(&rhs, 1e-13).expect("solves").to_vec();
+        let mut hx = vec![0.0; n];
+        vm.chol
+            .pattern()
+            .symmetric_product(vm.hessian_values(), &x, &mut hx);
+        let worst = hx
+            .iter()
+            .zip(&rhs)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-11, "{worst:e}");
+        vm.set_u(&u).unwrap();
+        assert_eq!(
+            vm.solve_hessian(&rhs, 1e-13).err(),
+            Some(VmError::NotEvaluated)
+        );
+    }
+
+    /// A jittered grid of `side` x `side` vertices, alternating diagonals.
+    fn jittered_grid(side: u32) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
         let mut a = Vec::new();
         for j in 0..side {
             for i in 0..side {
@@ -551,11 +739,32 @@ mod tests {
                 }
             }
         }
+        (a, faces)
+    }
+
+    fn plan_matches_interpreter(side: u32, threads: usize) {
+        plan_matches_interpreter_with(side, threads, false);
+    }
+
+    /// A jittered grid of `side` x `side` vertices (interior, boundary and mixed edges, every
+    /// valence), a metric that is not flat and a u that is not zero: the same bits from the
+    /// plan (in the current pool, of `threads` threads) and the interpreter. With `inert`,
+    /// the two triangles of a middle cell are inert.
+    fn plan_matches_interpreter_with(side: u32, threads: usize, inert: bool) {
+        assert_eq!(rayon::current_num_threads(), threads);
+        let (a, faces) = jittered_grid(side);
         let b: Vec<[f64; 2]> = a
             .iter()
             .map(|p| [p[0] * (1.0 + 0.05 * p[1]), p[1] + 0.03 * p[0] * p[0]])
             .collect();
-        let mut vm = Vm::new(bdmorph_compiler::compile(&a, &faces).expect("ok")).expect("vm");
+        let mut flags = vec![false; faces.len()];
+        if inert {
+            let cell = (side / 2 * (side - 1) + side / 2) as usize;
+            flags[2 * cell] = true;
+            flags[2 * cell + 1] = true;
+        }
+        let program = bdmorph_compiler::compile_with_inert(&a, &faces, &flags).expect("ok");
+        let mut vm = Vm::new(program).expect("vm");
         let (sa, sb) = (
             vm.squared_lengths(&a).expect("a"),
             vm.squared_lengths(&b).expect("b"),
@@ -578,6 +787,9 @@ mod tests {
         vm.grad.fill(0.0);
         vm.hvals.fill(0.0);
         vm.evaluate_with::<false>();
+        if inert {
+            assert!(vm.temps.contains(&kernel::INERT_CORNER));
+        }
         assert_eq!(planned.0, vm.len);
         assert_eq!(planned.1, vm.temps);
         assert_eq!(planned.2, vm.grad);

@@ -15,7 +15,13 @@ use std::ops::Range;
 use bdmorph_isa::{operand, Op, Program};
 use rayon::prelude::*;
 
-use crate::kernel::{half_angle_sum, half_angle_sum_fast, triangle_corners_into, Corner};
+use crate::kernel::{
+    half_angle_sum, half_angle_sum_fast, triangle_corners_into, Corner, INERT_CORNER,
+};
+
+/// Set in a triangle's first edge slot for a `TRIANGLE.INERT` (slots are below `2^31`: the
+/// compiler's indices are 32-bit and a program's edge count is far below that).
+const INERT: u32 = 1 << 31;
 
 /// Triangles from which [`Plan::run`] splits its sweeps over rayon's threads (when there
 /// are several).
@@ -29,7 +35,8 @@ pub(crate) struct Plan {
     /// Per edge slot of the stream: the indices of its two ends' scale factors, the number of
     /// unknowns standing for a boundary vertex (whose scale is 1).
     edge_scales: Vec<[u32; 2]>,
-    /// Per triangle: its three edge slots; triangle `t` writes temporaries `3t..3t + 3`.
+    /// Per triangle: its three edge slots, the first one with [`INERT`] set for an inert
+    /// triangle; triangle `t` writes temporaries `3t..3t + 3`.
     triangles: Vec<[u32; 3]>,
     /// Per unknown `k`: its corners and pairs are `vertex_start[k]..vertex_start[k + 1]`.
     vertex_start: Vec<u32>,
@@ -72,10 +79,13 @@ impl Plan {
                     plan.edge_scales.push([boundary, boundary]);
                     li += 1;
                 }
-                Op::Triangle => {
+                Op::Triangle | Op::TriangleInert => {
                     let mut e = [0u32; 3];
                     for slot in &mut e {
                         *slot = (li - operand::read(code, &mut pc) as usize) as u32;
+                    }
+                    if op == Op::TriangleInert {
+                        e[0] |= INERT;
                     }
                     plan.triangles.push(e);
                     ti += 3;
@@ -168,6 +178,10 @@ impl Plan {
     #[inline]
     fn corners_of(&self, len: &[f64], temps: &mut [Corner], triangles: &[[u32; 3]]) {
         for (out, &[e0, e1, e2]) in temps.chunks_exact_mut(3).zip(triangles) {
+            if e0 & INERT != 0 {
+                out.fill(INERT_CORNER);
+                continue;
+            }
             triangle_corners_into([len[e0 as usize], len[e1 as usize], len[e2 as usize]], out);
         }
     }
@@ -251,7 +265,12 @@ impl Plan {
             .zip(temps.chunks_exact(3))
             .zip(&self.triangles)
         {
-            let l = [dlog[e0 as usize], dlog[e1 as usize], dlog[e2 as usize]];
+            // An inert triangle's cotangents are 0: it contributes nothing.
+            let l = [
+                dlog[(e0 & !INERT) as usize],
+                dlog[e1 as usize],
+                dlog[e2 as usize],
+            ];
             let cot = [c[0][2], c[1][2], c[2][2]];
             // Corner i faces side (i + 1) % 3.
             for i in 0..3 {

@@ -12,6 +12,13 @@ const TANGENT_RELATIVE: f64 = 1e-6;
 /// quickly, a truncated solve is still a fair derivative for a predictor.
 const MAX_TANGENT_CG: u32 = 8;
 
+/// The smallest relative residual [`Vm::solve_hessian`] aims for.
+const SOLVE_RELATIVE: f64 = 1e-14;
+
+/// Conjugate-gradient iterations [`Vm::solve_hessian`] tries with a factor before it factors
+/// the current Hessian (and then again with that factor): as many as a Newton step allows.
+const SOLVE_CG: u32 = 25;
+
 /// Iterations a tangent's solve takes with a factor of the same frame (whose Hessian differs
 /// from the current one only by the last Newton step).
 const FRESH_TANGENT_CG: f64 = 2.0;
@@ -104,6 +111,53 @@ impl Vm {
             converged: outcome.converged,
             factorized,
         })
+    }
+
+    /// Solves `H x = rhs` for the Hessian of the last evaluation (one value of `rhs` per
+    /// unknown) to a residual below `relative` times that of `x = 0` (at least `1e-14`):
+    /// conjugate gradients preconditioned by a factor of the last solve's Hessians, after
+    /// factoring the current Hessian when there is none (the last factor is older than the
+    /// last [`Vm::newton`]) or when the one there does not reach the residual within the
+    /// iterations a Newton step would give it. This is what the derivative of a
+    /// solution with respect to a parameter of its gradient takes (`du/dp = -H^-1 dg/dp`).
+    /// Must follow an evaluation at the current `u` and metric, as a successful
+    /// [`Vm::newton`] leaves them (fails with [`VmError::NotEvaluated`] otherwise). Uses the
+    /// tangent's buffer (so [`Vm::tangent_values`] afterwards holds `x`) and leaves `u`, the
+    /// metric, the gradient and the Hessian as they were. Allocates nothing.
+    pub fn solve_hessian(&mut self, rhs: &[f64], relative: f64) -> Result<&[f64], VmError> {
+        let relative = if relative.is_nan() {
+            SOLVE_RELATIVE
+        } else {
+            relative.max(SOLVE_RELATIVE)
+        };
+        self.check_len("right-hand side", self.u.len(), rhs.len())?;
+        if !self.evaluated {
+            return Err(VmError::NotEvaluated);
+        }
+        for (d, r) in self.dgrad.iter_mut().zip(rhs) {
+            *d = -r;
+        }
+        // A factor of an earlier solve would take many iterations to the accuracy asked for:
+        // one of this solve's Hessians takes one or two.
+        let mut fresh = false;
+        if !(self.factor_ready && self.factor_current) {
+            self.factorize()?;
+            self.factor_current = true;
+            fresh = true;
+        }
+        let mut outcome = self.pcg(false, relative, SOLVE_CG, None);
+        if !outcome.converged && !fresh {
+            // A stale factor: the current Hessian's converges in a step or two.
+            self.factorize()?;
+            self.factor_current = true;
+            outcome = self.pcg(false, relative, SOLVE_CG, None);
+        }
+        if !outcome.converged {
+            return Err(VmError::SolveNotConverged {
+                iterations: outcome.iterations,
+            });
+        }
+        Ok(&self.tangent)
     }
 
     /// The tangent of the last successful [`Vm::tangent`], one value per unknown.

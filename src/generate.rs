@@ -434,6 +434,21 @@ fn rotate_about(p: [f64; 2], pivot: [f64; 2], angle: f64) -> [f64; 2] {
     [pivot[0] + c * x - s * y, pivot[1] + s * x + c * y]
 }
 
+/// [`figure`] with its right arm raised by `angle` radians about the shoulder and nothing else
+/// moved: the arm's rotation is blended in smoothly from the shoulder outwards (the weight of
+/// [`wave`]'s arm), so the map stays smooth, and every point left of `x = 0.65` or below
+/// `y = 0.6` keeps its place.
+pub fn raise_arm(mesh: &PlanarMesh, angle: f64) -> PlanarMesh {
+    map(mesh, |p| {
+        let arm = smoothstep(0.65, 1.25, p[0]) * smoothstep(0.6, 1.0, p[1]);
+        if arm > 0.0 {
+            rotate_about(p, [0.55, 1.35], angle * arm)
+        } else {
+            p
+        }
+    })
+}
+
 /// A waving pose of [`figure`]: the right arm raised, the left lowered, the legs apart and the
 /// head tilted, each by a rotation blended in smoothly along the limb (`amount = 1` for the
 /// full pose). For meshes of the figure's outline only.

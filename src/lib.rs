@@ -85,7 +85,7 @@ pub use blend::Blend;
 pub use io::SurfaceMesh;
 pub use located::{Located, MeshFile};
 pub use mesh::{MeshError, PlanarMesh};
-pub use morph::{Frame, FrameAt, FrameStats, Morph, MorphError, MorphOptions};
+pub use morph::{Frame, FrameAt, FrameStats, Morph, MorphError, MorphOptions, Placement};
 pub use param::messages::Spelling;
 #[allow(deprecated)]
 pub use path::Path;

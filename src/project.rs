@@ -99,6 +99,12 @@ pub struct Project {
     /// [`crate::parts`]). `None`: no joints.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joints: Option<Vec<[u32; 2]>>,
+    /// How the animation's frames are placed: `"fit"` (by the rigid motion that best fits the
+    /// keyframes, so that parts that hold still between keyframes hold still in between;
+    /// what [`Project::new`] sets) or `"anchor"` (by a vertex and an edge, as projects saved
+    /// without this field play). See [`crate::Placement`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub placement: Option<String>,
 }
 
 /// A part of a character: a layer's mesh within the project's.
@@ -527,7 +533,18 @@ impl Project {
             stiffness: None,
             parts: None,
             joints: None,
+            placement: Some(crate::Placement::Fit.to_string()),
         }
+    }
+
+    /// How the animation's frames are placed: [`Project::placement`], anchor when absent.
+    ///
+    /// # Errors
+    /// A name that is neither `fit` nor `anchor`, in words.
+    pub fn placement(&self) -> Result<crate::Placement, String> {
+        self.placement
+            .as_deref()
+            .map_or(Ok(crate::Placement::Anchor), str::parse)
     }
 
     /// The rest mesh.
@@ -588,6 +605,9 @@ impl Project {
     /// Checks everything a damaged file could get wrong.
     pub fn check(&self) -> Result<(), ProjectError> {
         let damaged = |why: String| Err(ProjectError::Damaged(why));
+        if let Err(e) = self.placement() {
+            return damaged(e);
+        }
         let n = self.mesh.positions.len();
         let rest = self.rest();
         if let Err(e) = rest.validate() {
@@ -688,10 +708,15 @@ pub fn path_of(
         .iter()
         .map(|k| k.easing.parse().unwrap_or(Easing::Linear))
         .collect();
+    let placement = doc.placement().unwrap_or_default();
     let options = PathOptions::default()
         .with_durations(durations)
         .with_easings(easings)
-        .with_morph(MorphOptions::default().with_allow_inverted(true));
+        .with_morph(
+            MorphOptions::default()
+                .with_allow_inverted(true)
+                .with_placement(placement),
+        );
     crate::KeyframePath::with_options(meshes, options)
 }
 

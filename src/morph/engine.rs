@@ -14,6 +14,7 @@ use bdmorph_vm::{NewtonOptions, Program, VmError};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
 use crate::morph::closure::{Closure, ClosureError, ClosureReport};
+use crate::morph::placement::{Fit, Placement};
 use crate::morph::predictor::{predictor_weights, useful_nodes, NODES};
 
 use crate::morph::{FrameAt, FrameStats, MorphError, MorphOptions};
@@ -118,6 +119,8 @@ pub(crate) struct Engine {
     /// Faces that carry a metric (the user's, then hidden ones filling holes); the rest are
     /// inert, filling free holes.
     real_faces: usize,
+    /// [`Placement::Fit`]'s data; `None` with [`Placement::Anchor`].
+    fit: Option<Fit>,
 }
 
 impl std::fmt::Debug for Engine {
@@ -244,6 +247,12 @@ impl Engine {
             Some(Closure::new(&mut vm, free, &squared, |a, b| slots.get(a, b)).map_err(solver)?)
         };
         let n_closing = closure.as_ref().map_or(0, |c| c.a.len());
+        let fit = (options.placement == Placement::Fit).then(|| {
+            Fit::new(
+                keyframes.iter().map(|k| k.positions.clone()).collect(),
+                &faces[..visible.min(faces.len())],
+            )
+        });
         let n_unknowns = vm.u().len();
         let n_vertices = keyframes[0].positions.len();
         let n_slots = squared[0].len();
@@ -279,6 +288,7 @@ impl Engine {
             closure,
             a_start: vec![0.0; n_closing],
             real_faces,
+            fit,
             vm,
         })
     }
@@ -459,6 +469,9 @@ impl Engine {
         self.vm
             .embed(anchor, [c, s], out)
             .map_err(|e| solver(e, weights))?;
+        if let Some(fit) = &mut self.fit {
+            fit.place(weights, line.map(|l| (l.from, l.to)), out);
+        }
         self.remember(line);
         let max_conformal_distortion = self.rest.distortion_into(out, &mut self.distortion);
         Ok(FrameStats {

@@ -7,9 +7,11 @@ mod closure;
 pub(crate) mod engine;
 mod holes;
 pub mod path;
+mod placement;
 mod predictor;
 mod solver;
 
+pub use placement::Placement;
 pub use solver::{PieceInfo, Structure};
 
 use crate::morph::engine::{Line, Unwrap};
@@ -55,6 +57,11 @@ pub struct MorphOptions {
     /// per core; `Some(n)` for a pool of its own of `n` threads (1 to
     /// [`crate::threads::MAX_THREADS`]), in which it is built and its frames are solved.
     pub threads: Option<usize>,
+    /// How each piece of a frame is placed (default [`Placement::Anchor`], the original
+    /// program's: by an anchor vertex and edge). [`Placement::Fit`] places it by the rigid
+    /// motion that best fits the keyframes, so that parts that hold still between keyframes
+    /// hold still in between; keyframes are reached exactly either way.
+    pub placement: Placement,
 }
 
 impl Default for MorphOptions {
@@ -67,6 +74,7 @@ impl Default for MorphOptions {
             factor_precision: FactorPrecision::Auto,
             allow_inverted: false,
             threads: None,
+            placement: Placement::Anchor,
         }
     }
 }
@@ -95,6 +103,24 @@ impl MorphOptions {
     /// Accepts keyframes with a few inverted triangles ([`MorphOptions::allow_inverted`]).
     pub fn with_allow_inverted(mut self, allow_inverted: bool) -> Self {
         self.allow_inverted = allow_inverted;
+        self
+    }
+    /// Sets how frames are placed ([`MorphOptions::placement`]).
+    ///
+    /// ```
+    /// use bdmorph::{generate, Morph, MorphOptions, Placement};
+    /// let rest = generate::figure(0.01);
+    /// let wave = generate::wave(&rest, 1.0);
+    /// let options = MorphOptions::default().with_placement(Placement::Fit);
+    /// let mut morph = Morph::new(&rest, &wave, options)?;
+    /// let end = morph.frame(1.0)?;
+    /// let miss = end.positions.iter().zip(&wave.positions)
+    ///     .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1])).fold(0.0, f64::max);
+    /// assert!(miss < 1e-9);
+    /// # Ok::<(), bdmorph::MorphError>(())
+    /// ```
+    pub fn with_placement(mut self, placement: Placement) -> Self {
+        self.placement = placement;
         self
     }
     /// Sets the iteration limit of Newton's method.

@@ -322,9 +322,11 @@ pub fn annulus(max_area: f64) -> PlanarMesh {
 /// A figure with a hand on its hip: a body (1 wide, 4 tall, from the origin up) with a head,
 /// and an arm (0.4 wide) from the shoulder (`y` 3 to 3.4) down to the hand, which rests on
 /// the hip (`y` 0.6 to 1): the arm and the body enclose a hole (`x` 1 to 1.6, `y` 1 to 3),
-/// as in a picture of such a figure meshed. Outlines are sampled every 0.05; triangles of area
-/// at most `max_area` (`0.005` gives about 1,000 vertices). See [`arm_across`].
+/// as in a picture of such a figure meshed. Outlines are sampled every 0.05 (finer for
+/// `max_area` below 0.005); triangles of area at most `max_area` (`0.005` gives about 1,300
+/// vertices, `0.0006` about 9,000). See [`arm_across`].
 pub fn hand_on_hip(max_area: f64) -> PlanarMesh {
+    let step = (0.7 * max_area.max(1e-6).sqrt()).min(0.05);
     // The head: a circle on the neck (the body's top, `x` from `0.5 - w` to `0.5 + w`).
     let (centre, r) = ([0.5, 4.45], 0.5);
     let w = (r * r - (4.0f64 - centre[1]).powi(2)).sqrt();
@@ -339,16 +341,16 @@ pub fn hand_on_hip(max_area: f64) -> PlanarMesh {
             [1.0, 4.0],
             [0.5 + w, 4.0],
         ],
-        0.05,
+        step,
     );
     let from = (4.0 - centre[1]).atan2(w);
     let sweep = TAU - 2.0 * (std::f64::consts::FRAC_PI_2 + from);
-    let steps = 64;
+    let steps = (3.2 / step).ceil().max(64.0) as u32;
     for i in 1..steps {
         let a = from + sweep * f64::from(i) / f64::from(steps);
         outline.push([centre[0] + r * a.cos(), centre[1] + r * a.sin()]);
     }
-    let mut back = polyline(&[[0.5 - w, 4.0], [0.0, 4.0], [0.0, 0.0]], 0.05);
+    let mut back = polyline(&[[0.5 - w, 4.0], [0.0, 4.0], [0.0, 0.0]], step);
     back.pop();
     outline.extend(back);
     let mut hole = polyline(

@@ -246,3 +246,19 @@ fn filled_and_free_holes_live_in_one_piece() {
     assert!(max_distance(&frames[40], &over.positions) / s < 1e-9);
     no_pop(&frames, s);
 }
+
+#[test]
+fn the_figure_with_a_hand_on_its_hip_scales_and_its_arm_crosses_the_body() {
+    for (area, at_least) in [(0.005, 1_000), (0.0006, 9_000)] {
+        let figure = generate::hand_on_hip(area);
+        figure.validate().expect("valid");
+        let n = figure.positions.len();
+        assert!(n >= at_least, "{area}: {n} vertices");
+        eprintln!("hand_on_hip({area}): {n} vertices");
+        let pieces = bdmorph::pieces(n, &figure.faces).expect("pieces");
+        assert_eq!((pieces.len(), pieces[0].loops.len()), (1, 2));
+        generate::arm_across(&figure, 1.2)
+            .validate()
+            .expect("no flip");
+    }
+}

@@ -62,8 +62,15 @@ fn legs_that_hold_still_while_the_body_leans_hold_still_in_between() {
         for t in [0.0, 1.0] {
             let f = morph.frame(t).expect("frame");
             let key = if t == 0.0 { &rest } else { &raised };
-            let (miss, _) = drift(f.positions, &key.positions, &(0..key.positions.len()).collect::<Vec<_>>());
-            assert!(miss < 1e-9 * s, "{placement}: t = {t} misses the keyframe by {miss:e}");
+            let (miss, _) = drift(
+                f.positions,
+                &key.positions,
+                &(0..key.positions.len()).collect::<Vec<_>>(),
+            );
+            assert!(
+                miss < 1e-9 * s,
+                "{placement}: t = {t} misses the keyframe by {miss:e}"
+            );
         }
         for k in 1..10 {
             let t = f64::from(k) / 10.0;
@@ -73,7 +80,10 @@ fn legs_that_hold_still_while_the_body_leans_hold_still_in_between() {
             worst[i] = worst[i].max(max / s);
         }
     }
-    eprintln!("still part's largest drift over the figure's size: anchor {:.2e}, fit {:.2e}", worst[0], worst[1]);
+    eprintln!(
+        "still part's largest drift over the figure's size: anchor {:.2e}, fit {:.2e}",
+        worst[0], worst[1]
+    );
     // The fit holds the legs where they stand, the anchor lets them slide.
     assert!(worst[1] < 0.3 * worst[0], "{worst:?}");
     assert!(worst[1] < 1e-2, "{worst:?}");
@@ -88,8 +98,8 @@ fn fit_placement_reaches_every_keyframe_of_a_path_and_is_continuous() {
         generate::wave(&rest, 1.0),
         generate::raise_arm(&rest, -0.4),
     ];
-    let options = PathOptions::default()
-        .with_morph(MorphOptions::default().with_placement(Placement::Fit));
+    let options =
+        PathOptions::default().with_morph(MorphOptions::default().with_placement(Placement::Fit));
     let mut path = KeyframePath::with_options(&keys, options).expect("path");
     let s = size(&rest.positions);
     let all: Vec<usize> = (0..rest.positions.len()).collect();

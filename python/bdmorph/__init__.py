@@ -235,6 +235,12 @@ def _on_error(on_error) -> str:
     return on_error
 
 
+def _placement(placement) -> str:
+    if placement not in ("anchor", "fit"):
+        raise MorphError(f"placement must be 'anchor' or 'fit', not {placement!r}")
+    return placement
+
+
 def _threads(threads) -> Optional[int]:
     if threads is None:
         return None
@@ -263,7 +269,10 @@ class Morph:
     (default 50), ``allow_inverted`` (accept a few clockwise triangles in the keyframes),
     ``warm_start`` (default True), ``threads`` (default None: one per core; a mesh from about
     6K vertices splits each frame over them; 1 is the one-thread engine; the same count gives
-    the same bits, another agrees within the solver's tolerance).
+    the same bits, another agrees within the solver's tolerance), ``placement`` (``"anchor"``,
+    the default: each frame placed by a vertex and an edge; ``"fit"``: by the rigid motion
+    that best fits the keyframes, so that parts that hold still between them hold still in
+    between; the command line's ``--placement``).
 
     >>> import numpy as np, bdmorph
     >>> V0 = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], dtype=float)
@@ -278,11 +287,13 @@ class Morph:
 
     def __init__(self, V0, V1, F, *, tolerance: Optional[float] = None,
                  max_iterations: Optional[int] = None, allow_inverted: bool = False,
-                 warm_start: bool = True, threads: Optional[int] = None):
+                 warm_start: bool = True, threads: Optional[int] = None,
+                 placement: str = "anchor"):
         a, b = _points(V0, "V0"), _points(V1, "V1")
         _same_counts([("V0", a), ("V1", b)])
         self._m = _native.Morph(a, b, _faces(F), *_morph_options(tolerance, max_iterations),
-                                allow_inverted, warm_start, _threads(threads))
+                                allow_inverted, warm_start, _threads(threads),
+                                _placement(placement))
         self._failures: List[FrameFailure] = []
 
     def frame(self, t: float) -> np.ndarray:
@@ -358,10 +369,11 @@ class Blend:
 
     def __init__(self, keyframes: Sequence, F, *, tolerance: Optional[float] = None,
                  max_iterations: Optional[int] = None, allow_inverted: bool = False,
-                 warm_start: bool = True, threads: Optional[int] = None):
+                 warm_start: bool = True, threads: Optional[int] = None,
+                 placement: str = "anchor"):
         self._b = _native.Blend(_keyframes(keyframes), _faces(F),
                                 *_morph_options(tolerance, max_iterations), allow_inverted,
-                                warm_start, _threads(threads))
+                                warm_start, _threads(threads), _placement(placement))
         self._failures: List[FrameFailure] = []
 
     def frame(self, weights) -> np.ndarray:
@@ -427,7 +439,7 @@ class Path:
                  easings: Union[None, str, Sequence[str]] = None,
                  tolerance: Optional[float] = None, max_iterations: Optional[int] = None,
                  allow_inverted: bool = False, warm_start: bool = True,
-                 threads: Optional[int] = None):
+                 threads: Optional[int] = None, placement: str = "anchor"):
         keys = _keyframes(keyframes)
         if isinstance(easings, str):
             easings = [easings] * (len(keys) - 1)
@@ -441,7 +453,7 @@ class Path:
             easings = [str(e) for e in easings]
         self._p = _native.Path(keys, _faces(F), durations, easings,
                                *_morph_options(tolerance, max_iterations), allow_inverted,
-                               warm_start, _threads(threads))
+                               warm_start, _threads(threads), _placement(placement))
         self._failures: List[FrameFailure] = []
 
     def frame(self, t: float) -> np.ndarray:

@@ -17,10 +17,13 @@ fn options(
     max_iterations: Option<u32>,
     allow_inverted: bool,
     warm_start: bool,
+    placement: &str,
 ) -> PyResult<MorphOptions> {
+    let placement: bdmorph::Placement = placement.parse().map_err(errors::MorphError::new_err)?;
     let mut o = MorphOptions::default()
         .with_allow_inverted(allow_inverted)
-        .with_warm_start(warm_start);
+        .with_warm_start(warm_start)
+        .with_placement(placement);
     if let Some(t) = tolerance {
         if !(t.is_finite() && t > 0.0) {
             return Err(errors::MorphError::new_err(format!(
@@ -177,7 +180,7 @@ pub struct Morph {
 #[pymethods]
 impl Morph {
     #[new]
-    #[pyo3(signature = (v0, v1, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None))]
+    #[pyo3(signature = (v0, v1, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None, placement="anchor"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -189,8 +192,15 @@ impl Morph {
         allow_inverted: bool,
         warm_start: bool,
         threads: Option<usize>,
+        placement: &str,
     ) -> PyResult<Morph> {
-        let options = options(tolerance, max_iterations, allow_inverted, warm_start)?;
+        let options = options(
+            tolerance,
+            max_iterations,
+            allow_inverted,
+            warm_start,
+            placement,
+        )?;
         same_counts(&[("V0", &v0), ("V1", &v1)])?;
         let source = arrays::planar(&v0, &f, "V0", allow_inverted)?;
         let target = arrays::planar(&v1, &f, "V1", allow_inverted)?;
@@ -288,7 +298,7 @@ pub struct Blend {
 #[pymethods]
 impl Blend {
     #[new]
-    #[pyo3(signature = (keyframes, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None))]
+    #[pyo3(signature = (keyframes, f, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None, placement="anchor"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -299,8 +309,15 @@ impl Blend {
         allow_inverted: bool,
         warm_start: bool,
         threads: Option<usize>,
+        placement: &str,
     ) -> PyResult<Blend> {
-        let options = options(tolerance, max_iterations, allow_inverted, warm_start)?;
+        let options = options(
+            tolerance,
+            max_iterations,
+            allow_inverted,
+            warm_start,
+            placement,
+        )?;
         let keys = self::keyframes(&keyframes, &f, allow_inverted)?;
         let n = keys.first().map_or(0, |k| k.positions.len());
         let k = keys.len();
@@ -405,7 +422,7 @@ pub struct Path {
 #[pymethods]
 impl Path {
     #[new]
-    #[pyo3(signature = (keyframes, f, durations=None, easings=None, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None))]
+    #[pyo3(signature = (keyframes, f, durations=None, easings=None, tolerance=None, max_iterations=None, allow_inverted=false, warm_start=true, threads=None, placement="anchor"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -418,8 +435,15 @@ impl Path {
         allow_inverted: bool,
         warm_start: bool,
         threads: Option<usize>,
+        placement: &str,
     ) -> PyResult<Path> {
-        let morph = options(tolerance, max_iterations, allow_inverted, warm_start)?;
+        let morph = options(
+            tolerance,
+            max_iterations,
+            allow_inverted,
+            warm_start,
+            placement,
+        )?;
         let keys = self::keyframes(&keyframes, &f, allow_inverted)?;
         let n = keys.first().map_or(0, |k| k.positions.len());
         let mut options = PathOptions::default().with_morph(morph);

@@ -33,6 +33,25 @@ def test_frames_equal_the_command_lines(tmp_path, cli, strip):
         assert np.abs(ours[i] - theirs[:, :2]).max() <= 1e-12 * size_of(V0), i
 
 
+def test_fit_placement_equals_the_command_lines(tmp_path, cli, strip):
+    V0, V1, V2, F = strip
+    for name, V in [("a", V0), ("b", V1), ("c", V2)]:
+        bdmorph.write_obj(tmp_path / f"{name}.obj", V, F)
+    cli("morph", *(tmp_path / f"{n}.obj" for n in "abc"), "--frames", 9, "--placement", "fit",
+        "-o", tmp_path / "out")
+    path = bdmorph.Path([V0, V1, V2], F, placement="fit")
+    anchored = bdmorph.Path([V0, V1, V2], F)
+    for i, t in enumerate(np.linspace(0, 1, 9)):
+        theirs, _ = bdmorph.read_mesh(tmp_path / "out" / f"frame_{i:04}.obj")
+        assert np.abs(path.frame(t) - theirs[:, :2]).max() <= 1e-12 * size_of(V0)
+        # Keyframes are reached either way; in between the placements differ.
+        if i % 4 == 0:
+            assert np.abs(anchored.frame(t) - theirs[:, :2]).max() <= 1e-9 * size_of(V0)
+    assert np.abs(bdmorph.Morph(V0, V1, F, placement="fit").frame(1.0) - V1).max() <= 1e-9
+    with pytest.raises(bdmorph.MorphError, match="placement must be 'anchor' or 'fit'"):
+        bdmorph.Blend([V0, V1], F, placement="wobble")
+
+
 def test_extrapolation_equals_the_command_lines(tmp_path, cli, strip):
     V0, V1, _, F = strip
     bdmorph.write_obj(tmp_path / "a.obj", V0, F)

@@ -692,8 +692,8 @@ impl Project {
 }
 
 /// The path through `meshes` (the keyframes' poses, with `doc`'s triangles) with the
-/// document's times and easings; keyframes with flipped triangles morph as the command line's
-/// `--allow-inverted` does.
+/// document's times and easings and its placement; keyframes with flipped triangles are
+/// accepted (`--allow-inverted`) and reached exactly ([`MorphOptions::reach_inverted`]).
 ///
 /// # Errors
 /// The path's, when the keyframes cannot be morphed.
@@ -715,6 +715,7 @@ pub fn path_of(
         .with_morph(
             MorphOptions::default()
                 .with_allow_inverted(true)
+                .with_reach_inverted(true)
                 .with_placement(placement),
         );
     crate::KeyframePath::with_options(meshes, options)

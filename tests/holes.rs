@@ -340,6 +340,53 @@ fn a_keyframe_with_inverted_triangles_is_refused_by_default_and_morphs_when_allo
     assert!(max_distance(&start, &a.positions) < 1e-9 * a.diameter());
 }
 
+#[test]
+fn a_folded_keyframe_is_reached_exactly_when_asked_and_frames_stay_continuous() {
+    let a = generate::grid(8, 8, 0.0);
+    let (b, _, folded_faces) = folded(&a);
+    let c = generate::bend(&a, -0.3);
+    let options = MorphOptions::default()
+        .with_allow_inverted(true)
+        .with_reach_inverted(true);
+    let path_options = bdmorph::PathOptions::default().with_morph(options);
+    let mut path =
+        bdmorph::KeyframePath::with_options(&[a.clone(), b.clone(), c.clone()], path_options)
+            .expect("path");
+    let size = a.diameter();
+    for (t, key) in [(0.0, &a), (0.5, &b), (1.0, &c)] {
+        let f = path.frame(t).expect("frame");
+        let miss = max_distance(f.positions, &key.positions);
+        assert!(miss < 1e-9 * size, "t = {t}: {miss:e}");
+        // The statistics are those of what is returned: the fold, at the folded keyframe.
+        let expected = if t == 0.5 { folded_faces.len() } else { 0 };
+        assert_eq!(f.stats.flipped_triangles, expected, "t = {t}");
+    }
+    // Continuous through the folded keyframe: no step is much larger than its neighbours.
+    let frames: Vec<Vec<[f64; 2]>> = (0..=100)
+        .map(|i| {
+            path.frame(f64::from(i) / 100.0)
+                .expect("frame")
+                .positions
+                .to_vec()
+        })
+        .collect();
+    let steps: Vec<f64> = frames
+        .windows(2)
+        .map(|w| max_distance(&w[0], &w[1]))
+        .collect();
+    let median = {
+        let mut s = steps.clone();
+        s.sort_by(f64::total_cmp);
+        s[s.len() / 2]
+    };
+    assert!(steps.iter().all(|&s| s < 5.0 * median), "{steps:?}");
+    // Without it, the folded keyframe is the flat shape nearest it, as before.
+    let mut plain = Morph::new(&a, &b, options.with_reach_inverted(false)).expect("morph");
+    let end = plain.frame(1.0).expect("end");
+    assert!(max_distance(end.positions, &b.positions) > 1e-3 * size);
+    assert_eq!(end.stats.flipped_triangles, 0);
+}
+
 // The command line.
 
 fn scratch(name: &str) -> std::path::PathBuf {

@@ -57,6 +57,14 @@ pub struct MorphOptions {
     /// per core; `Some(n)` for a pool of its own of `n` threads (1 to
     /// [`crate::threads::MAX_THREADS`]), in which it is built and its frames are solved.
     pub threads: Option<usize>,
+    /// With [`MorphOptions::allow_inverted`], reach keyframes with inverted triangles exactly
+    /// too (default false: at such a keyframe the frame is the flat shape nearest its side
+    /// lengths). The difference between each such keyframe and the frame solved at it is
+    /// added to every frame, weighted by that keyframe's weight: frames stay continuous, every
+    /// keyframe is met to round-off, and frames near a folded keyframe fold as it does (their
+    /// statistics count the user's flipped triangles in the positions returned). The studio
+    /// plays its projects so: what the animator posed is what every export shows.
+    pub reach_inverted: bool,
     /// How each piece of a frame is placed (default [`Placement::Anchor`], the original
     /// program's: by an anchor vertex and edge). [`Placement::Fit`] places it by the rigid
     /// motion that best fits the keyframes, so that parts that hold still between keyframes
@@ -74,6 +82,7 @@ impl Default for MorphOptions {
             factor_precision: FactorPrecision::Auto,
             allow_inverted: false,
             threads: None,
+            reach_inverted: false,
             placement: Placement::Anchor,
         }
     }
@@ -103,6 +112,11 @@ impl MorphOptions {
     /// Accepts keyframes with a few inverted triangles ([`MorphOptions::allow_inverted`]).
     pub fn with_allow_inverted(mut self, allow_inverted: bool) -> Self {
         self.allow_inverted = allow_inverted;
+        self
+    }
+    /// Reaches keyframes with inverted triangles exactly ([`MorphOptions::reach_inverted`]).
+    pub fn with_reach_inverted(mut self, reach_inverted: bool) -> Self {
+        self.reach_inverted = reach_inverted;
         self
     }
     /// Sets how frames are placed ([`MorphOptions::placement`]).

@@ -39,6 +39,7 @@ use std::collections::HashSet;
 use bdmorph_compiler::CompileError;
 use bdmorph_vm::{FactorPrecision, Program, TriangleReport};
 
+use crate::distortion::RestShape;
 use crate::mesh::{MeshError, PlanarMesh};
 use crate::morph::engine::{Engine, Line, Unwrap};
 use crate::morph::holes;
@@ -101,6 +102,11 @@ pub(crate) struct Solver {
     structure: Structure,
     /// Where it was built and its frames are solved.
     pool: crate::threads::Pool,
+    /// Keyframes reached by a correction ([`MorphOptions::reach_inverted`]): each one's index
+    /// and its difference from the frame solved at it, per vertex.
+    reach: Vec<(usize, Vec<[f64; 2]>)>,
+    /// The first keyframe's shape, to measure corrected frames.
+    reach_shape: Option<RestShape>,
 }
 
 impl std::fmt::Debug for Solver {
@@ -187,9 +193,56 @@ impl Solver {
         options: MorphOptions,
     ) -> Result<Solver, MorphError> {
         let pool = crate::threads::Pool::new(options.threads)?;
-        let mut solver = pool.run(|| Solver::new_here(keyframes, unwrap, options))?;
+        let mut solver = pool.run(|| {
+            let mut solver = Solver::new_here(keyframes, unwrap, options)?;
+            solver.prepare_reach(keyframes, options)?;
+            Ok::<_, MorphError>(solver)
+        })?;
         solver.pool = pool;
         Ok(solver)
+    }
+
+    /// With [`MorphOptions::reach_inverted`]: solves each keyframe with inverted triangles
+    /// once and keeps its difference from the keyframe, which every frame then adds by that
+    /// keyframe's weight.
+    fn prepare_reach(
+        &mut self,
+        keyframes: &[PlanarMesh],
+        options: MorphOptions,
+    ) -> Result<(), MorphError> {
+        if !(options.allow_inverted && options.reach_inverted) {
+            return Ok(());
+        }
+        let folded: Vec<usize> = (0..keyframes.len())
+            .filter(|&k| !self.structure.inverted[k].is_empty())
+            .collect();
+        if folded.is_empty() {
+            return Ok(());
+        }
+        // Corrected frames are written through the general path (its buffers).
+        self.direct = false;
+        for p in &mut self.pieces {
+            p.out.resize(p.vertices.len(), [0.0; 2]);
+        }
+        self.positions = vec![[0.0; 2]; self.n_vertices];
+        self.distortion = vec![1.0; self.faces.len()];
+        self.reach_shape = Some(RestShape::new(&keyframes[0].positions, &self.faces));
+        let mut weights = vec![0.0; keyframes.len()];
+        let mut out = vec![[0.0; 2]; self.n_vertices];
+        for k in folded {
+            weights.fill(0.0);
+            weights[k] = 1.0;
+            self.frame_into_here(&weights, None, None, &mut out)?;
+            let miss = keyframes[k]
+                .positions
+                .iter()
+                .zip(&out)
+                .map(|(p, q)| [p[0] - q[0], p[1] - q[1]])
+                .collect();
+            self.reach.push((k, miss));
+        }
+        self.forget_solutions();
+        Ok(())
     }
 
     fn new_here(
@@ -341,6 +394,8 @@ impl Solver {
                 inverted,
             },
             pool: crate::threads::Pool::default(),
+            reach: Vec::new(),
+            reach_shape: None,
         })
     }
 
@@ -356,8 +411,11 @@ impl Solver {
         // looks up the face's edges ([`MorphError::ProgramMismatch`]).
         let pool = crate::threads::Pool::new(options.threads)?;
         let inverted = check(keyframes, options.allow_inverted)?;
-        let mut solver =
-            pool.run(|| Solver::disk(program, keyframes, inverted, unwrap, options))?;
+        let mut solver = pool.run(|| {
+            let mut solver = Solver::disk(program, keyframes, inverted, unwrap, options)?;
+            solver.prepare_reach(keyframes, options)?;
+            Ok::<_, MorphError>(solver)
+        })?;
         solver.pool = pool;
         Ok(solver)
     }
@@ -389,6 +447,8 @@ impl Solver {
                 out: Vec::new(),
             }],
             pool: crate::threads::Pool::default(),
+            reach: Vec::new(),
+            reach_shape: None,
             structure: Structure {
                 pieces: vec![PieceInfo {
                     vertices: n,
@@ -555,6 +615,22 @@ impl Solver {
             expected: self.n_vertices,
             got: out.len(),
         })?;
+        let mut corrected = false;
+        for (k, miss) in &self.reach {
+            let w = weights[*k];
+            if w != 0.0 {
+                corrected = true;
+                for (p, d) in out.iter_mut().zip(miss) {
+                    p[0] += w * d[0];
+                    p[1] += w * d[1];
+                }
+            }
+        }
+        if let (true, Some(shape)) = (corrected, &self.reach_shape) {
+            // Measured on what is returned: the user's triangles as corrected.
+            stats.max_conformal_distortion = shape.distortion_into(out, &mut self.distortion);
+            stats.flipped_triangles = self.distortion.iter().filter(|d| d.is_infinite()).count();
+        }
         stats.seconds = started.elapsed().as_secs_f64();
         Ok(stats)
     }

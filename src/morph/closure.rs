@@ -38,9 +38,11 @@ const MAX_STEPS: u32 = 30;
 /// The outline closes when its end misses its start by at most this fraction of its length.
 const CLOSED: f64 = 1e-11;
 
-/// Relative residual of the solves that give the Jacobian of the misses: its error then
-/// shrinks a miss by that factor beyond what Newton's quadratic convergence does.
-const SENSITIVITY_RESIDUAL: f64 = 1e-10;
+/// Relative residual of the solves that give the Jacobian of the misses (and the change of `u`
+/// that goes with a step): an error of that size in the Jacobian leaves a miss that size
+/// times the last one, beyond Newton's quadratic term (1e-6 over a miss of 1e-6 of the
+/// outline's length, warm frames' usual start, is far below [`CLOSED`]).
+const SENSITIVITY_RESIDUAL: f64 = 1e-7;
 
 /// A frame whose closing stalled is still accepted when its end misses its start by at most
 /// this fraction of its length (far below a pixel at any size a picture has).
@@ -249,6 +251,12 @@ impl Closure {
         }
         let mut report = ClosureReport::default();
         self.a.copy_from_slice(start);
+        if weights.iter().filter(|w| **w != 0.0).count() == 1 && weights.contains(&1.0) {
+            // A keyframe is its own solution: u = 0 with its outline closed as drawn, met
+            // exactly (no closing step, whatever the start predicted).
+            self.a.fill(0.0);
+            vm.reset_u();
+        }
         let mut gap = self.flatten_and_measure(vm, newton, &mut report)?;
         let m = self.a.len();
         loop {

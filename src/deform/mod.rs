@@ -14,15 +14,23 @@
 //!   triangle's conformal distortion at most `K` and none flipped, met or reported per drag
 //!   ([`BoundedPoseOptions`]).
 //!
-//! Each drag's [`DragReport`] measures the pose the same way for every method: ARAP
-//! energy, largest conformal distortion, flipped triangles, the handles' residual.
+//! Each drag's [`DragReport`] measures the pose the same way for every method, from the
+//! positions the drag returns: ARAP energy, largest conformal distortion, flipped triangles,
+//! the handles' residual, and how the drag ended ([`DragStatus`]: still moving, converged,
+//! stalled, or reverted to the pose before it when the method reached a point that is not
+//! finite). The positions are always finite.
 //! Meshes of several pieces, with holes, pose as well: every piece needs a handle.
 //!
 //! Regions painted stiff ([`Deformer::set_stiffness`], one weight per triangle, After Effects'
 //! "starch") keep their shape up to a rotation while the rest bends, under every method.
 //!
-//! A pose left with flipped triangles (a quick KVF drag on a thin limb, say) is repaired by
-//! [`untangle`]: the bounded-distortion projections on the region around the flips only.
+//! KVF's steps never raise its energy and, by default, never flip a triangle
+//! ([`KvfOptions::flip_free`]); a large drag is followed in stretches, so that it ends where
+//! the same drag in small moves does.
+//!
+//! A pose left with flipped triangles (a quick ARAP drag on a thin limb, say) is repaired by
+//! [`untangle`]: the bounded-distortion projections on the region around the flips only,
+//! within a distortion limit it states, or not at all.
 //!
 //! ```
 //! use bdmorph::deform::{Deformer, PoseMethod};

@@ -14,7 +14,7 @@
 
 use super::edit::Touched;
 use super::project::{MethodData, Project};
-use crate::deform::{DragReport, KvfOptions, PoseMethod};
+use crate::deform::{DragReport, DragStatus, KvfOptions, PoseMethod};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
 use crate::parts::{JointedDeformer, Placement, Weld};
@@ -322,7 +322,10 @@ impl Engine {
 
     /// Moves the pins of keyframe `k` (the one loaded) to `targets` and writes the pose into
     /// `doc`. The pose is checked before it is kept: every point finite, no triangle
-    /// collapsed, not mirrored; otherwise the keyframe keeps its pose and the drag is refused.
+    /// collapsed, not mirrored; otherwise (or when the deformer reverted to the pose before
+    /// the drag) the keyframe keeps its pose and the drag is refused. A drag that stalled
+    /// (flip-free KVF stopping short of a handle rather than folding or crushing) is kept:
+    /// the pose is valid, and the report says so.
     pub fn drag(
         &mut self,
         doc: &mut Project,
@@ -340,6 +343,11 @@ impl Engine {
         let result = self.deformer.drag(&self.targets);
         let bad = match &result {
             Err(e) => Some(people(&e.to_string())),
+            // The deformer kept the pose before the drag: say why nothing moved.
+            Ok(r) if r.status == DragStatus::Reverted => Some(
+                "the handles are too far apart for the mesh to follow (the pose would not be finite)"
+                    .into(),
+            ),
             Ok(_) => pose_problem(&self.rest, self.deformer.positions()),
         };
         if let Some(why) = bad {

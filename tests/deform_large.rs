@@ -352,3 +352,62 @@ fn the_studios_default_method_never_flips_a_thin_arm_dragged_across_the_body() {
         );
     }
 }
+
+#[test]
+fn the_figures_drags_with_flip_free_kvf() {
+    // The demo figure (examples/posing.rs), feet and head held: the right hand raised 65
+    // degrees about the shoulder in 20 moves then 20 drags there, and pulled into the chest
+    // in 20 moves. Flip-free KVF: the raised arm as before (ARAP's pose, 1.45), and no
+    // triangle flipped at any move of the pull into the chest, where ARAP folds.
+    let rest = generate::figure(0.01);
+    let p = &rest.positions;
+    let pins: Vec<u32> = [[-0.45, -1.5], [0.45, -1.5], [0.0, 2.8], [1.72, 1.4]]
+        .iter()
+        .map(|&q| nearest(p, q))
+        .collect();
+    let start = places(&rest, &pins);
+    let (hand, shoulder) = (start[3], [0.6, 1.35]);
+    let r = (hand[0] - shoulder[0]).hypot(hand[1] - shoulder[1]);
+    let a0 = (hand[1] - shoulder[1]).atan2(hand[0] - shoulder[0]);
+    let mut raised = Vec::new();
+    let mut chest_flips = Vec::new();
+    for method in [PoseMethod::kvf(), PoseMethod::arap()] {
+        let mut pose = Deformer::new(&rest, method).expect("set up");
+        pose.set_pins(&pins).expect("pins");
+        let mut t = start.clone();
+        for k in 1..=20 {
+            let a = a0 + 65f64.to_radians() * f64::from(k) / 20.0;
+            t[3] = [shoulder[0] + r * a.cos(), shoulder[1] + r * a.sin()];
+            pose.drag(&t).expect("drag");
+        }
+        let mut report = pose.drag(&t).expect("drag");
+        for _ in 0..19 {
+            report = pose.drag(&t).expect("drag");
+        }
+        eprintln!("raised, {}: {report:?}", method.name());
+        raised.push(report.max_distortion);
+        let mut pose = Deformer::new(&rest, method).expect("set up");
+        pose.set_pins(&pins).expect("pins");
+        let mut t = start.clone();
+        let mut most = 0;
+        for k in 1..=20 {
+            let s = f64::from(k) / 20.0;
+            t[3] = [hand[0] * (1.0 - s), hand[1] + (1.3 - hand[1]) * s];
+            let report = pose.drag(&t).expect("drag");
+            check_honest("chest", &rest, &pose, &t, &report);
+            most = most.max(report.flipped_triangles);
+        }
+        let report = pose.drag(&t).expect("drag");
+        eprintln!(
+            "into the chest, {}: at most {most} flipped during the drag; at the end {report:?}",
+            method.name()
+        );
+        chest_flips.push(most);
+    }
+    assert!((raised[0] - raised[1]).abs() < 0.01, "{raised:?}");
+    assert_eq!(chest_flips[0], 0, "kvf: {chest_flips:?}");
+    assert!(
+        chest_flips[1] > 0,
+        "the pull is meant to fold ARAP: {chest_flips:?}"
+    );
+}

@@ -1,6 +1,7 @@
 //! Repairing poses with flipped triangles (`bdmorph::deform::untangle`) on a character with a
 //! thin arm: the arm's tip pulled sharply in one fast drag (ARAP with two iterations; the
-//! default KVF no longer folds), the flips counted, the repair timed (median of RUNS).
+//! globalised KVF folds it only at the far pulls), the flips counted, the repair timed
+//! (median of RUNS).
 //!
 //! `cargo run --release --example untangle [VERTICES] [RUNS] [DX,DY ...]`
 //!

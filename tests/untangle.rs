@@ -5,7 +5,8 @@
 mod common;
 
 use bdmorph::deform::{
-    untangle, ArapOptions, DeformError, Deformer, PoseMethod, UntangleOptions, Untangled,
+    untangle, ArapOptions, DeformError, Deformer, KvfOptions, PoseMethod, UntangleOptions,
+    Untangled,
 };
 use bdmorph::meshing::{mesh_picture, MeshOptions, PictureOptions};
 use bdmorph::{generate, PlanarMesh};
@@ -50,7 +51,7 @@ fn character(vertices: usize) -> PlanarMesh {
 
 /// The character held at three points of the torso, its arm tip pulled by `(dx, dy)` pixels
 /// in one fast drag: ARAP with two iterations, as one mouse move that lands far away (the
-/// default KVF never folds: its steps are flip-free). Returns the mesh, the pins and the
+/// globalised KVF folds it only at the far pulls). Returns the mesh, the pins and the
 /// pose.
 fn fast_pull(vertices: usize, dx: f64, dy: f64) -> (PlanarMesh, Vec<u32>, Vec<[f64; 2]>) {
     let rest = character(vertices);
@@ -226,7 +227,7 @@ fn a_repair_that_cannot_meet_its_bound_leaves_the_pose_unchanged() {
 
 #[test]
 fn a_pose_without_flips_comes_back_bit_for_bit() {
-    // A KVF pull (flip-free), and the figure's waving pose.
+    // A flip-free KVF pull, and the figure's waving pose.
     let rest = character(3000);
     let pins: Vec<u32> = [
         [230.0, 200.0],
@@ -237,7 +238,8 @@ fn a_pose_without_flips_comes_back_bit_for_bit() {
     .iter()
     .map(|&q| nearest(&rest.positions, q))
     .collect();
-    let mut kvf = Deformer::new(&rest, PoseMethod::kvf()).expect("set up");
+    let flip_free = PoseMethod::Kvf(KvfOptions::default().with_flip_free(true));
+    let mut kvf = Deformer::new(&rest, flip_free).expect("set up");
     kvf.set_pins(&pins).expect("pins");
     let mut targets: Vec<[f64; 2]> = pins.iter().map(|&v| rest.positions[v as usize]).collect();
     targets[3] = [targets[3][0] - 60.0, targets[3][1] + 80.0];

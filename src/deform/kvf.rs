@@ -53,7 +53,7 @@
 //! `α` towards the field's first solve (`ω = 0`, the ARAP global step with the springs: its
 //! quadratic bounds `E` from above, so that direction lowers `E` for every `α` unless the
 //! pose is stationary). A pose is taken when its energy is no higher than the pose's and,
-//! with [`KvfOptions::flip_free`] (the default), no unflipped triangle has shrunk below a
+//! with [`KvfOptions::flip_free`] (off by default), no unflipped triangle has shrunk below a
 //! fifth of its area or past [`KvfOptions::max_distortion`]: a pose without flipped
 //! triangles never gets one (a flip would need the signed area through zero, and a step
 //! short enough never reaches it), and the steps do not crush triangles into slivers.
@@ -67,9 +67,10 @@
 //! the rest along straight lines), as the same drag in small mouse moves would be: one
 //! large drag ends where 20 small ones do.
 //!
-//! Energy and ARAP are not a barrier: where the flip-free steps would have to fold a
-//! triangle to go on (a limb dragged back through itself), they stop, stalled, at
-//! distortion [`KvfOptions::max_distortion`] at most, short of the handle.
+//! ARAP's energy and the springs are no barrier: where flip-free steps would have to fold
+//! a triangle to go on (a limb dragged back through itself, a bent keyframe turned about its
+//! handles), they stop, stalled, at distortion [`KvfOptions::max_distortion`] at most, short
+//! of the handle. That is why they are not the default.
 
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
@@ -124,12 +125,14 @@ pub struct KvfOptions {
     /// mesh. A finite number at least 1; checked by [`super::Deformer::set_pins`]. Only
     /// with [`KvfOptions::flip_free`].
     pub max_distortion: f64,
-    /// Whether a step may flip a triangle (default `true`: never; a triangle unflipped where
-    /// the step starts keeps a positive area, above a fifth of what it had, and its
-    /// distortion within [`KvfOptions::max_distortion`]). Where the energy's minimum has a
-    /// fold (a handle dragged so that ARAP folds too), flip-free steps stop short of it,
-    /// [`super::DragStatus::Stalled`]; `false` lets the steps fold and unfold on the way,
-    /// as the original editor's, still never raising the energy.
+    /// Whether steps are flip-free (default `false`): with `true`, a triangle unflipped where
+    /// a step starts keeps a positive area, above a fifth of what it had, and its distortion
+    /// within [`KvfOptions::max_distortion`]. ARAP's energy is no barrier, so flip-free steps
+    /// can stop against a triangle's zero area: where the way to the handles passes a fold
+    /// (a limb dragged back through itself, a bent pose turned about its handles) they stop,
+    /// [`super::DragStatus::Stalled`], short of the handles. With `false` (the original
+    /// editor's way, and the default) the steps may fold and unfold on the way, never raising
+    /// the energy; the studio repairs a drag that leaves a fold.
     pub flip_free: bool,
 }
 
@@ -141,7 +144,7 @@ impl Default for KvfOptions {
             alternations: 2,
             tolerance: 1e-12,
             max_distortion: 10.0,
-            flip_free: true,
+            flip_free: false,
         }
     }
 }

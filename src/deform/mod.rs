@@ -24,7 +24,7 @@
 //! Regions painted stiff ([`Deformer::set_stiffness`], one weight per triangle, After Effects'
 //! "starch") keep their shape up to a rotation while the rest bends, under every method.
 //!
-//! KVF's steps never raise its energy and, by default, never flip a triangle
+//! KVF's steps never raise its energy, and can be made flip-free
 //! ([`KvfOptions::flip_free`]); a large drag is followed in stretches, so that it ends where
 //! the same drag in small moves does.
 //!

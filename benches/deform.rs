@@ -1,6 +1,6 @@
 //! Posing by handles (`bdmorph::deform`), every method: one drag (a mouse moving back and
 //! forth, a new target each time, warm-started from the previous pose) and a re-pin (the
-//! only factorisation), on generated disks of about 1K, 5K and 20K vertices with four
+//! only factorisation), on generated disks of about 1K, 5K, 10K and 20K vertices with four
 //! handles, and on the shared planar meshes (woody, 694 vertices; the USTC leaf, 3,000) when
 //! `../shared/data` is present.
 //!
@@ -14,7 +14,7 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
-use bdmorph::deform::{Deformer, PoseMethod};
+use bdmorph::deform::{Deformer, KvfOptions, PoseMethod};
 use bdmorph::{generate, PlanarMesh};
 
 /// Four handles: the first vertex, and three on the far side, spread out.
@@ -23,12 +23,17 @@ fn handles(mesh: &PlanarMesh) -> Vec<u32> {
     vec![0, n - 1, n - 1 - n / 10, n - 1 - n / 5]
 }
 
-/// The methods, as named in the benchmark ids.
-fn methods() -> [PoseMethod; 3] {
+/// The methods, as named in the benchmark ids: KVF flip-free (the default) and with steps
+/// that may fold (`kvf-folding`: the line search on the energy only).
+fn methods() -> [(&'static str, PoseMethod); 4] {
     [
-        PoseMethod::kvf(),
-        PoseMethod::arap(),
-        PoseMethod::bounded(2.5),
+        ("kvf", PoseMethod::kvf()),
+        (
+            "kvf-folding",
+            PoseMethod::Kvf(KvfOptions::default().with_flip_free(false)),
+        ),
+        ("arap", PoseMethod::arap()),
+        ("bounded", PoseMethod::bounded(2.5)),
     ]
 }
 
@@ -53,7 +58,7 @@ impl Mouse {
 }
 
 fn meshes() -> Vec<(String, PlanarMesh)> {
-    let mut out: Vec<(String, PlanarMesh)> = [1000, 5000, 20000]
+    let mut out: Vec<(String, PlanarMesh)> = [1000, 5000, 10000, 20000]
         .iter()
         .map(|&n| {
             let mesh = generate::disk(generate::rings_for(n), 0.2);
@@ -75,8 +80,8 @@ fn meshes() -> Vec<(String, PlanarMesh)> {
 
 fn bench(c: &mut Criterion) {
     let meshes = meshes();
-    for method in methods() {
-        let mut drag = c.benchmark_group(format!("deform_drag/{}", method.name()));
+    for (label, method) in methods() {
+        let mut drag = c.benchmark_group(format!("deform_drag/{label}"));
         for (name, mesh) in &meshes {
             let pins = handles(mesh);
             let mut pose = Deformer::new(mesh, method).expect("set up");
@@ -96,7 +101,7 @@ fn bench(c: &mut Criterion) {
             });
         }
         drag.finish();
-        let mut repin = c.benchmark_group(format!("deform_set_pins/{}", method.name()));
+        let mut repin = c.benchmark_group(format!("deform_set_pins/{label}"));
         for (name, mesh) in &meshes {
             let pins = handles(mesh);
             let mut pose = Deformer::new(mesh, method).expect("set up");

@@ -149,7 +149,13 @@ fn disk() -> Scene {
 /// bounded method with the bound `K = 3`.
 fn methods() -> [PoseMethod; 3] {
     [
-        PoseMethod::Kvf(KvfOptions::default().with_iterations(20)),
+        // Not flip-free: the disk's drag folds a triangle for ARAP and KVF unweighted (and
+        // KVF at weight 1000 on its way), where flip-free steps stop short, stalled.
+        PoseMethod::Kvf(
+            KvfOptions::default()
+                .with_iterations(20)
+                .with_flip_free(false),
+        ),
         PoseMethod::Arap(ArapOptions::default().with_iterations(50)),
         PoseMethod::Bounded(BoundedPoseOptions::new(3.0).with_iterations(200)),
     ]

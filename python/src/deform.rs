@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use bdmorph::deform::{
-    ArapOptions, BoundedPoseOptions, DragReport, KvfOptions, PoseMethod as Method,
+    ArapOptions, BoundedPoseOptions, DragReport, DragStatus, KvfOptions, PoseMethod as Method,
 };
 
 use crate::arrays;
@@ -216,7 +216,10 @@ impl Deformer {
     }
 
     /// What the last drag did (None before the first): iterations, energy, last_change,
-    /// flipped_triangles, pin_residual, max_distortion, bound_met (None unless bounded).
+    /// flipped_triangles, pin_residual, max_distortion, bound_met (None unless bounded),
+    /// status ("moving", "converged", "stalled": no step could make progress, or
+    /// "reverted": the method reached a point that is not finite, the pose before the drag
+    /// is kept).
     #[getter]
     fn report<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Some(r) = &self.report else {
@@ -230,6 +233,15 @@ impl Deformer {
         d.set_item("pin_residual", r.pin_residual)?;
         d.set_item("max_distortion", r.max_distortion)?;
         d.set_item("bound_met", r.bound_met)?;
+        d.set_item(
+            "status",
+            match r.status {
+                DragStatus::Converged => "converged",
+                DragStatus::Stalled => "stalled",
+                DragStatus::Reverted => "reverted",
+                _ => "moving",
+            },
+        )?;
         Ok(Some(d))
     }
 }

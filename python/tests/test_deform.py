@@ -40,8 +40,11 @@ def test_arap_equals_the_command_lines(tmp_path, cli, plate):
     assert np.abs(ours[pins] - targets).max() == 0.0
     r = d.report
     assert set(r) == {"iterations", "energy", "last_change", "flipped_triangles",
-                      "pin_residual", "max_distortion", "bound_met"}
+                      "pin_residual", "max_distortion", "bound_met", "status"}
     assert r["bound_met"] is None and r["flipped_triangles"] == 0
+    # Converged exactly when the last iteration moved no vertex by more than the tolerance.
+    assert r["status"] in {"moving", "converged"}
+    assert (r["status"] == "converged") == (r["last_change"] <= 1e-10)
 
 
 def test_kvf_equals_the_command_lines(tmp_path, cli, plate):

@@ -18,7 +18,7 @@
 
 use bdmorph_cholesky::Cholesky;
 
-use super::{DeformError, DragReport};
+use super::{DeformError, DragReport, DragStatus};
 use crate::param::frames::Frames;
 use crate::param::local_global::{fit_each, free_laplacian, global_rhs, weighted_edges, Fit, NONE};
 
@@ -148,10 +148,13 @@ impl Arap {
         let k = self.rhs.len() / 2;
         let mut iterations = 0;
         let mut last_change = 0.0;
+        let mut status = DragStatus::Moving;
         while iterations < self.options.iterations.max(1) {
             iterations += 1;
             fit_each(frames, uv, Fit::Rotation, &mut self.l);
             let Some(chol) = self.chol.as_mut() else {
+                // Every vertex pinned: the pose is the targets.
+                status = DragStatus::Converged;
                 break;
             };
             global_rhs(
@@ -174,12 +177,14 @@ impl Arap {
                 }
             }
             if last_change <= self.options.tolerance * size {
+                status = DragStatus::Converged;
                 break;
             }
         }
         Ok(DragReport {
             iterations,
             last_change: last_change / size,
+            status,
             ..DragReport::default()
         })
     }

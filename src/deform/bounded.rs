@@ -20,7 +20,7 @@
 //! its shape and its way back; the projections its guarantee.
 
 use super::arap::{Arap, ArapOptions};
-use super::{DeformError, DragReport};
+use super::{DeformError, DragReport, DragStatus};
 use crate::param::bounded::{BoundedDistortion, BoundedOptions};
 use crate::param::energy::Energy;
 use crate::param::frames::Frames;
@@ -193,11 +193,17 @@ impl Bounded {
         let mut iterations = 0;
         let mut last_change = 0.0f64;
         let (mut best, mut since_best) = (f64::INFINITY, 0);
+        let status;
         loop {
             let (worst, inverted) = solver.measure_excess(uv);
             let met = worst <= limit && inverted == 0;
             if met || iterations >= self.options.iterations {
                 self.behind = !met;
+                status = if met {
+                    DragStatus::Converged
+                } else {
+                    DragStatus::Moving
+                };
                 break;
             }
             if worst < best * (1.0 - 1e-4) {
@@ -218,6 +224,7 @@ impl Bounded {
                         // No decrease: a local minimum of the excess; reported as unmet.
                         self.behind = true;
                         iterations += 1;
+                        status = DragStatus::Stalled;
                         break;
                     }
                 }
@@ -238,6 +245,7 @@ impl Bounded {
             } else {
                 arap_change
             },
+            status,
             ..DragReport::default()
         })
     }

@@ -37,15 +37,71 @@
 //! Integrating along log spirals (per edge, the spiral the field's similarity along the
 //! edge traces in unit time; each vertex the mean over its edges) turns a field's rotation
 //! into a rotation rather than the growth of a straight-line step.
+//!
+//! # The globalised step
+//!
+//! The steps descend one energy, the one whose stationary poses they stop at:
+//!
+//! ```text
+//! E(u) = Σ_f s_f A_f |F_f − R_f|²  +  ½ w Σ_handles |u_p − t_p|²
+//! ```
+//!
+//! (`s_f` the stiffness, `R_f` the closest rotation to `F_f`: the ARAP energy plus the
+//! handles' springs, in the units of the `v` step's matrix). For `α = 1, 1/2, 1/4, …` the
+//! field is followed for a time `α` (a backtracking line search along the flow: `α v` has
+//! the spiral factors of `α z`), and if that pose is refused, the pose is moved straight by
+//! `α` towards the field's first solve (`ω = 0`, the ARAP global step with the springs: its
+//! quadratic bounds `E` from above, so that direction lowers `E` for every `α` unless the
+//! pose is stationary). A pose is taken when its energy is no higher than the pose's and,
+//! with [`KvfOptions::flip_free`] (off by default), no unflipped triangle has shrunk below a
+//! fifth of its area or past [`KvfOptions::max_distortion`]: a pose without flipped
+//! triangles never gets one (a flip would need the signed area through zero, and a step
+//! short enough never reaches it), and the steps do not crush triangles into slivers.
+//! Without the line search, a large drag's field (a spring pulling a handle several mesh
+//! sizes away) grows the pose by `e^|z|` along its spirals: energies of 1e10 to 1e137 and,
+//! further, points that are not finite. A step that no `α` down to 2⁻⁴⁰ makes acceptable
+//! is not taken: the drag stops there and says [`super::DragStatus::Stalled`].
+//!
+//! A drag that moves a handle further than 5% of the mesh's size is followed in stretches
+//! of at most that, each with the drag's steps (the handles' rigid motion along its arc,
+//! the rest along straight lines), as the same drag in small mouse moves would be: one
+//! large drag ends where 20 small ones do.
+//!
+//! ARAP's energy and the springs are no barrier: where flip-free steps would have to fold
+//! a triangle to go on (a limb dragged back through itself, a bent keyframe turned about its
+//! handles), they stop, stalled, at distortion [`KvfOptions::max_distortion`] at most, short
+//! of the handle. That is why they are not the default.
 
 // Small fixed-size matrix algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
 use bdmorph_cholesky::Cholesky;
 
-use super::{DeformError, DragReport};
+use super::{DeformError, DragReport, DragStatus};
 use crate::param::frames::Frames;
 use crate::param::local_global::{fit_each, free_laplacian_plus, global_rhs, weighted_edges, Fit};
+
+/// The shortest fraction of a step the line search tries (2⁻⁴⁰): below it the step is not
+/// taken and the drag stops, stalled.
+const MIN_STEP: f64 = 9.094947017729282e-13;
+
+/// The farthest a handle's target moves in one stretch of a drag, relative to the mesh's
+/// size: a drag that moves a handle further is followed in stretches of at most this
+/// (each with [`KvfOptions::iterations`] steps), as a mouse moving there would. Chosen on
+/// the bar of `tests/deform_large.rs` (a tip swung 1.1 sizes): in one stretch the springs'
+/// first steps shear the bar into slivers the flip-free steps cannot open again; in
+/// stretches of 0.05 it bends as in 20 mouse moves.
+const STRETCH: f64 = 0.05;
+
+/// The most stretches of one drag (a drag of more than `STRETCHES × STRETCH` mesh sizes takes
+/// longer strides).
+const STRETCHES: usize = 400;
+
+/// The most a step may shrink a triangle: its area stays above this fraction of the area it
+/// had (as projected Newton's line search stops short of a flip, at a fraction of the
+/// way). Without it a step of a large drag may crush triangles to slivers (distortions of
+/// 1e14 measured) that later steps cannot open again.
+const SHRINK: f64 = 0.2;
 
 /// Options of [`super::PoseMethod::Kvf`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,6 +118,22 @@ pub struct KvfOptions {
     /// A drag stops early once no vertex moved by more than this times the mesh's size in a
     /// step (default `1e-12`).
     pub tolerance: f64,
+    /// The largest conformal distortion `σ₁ / σ₂` a step may give a triangle (default 10):
+    /// a step that would take a triangle over it (or over the distortion it has already,
+    /// if that is more) is cut short, and a handle that cannot be followed further within
+    /// it stops there, the drag [`super::DragStatus::Stalled`], rather than crushing the
+    /// mesh. A finite number at least 1; checked by [`super::Deformer::set_pins`]. Only
+    /// with [`KvfOptions::flip_free`].
+    pub max_distortion: f64,
+    /// Whether steps are flip-free (default `false`): with `true`, a triangle unflipped where
+    /// a step starts keeps a positive area, above a fifth of what it had, and its distortion
+    /// within [`KvfOptions::max_distortion`]. ARAP's energy is no barrier, so flip-free steps
+    /// can stop against a triangle's zero area: where the way to the handles passes a fold
+    /// (a limb dragged back through itself, a bent pose turned about its handles) they stop,
+    /// [`super::DragStatus::Stalled`], short of the handles. With `false` (the original
+    /// editor's way, and the default) the steps may fold and unfold on the way, never raising
+    /// the energy; the studio repairs a drag that leaves a fold.
+    pub flip_free: bool,
 }
 
 impl Default for KvfOptions {
@@ -71,6 +143,8 @@ impl Default for KvfOptions {
             iterations: 2,
             alternations: 2,
             tolerance: 1e-12,
+            max_distortion: 10.0,
+            flip_free: false,
         }
     }
 }
@@ -94,6 +168,16 @@ impl KvfOptions {
     /// Sets the early-stopping tolerance.
     pub fn with_tolerance(mut self, tolerance: f64) -> Self {
         self.tolerance = tolerance;
+        self
+    }
+    /// Sets the largest distortion a step may give a triangle.
+    pub fn with_max_distortion(mut self, k: f64) -> Self {
+        self.max_distortion = k;
+        self
+    }
+    /// Sets whether steps are flip-free.
+    pub fn with_flip_free(mut self, flip_free: bool) -> Self {
+        self.flip_free = flip_free;
         self
     }
 }
@@ -129,6 +213,22 @@ pub(crate) struct Kvf {
     /// holding it), and how many those are.
     sum: Vec<[f64; 2]>,
     count: Vec<f64>,
+    /// The pose a trial step reaches.
+    trial: Vec<[f64; 2]>,
+    /// Per triangle, the determinant of its gradient in the pose the step starts from: a
+    /// positive one must stay above [`SHRINK`] times it.
+    det: Vec<f64>,
+    /// Per triangle, the largest distortion a step may give it: the larger of
+    /// [`KvfOptions::max_distortion`] and its distortion where the step starts.
+    cap: Vec<f64>,
+    /// The straight step's target: the field's first solve, `ω = 0` (x then y rows).
+    straight: Vec<f64>,
+    /// The handles' targets of the last drag, where the next drag's stretches start when
+    /// `known` (otherwise at the handles' places in the pose: after new pins or a new pose).
+    previous: Vec<[f64; 2]>,
+    known: bool,
+    /// The targets of one stretch.
+    stretch: Vec<[f64; 2]>,
 }
 
 impl Kvf {
@@ -175,6 +275,13 @@ impl Kvf {
             edges,
             sum: vec![[0.0; 2]; n],
             count,
+            trial: vec![[0.0; 2]; n],
+            det: vec![1.0; m],
+            cap: vec![options.max_distortion; m],
+            straight: vec![0.0; 2 * n],
+            previous: Vec::new(),
+            known: false,
+            stretch: Vec::new(),
         }
     }
 
@@ -197,6 +304,10 @@ impl Kvf {
         if !(weight > 0.0 && weight.is_finite()) {
             return Err(DeformError::BadWeight(weight));
         }
+        let k = self.options.max_distortion;
+        if !(k >= 1.0 && k.is_finite()) {
+            return Err(DeformError::BadBound(k));
+        }
         self.stiffness = weight * self.mean_diagonal;
         let extra: Vec<(u32, f64)> = pins.iter().map(|&p| (p, self.stiffness)).collect();
         let n = self.index.len() as u32;
@@ -208,7 +319,15 @@ impl Kvf {
             &extra,
         )?);
         self.pins = pins.to_vec();
+        self.known = false;
+        self.previous = vec![[0.0; 2]; pins.len()];
+        self.stretch = vec![[0.0; 2]; pins.len()];
         Ok(())
+    }
+
+    /// The pose was replaced: the next drag's stretches start from the handles' places.
+    pub(crate) fn forget_targets(&mut self) {
+        self.known = false;
     }
 
     /// Sets the handles' weight and refactors (pins unchanged).
@@ -231,47 +350,166 @@ impl Kvf {
         uv: &mut [[f64; 2]],
         size: f64,
     ) -> Result<DragReport, DeformError> {
+        // Where the handles' targets start from, and in how many stretches they go.
+        if !self.known || self.previous.len() != targets.len() {
+            self.previous.clear();
+            self.previous
+                .extend(self.pins.iter().map(|&p| uv[p as usize]));
+        }
+        // The handles' move split into the rigid motion that best fits it (about their
+        // centroid) and what is left: the stretches follow the rigid part along its arc and
+        // the rest along straight lines, so handles that all turn together turn the mesh
+        // rather than pull it through their chords.
+        let motion = Motion::fit(&self.previous, targets);
+        let far = self
+            .previous
+            .iter()
+            .zip(targets)
+            .map(|(&a, &b)| motion.path_length(a, b))
+            .fold(0.0, f64::max);
+        let stretches = ((far / (STRETCH * size)).ceil() as usize).clamp(1, STRETCHES);
+        let mut stretch = std::mem::take(&mut self.stretch);
+        stretch.resize(targets.len(), [0.0; 2]);
+        let mut report = DragReport::default();
+        for k in 1..=stretches {
+            if k == stretches {
+                stretch.copy_from_slice(targets);
+            } else {
+                let s = k as f64 / stretches as f64;
+                for ((out, &a), &b) in stretch.iter_mut().zip(&self.previous).zip(targets) {
+                    *out = motion.along(a, b, s);
+                }
+            }
+            let r = self.iterate(frames, &stretch, uv, size);
+            let r = match r {
+                Ok(r) => r,
+                Err(e) => {
+                    self.stretch = stretch;
+                    return Err(e);
+                }
+            };
+            report.iterations += r.iterations;
+            report.last_change = r.last_change;
+            report.status = r.status;
+        }
+        self.stretch = stretch;
+        self.previous.copy_from_slice(targets);
+        self.known = true;
+        Ok(report)
+    }
+
+    /// Up to [`KvfOptions::iterations`] steps towards `targets`.
+    fn iterate(
+        &mut self,
+        frames: &Frames,
+        targets: &[[f64; 2]],
+        uv: &mut [[f64; 2]],
+        size: f64,
+    ) -> Result<DragReport, DeformError> {
         let n = uv.len();
         let mut iterations = 0;
         let mut last_change = 0.0;
+        let mut status = DragStatus::Moving;
         while iterations < self.options.iterations.max(1) {
             iterations += 1;
-            last_change = self.step(frames, targets, uv)?;
-            if last_change <= self.options.tolerance * size {
-                break;
+            match self.step(frames, targets, uv, size)? {
+                Step::Moved { change, full } => {
+                    last_change = change;
+                    if full && change <= self.options.tolerance * size {
+                        status = DragStatus::Converged;
+                        break;
+                    }
+                }
+                Step::Stationary => {
+                    last_change = 0.0;
+                    status = DragStatus::Converged;
+                    break;
+                }
+                Step::Stuck { proposed } => {
+                    // No step lowered the energy without a flip: the pose stays as it is,
+                    // as far from stationary as the step it could not take says.
+                    last_change = proposed;
+                    status = DragStatus::Stalled;
+                    break;
+                }
             }
         }
         debug_assert_eq!(self.rhs.len(), 2 * n);
-        let energy = fit_each(frames, uv, Fit::Rotation, &mut self.rotation);
-        let pin_residual = self
-            .pins
-            .iter()
-            .zip(targets)
-            .map(|(&p, t)| (uv[p as usize][0] - t[0]).hypot(uv[p as usize][1] - t[1]))
-            .fold(0.0, f64::max);
         Ok(DragReport {
             iterations,
-            energy,
             last_change: last_change / size,
-            pin_residual,
+            status,
             ..DragReport::default()
         })
     }
 
-    /// One field and one move along it; the largest move of a vertex.
+    /// The energy the steps descend, `Σ s_f A_f |F_f − R_f|² + ½ w Σ |u_p − t_p|²`, of `uv`;
+    /// `None` when a triangle with a positive determinant in [`Kvf::det`] has shrunk below
+    /// [`SHRINK`] of it (or flipped) there, or the energy is not finite.
+    fn merit(&self, frames: &Frames, targets: &[[f64; 2]], uv: &[[f64; 2]]) -> Option<f64> {
+        let mut energy = 0.0;
+        for f in 0..frames.len() {
+            let j = frames.gradient(f, uv);
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            let (q, r) = super::similarity_parts(j);
+            // A NaN fails the tests too.
+            if self.options.flip_free && self.det[f] > 0.0 {
+                let kept = det > SHRINK * self.det[f] && q + r <= self.cap[f] * (q - r);
+                if !kept {
+                    return None;
+                }
+            }
+            let s = self.face_stiffness.as_ref().map_or(1.0, |w| w[f]);
+            energy += s * frames.area[f] * (2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r * r);
+        }
+        for (&p, t) in self.pins.iter().zip(targets) {
+            let u = uv[p as usize];
+            let (dx, dy) = (u[0] - t[0], u[1] - t[1]);
+            energy += 0.5 * self.stiffness * (dx * dx + dy * dy);
+        }
+        energy.is_finite().then_some(energy)
+    }
+
+    /// One field and one move along it, as far along it as the line search allows.
+    ///
+    /// For `α = 1, 1/2, 1/4, …` down to [`MIN_STEP`]: the field's flow for a time `α` (the
+    /// log spirals), then, if that is refused, the straight step `α (y₀ − u)` towards the
+    /// field's first solve (`ω = 0`: the ARAP global step with the handles' springs, whose
+    /// quadratic bounds `E` from above, so every `α` in `(0, 1]` lowers `E` unless `u` is
+    /// stationary). A move is taken when it shrinks no triangle below [`SHRINK`] of its
+    /// area and does not raise `E` (a full step within the tolerance is round-off of a
+    /// stationary pose, taken whatever the energy's last digits say).
     fn step(
         &mut self,
         frames: &Frames,
         targets: &[[f64; 2]],
         uv: &mut [[f64; 2]],
-    ) -> Result<f64, DeformError> {
+        size: f64,
+    ) -> Result<Step, DeformError> {
         let n = uv.len();
         fit_each(frames, uv, Fit::Rotation, &mut self.rotation);
+        for f in 0..frames.len() {
+            let j = frames.gradient(f, uv);
+            self.det[f] = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            let (q, r) = super::similarity_parts(j);
+            self.cap[f] = if q - r > 0.0 {
+                self.options.max_distortion.max((q + r) / (q - r))
+            } else {
+                f64::INFINITY
+            };
+        }
         if !self.strain_feedback {
             for f in 0..frames.len() {
                 self.gradient[f] = frames.gradient(f, uv);
             }
         }
+        // Without the strain term (the original's flow, kept for the test of its drift)
+        // there is no energy to descend: only shrinking and flips are refused.
+        let start = if self.strain_feedback {
+            self.merit(frames, targets, uv)
+        } else {
+            None
+        };
         self.omega.fill(0.0);
         let chol = self.chol.as_mut().ok_or(DeformError::TargetCount {
             pins: 0,
@@ -308,6 +546,9 @@ impl Kvf {
                 self.rhs[n + p as usize] += self.stiffness * t[1];
             }
             chol.solve_in_place(&mut self.rhs, 2)?;
+            if round == 0 {
+                self.straight.copy_from_slice(&self.rhs);
+            }
             if round + 1 < self.options.alternations.max(1) {
                 // The ω step: ω = ⟨∇y − base, J R⟩ / |J R|², and ⟨base, J R⟩ = 0 for both
                 // bases (R is F's polar rotation).
@@ -318,13 +559,84 @@ impl Kvf {
                 }
             }
         }
-        // Move along the field v = y − u by each edge's log spiral.
+        let tolerance = self.options.tolerance * size;
+        let proposed = (0..n)
+            .filter(|&v| self.count[v] > 0.0)
+            .map(|v| (self.straight[v] - uv[v][0]).hypot(self.straight[n + v] - uv[v][1]))
+            .fold(0.0, f64::max);
+        let mut alpha = 1.0;
+        while alpha >= MIN_STEP {
+            let full = alpha == 1.0;
+            for straight in [false, true] {
+                if straight && !self.strain_feedback {
+                    continue;
+                }
+                let change = if straight {
+                    self.line(uv, alpha)
+                } else {
+                    self.advect(uv, alpha)
+                };
+                let Some(energy) = self.merit(frames, targets, &self.trial) else {
+                    continue;
+                };
+                let accept = (full && change <= tolerance)
+                    || match start {
+                        Some(e0) => energy <= e0 + 1e-12 * e0.abs(),
+                        // No energy to compare with (the original's flow, or a pose that
+                        // came with none that is finite): any move that keeps the triangles
+                        // is taken.
+                        None => true,
+                    };
+                if accept {
+                    uv.copy_from_slice(&self.trial);
+                    return Ok(Step::Moved {
+                        change,
+                        full: full && !straight,
+                    });
+                }
+            }
+            alpha *= 0.5;
+        }
+        Ok(if proposed <= tolerance {
+            Step::Stationary
+        } else {
+            Step::Stuck { proposed }
+        })
+    }
+
+    /// The pose `uv` moved straight towards the field's first solve, by `α` of the way, into
+    /// [`Kvf::trial`]; the largest move of a vertex.
+    fn line(&mut self, uv: &[[f64; 2]], alpha: f64) -> f64 {
+        let n = uv.len();
+        let mut change = 0.0f64;
+        for (v, out) in self.trial.iter_mut().enumerate() {
+            if self.count[v] == 0.0 {
+                *out = uv[v];
+                continue;
+            }
+            let d = [self.straight[v] - uv[v][0], self.straight[n + v] - uv[v][1]];
+            *out = [uv[v][0] + alpha * d[0], uv[v][1] + alpha * d[1]];
+            change = change.max(alpha * d[0].hypot(d[1]));
+        }
+        change
+    }
+
+    /// The pose `uv` moved along the field `α (y − u)` (`y` in [`Kvf::rhs`]) by each edge's
+    /// log spiral, into [`Kvf::trial`]; the largest move of a vertex.
+    fn advect(&mut self, uv: &[[f64; 2]], alpha: f64) -> f64 {
+        let n = uv.len();
         self.sum.fill([0.0; 2]);
         for &(i, j, times) in &self.edges {
             let (i, j) = (i as usize, j as usize);
             let (pi, pj) = (uv[i], uv[j]);
-            let vi = [self.rhs[i] - pi[0], self.rhs[n + i] - pi[1]];
-            let vj = [self.rhs[j] - pj[0], self.rhs[n + j] - pj[1]];
+            let vi = [
+                alpha * (self.rhs[i] - pi[0]),
+                alpha * (self.rhs[n + i] - pi[1]),
+            ];
+            let vj = [
+                alpha * (self.rhs[j] - pj[0]),
+                alpha * (self.rhs[n + j] - pj[1]),
+            ];
             let phi = spiral_factor(
                 [vi[0] - vj[0], vi[1] - vj[1]],
                 [pi[0] - pj[0], pi[1] - pj[1]],
@@ -336,17 +648,95 @@ impl Kvf {
             self.sum[j][1] += times * (pj[1] + mj[1]);
         }
         let mut change = 0.0f64;
-        for (v, out) in uv.iter_mut().enumerate() {
+        for (v, out) in self.trial.iter_mut().enumerate() {
             let c = self.count[v];
             if c == 0.0 {
+                *out = uv[v];
                 continue;
             }
             let new = [self.sum[v][0] / c, self.sum[v][1] / c];
-            change = change.max((new[0] - out[0]).hypot(new[1] - out[1]));
+            change = change.max((new[0] - uv[v][0]).hypot(new[1] - uv[v][1]));
             *out = new;
         }
-        Ok(change)
+        change
     }
+}
+
+/// The rigid motion that best takes one set of handle places to another (least squares,
+/// about their centroids), to split a drag into stretches along it.
+struct Motion {
+    from: [f64; 2],
+    to: [f64; 2],
+    angle: f64,
+}
+
+impl Motion {
+    fn fit(a: &[[f64; 2]], b: &[[f64; 2]]) -> Motion {
+        let k = a.len().max(1) as f64;
+        let centroid = |p: &[[f64; 2]]| {
+            let s = p.iter().fold([0.0; 2], |s, q| [s[0] + q[0], s[1] + q[1]]);
+            [s[0] / k, s[1] / k]
+        };
+        let (from, to) = (centroid(a), centroid(b));
+        let (mut dot, mut cross) = (0.0, 0.0);
+        for (p, q) in a.iter().zip(b) {
+            let (x, y) = (
+                [p[0] - from[0], p[1] - from[1]],
+                [q[0] - to[0], q[1] - to[1]],
+            );
+            dot += x[0] * y[0] + x[1] * y[1];
+            cross += x[0] * y[1] - x[1] * y[0];
+        }
+        let angle = if dot == 0.0 && cross == 0.0 {
+            0.0
+        } else {
+            cross.atan2(dot)
+        };
+        Motion { from, to, angle }
+    }
+
+    /// Where the handle going from `a` to `b` is a fraction `s` of the way: `a` turned by
+    /// `s` of the angle about the centroid as it moves, plus `s` of what the motion leaves.
+    fn along(&self, a: [f64; 2], b: [f64; 2], s: f64) -> [f64; 2] {
+        let rigid = |t: f64| {
+            let (sin, cos) = (t * self.angle).sin_cos();
+            let x = [a[0] - self.from[0], a[1] - self.from[1]];
+            [
+                self.from[0] + t * (self.to[0] - self.from[0]) + cos * x[0] - sin * x[1],
+                self.from[1] + t * (self.to[1] - self.from[1]) + sin * x[0] + cos * x[1],
+            ]
+        };
+        let end = rigid(1.0);
+        let now = rigid(s);
+        [now[0] + s * (b[0] - end[0]), now[1] + s * (b[1] - end[1])]
+    }
+
+    /// A bound on the length of the handle's path from `a` to `b` along the motion.
+    fn path_length(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
+        let r = (a[0] - self.from[0]).hypot(a[1] - self.from[1]);
+        let shift = (self.to[0] - self.from[0]).hypot(self.to[1] - self.from[1]);
+        let rigid_end = {
+            let (sin, cos) = self.angle.sin_cos();
+            let x = [a[0] - self.from[0], a[1] - self.from[1]];
+            [
+                self.to[0] + cos * x[0] - sin * x[1],
+                self.to[1] + sin * x[0] + cos * x[1],
+            ]
+        };
+        self.angle.abs() * r + shift + (b[0] - rigid_end[0]).hypot(b[1] - rigid_end[1])
+    }
+}
+
+/// What one step did.
+enum Step {
+    /// It moved the pose; the largest move of a vertex, and whether it was the field's
+    /// whole step.
+    Moved { change: f64, full: bool },
+    /// The pose is stationary: the field's first solve is the pose, within the tolerance.
+    Stationary,
+    /// No move was taken: none lowered the energy without shrinking a triangle too far;
+    /// the largest move of a vertex the straight step proposed.
+    Stuck { proposed: f64 },
 }
 
 /// The gradient of triangle `f` of the field stored as x rows then y rows in `xy`.

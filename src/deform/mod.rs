@@ -14,15 +14,23 @@
 //!   triangle's conformal distortion at most `K` and none flipped, met or reported per drag
 //!   ([`BoundedPoseOptions`]).
 //!
-//! Each drag's [`DragReport`] measures the pose the same way for every method: ARAP
-//! energy, largest conformal distortion, flipped triangles, the handles' residual.
+//! Each drag's [`DragReport`] measures the pose the same way for every method, from the
+//! positions the drag returns: ARAP energy, largest conformal distortion, flipped triangles,
+//! the handles' residual, and how the drag ended ([`DragStatus`]: still moving, converged,
+//! stalled, or reverted to the pose before it when the method reached a point that is not
+//! finite). The positions are always finite.
 //! Meshes of several pieces, with holes, pose as well: every piece needs a handle.
 //!
 //! Regions painted stiff ([`Deformer::set_stiffness`], one weight per triangle, After Effects'
 //! "starch") keep their shape up to a rotation while the rest bends, under every method.
 //!
-//! A pose left with flipped triangles (a quick KVF drag on a thin limb, say) is repaired by
-//! [`untangle`]: the bounded-distortion projections on the region around the flips only.
+//! KVF's steps never raise its energy, and can be made flip-free
+//! ([`KvfOptions::flip_free`]); a large drag is followed in stretches, so that it ends where
+//! the same drag in small moves does.
+//!
+//! A pose left with flipped triangles (a quick ARAP drag on a thin limb, say) is repaired by
+//! [`untangle`]: the bounded-distortion projections on the region around the flips only,
+//! within a distortion limit it states, or not at all.
 //!
 //! ```
 //! use bdmorph::deform::{Deformer, PoseMethod};
@@ -93,8 +101,8 @@ impl PoseMethod {
 
 /// The method's state.
 enum Solver {
-    Kvf(kvf::Kvf),
-    Arap(arap::Arap),
+    Kvf(Box<kvf::Kvf>),
+    Arap(Box<arap::Arap>),
     Bounded(Box<bounded::Bounded>),
 }
 
@@ -194,6 +202,28 @@ pub enum DeformError {
     },
 }
 
+/// How a drag's iterations ended.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum DragStatus {
+    /// The iterations were spent with the pose still moving toward where the handles take
+    /// it; the next drag (at the same targets or new ones) goes on from it. For
+    /// [`PoseMethod::Bounded`]: the bound is not met yet.
+    #[default]
+    Moving,
+    /// The pose moved by at most the method's tolerance in its last iteration: a stationary
+    /// pose for these targets. For [`PoseMethod::Bounded`]: the bound is met.
+    Converged,
+    /// The method could not make progress: no step along KVF's field lowered its energy
+    /// without flipping a triangle (its line search), or bounded distortion's finishing
+    /// Newton step found no decrease. The pose is the last one that made progress: finite
+    /// and usable, but not where the method would settle.
+    Stalled,
+    /// The method's iterations reached a point that is not finite (targets too far for
+    /// floating point, say); the pose before the drag is kept, and the report measures it.
+    Reverted,
+}
+
 /// What a drag did, and the pose it left, measured the same way for every method.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DragReport {
@@ -214,6 +244,9 @@ pub struct DragReport {
     /// For [`PoseMethod::Bounded`], whether every triangle is within the bound and none is
     /// flipped; `None` for methods without a bound.
     pub bound_met: Option<bool>,
+    /// How the iterations ended: still moving, converged, stalled, or reverted to the pose
+    /// before the drag.
+    pub status: DragStatus,
 }
 
 /// A mesh prepared for posing.
@@ -224,6 +257,9 @@ pub struct Deformer {
     frames: Frames,
     diameter: f64,
     positions: Vec<[f64; 2]>,
+    /// The pose before the drag being made, put back if the method ends on a point that is
+    /// not finite.
+    before: Vec<[f64; 2]>,
     pins: Vec<u32>,
     solver: Solver,
     /// Per triangle, its stiffness ([`Deformer::set_stiffness`]; `None`: all 1).
@@ -252,8 +288,10 @@ impl Deformer {
         let frames = planar_frames(mesh)?;
         let n = mesh.positions.len();
         let solver = match method {
-            PoseMethod::Kvf(options) => Solver::Kvf(kvf::Kvf::new(&frames, n, options)),
-            PoseMethod::Arap(options) => Solver::Arap(arap::Arap::new(&frames, n, options)),
+            PoseMethod::Kvf(options) => Solver::Kvf(Box::new(kvf::Kvf::new(&frames, n, options))),
+            PoseMethod::Arap(options) => {
+                Solver::Arap(Box::new(arap::Arap::new(&frames, n, options)))
+            }
             PoseMethod::Bounded(options) => {
                 Solver::Bounded(Box::new(bounded::Bounded::new(&frames, n, options)?))
             }
@@ -263,6 +301,7 @@ impl Deformer {
             solver,
             diameter: mesh.diameter().max(f64::MIN_POSITIVE),
             positions: mesh.positions.clone(),
+            before: mesh.positions.clone(),
             rest: mesh.clone(),
             frames,
             pins: Vec::new(),
@@ -444,13 +483,24 @@ impl Deformer {
             return Err(DeformError::NonFiniteTarget { index });
         }
         let size = self.diameter;
-        let mut report = match &mut self.solver {
-            Solver::Kvf(s) => s.drag(&self.frames, targets, &mut self.positions, size)?,
-            Solver::Arap(s) => s.drag(&self.frames, targets, &mut self.positions, size)?,
+        self.before.copy_from_slice(&self.positions);
+        let result = match &mut self.solver {
+            Solver::Kvf(s) => s.drag(&self.frames, targets, &mut self.positions, size),
+            Solver::Arap(s) => s.drag(&self.frames, targets, &mut self.positions, size),
             Solver::Bounded(s) => {
-                s.drag(&self.frames, targets, &self.pins, &mut self.positions, size)?
+                s.drag(&self.frames, targets, &self.pins, &mut self.positions, size)
             }
         };
+        let finite = self.positions.iter().flatten().all(|c| c.is_finite());
+        if result.is_err() || !finite {
+            // Whatever the method did, the pose stays finite and usable: the one before.
+            self.positions.copy_from_slice(&self.before);
+        }
+        let mut report = result?;
+        if !finite {
+            report.status = DragStatus::Reverted;
+            report.last_change = 0.0;
+        }
         self.measure(targets, &mut report);
         Ok(report)
     }
@@ -467,8 +517,9 @@ impl Deformer {
         for f in 0..self.frames.len() {
             let (q, r) = similarity_parts(self.frames.gradient(f, &self.positions));
             energy += self.frames.area[f] * (2.0 * (q - 1.0) * (q - 1.0) + 2.0 * r * r);
-            // σ₁ = q + r, σ₂ = q − r (signed): flipped when σ₂ ≤ 0.
-            if q - r <= 0.0 {
+            // σ₁ = q + r, σ₂ = q − r (signed): flipped when σ₂ ≤ 0 (or not a number, which
+            // the drag never leaves; counted as flipped rather than hidden).
+            if q - r <= 0.0 || (q - r).is_nan() {
                 flipped += 1;
             } else {
                 let d = (q + r) / (q - r);
@@ -513,6 +564,14 @@ impl Deformer {
     /// Puts the pose back to the rest shape (pins stay).
     pub fn reset(&mut self) {
         self.positions.copy_from_slice(&self.rest.positions);
+        self.forget_targets();
+    }
+
+    /// The pose was replaced: KVF's next drag starts from the handles' places.
+    fn forget_targets(&mut self) {
+        if let Solver::Kvf(s) = &mut self.solver {
+            s.forget_targets();
+        }
     }
 
     /// Replaces the pose (the next drag starts from it), e.g. an undo; `positions` must
@@ -531,6 +590,7 @@ impl Deformer {
             return Err(DeformError::NonFiniteTarget { index });
         }
         self.positions.copy_from_slice(positions);
+        self.forget_targets();
         Ok(())
     }
 }

@@ -9,6 +9,9 @@ use crate::param::bounded::{BoundedDistortion, BoundedOptions};
 
 const UNREACHED: u32 = u32::MAX;
 
+/// The limit counts as met at `limit (1 + LIMIT_SLACK)`, as the projections' tolerance.
+const LIMIT_SLACK: f64 = 1e-3;
+
 /// The most iterations (projections and the projected-Newton finish) of one attempt.
 const ATTEMPT_ITERATIONS: u32 = 300;
 
@@ -39,7 +42,24 @@ pub struct UntangleOptions {
     pub rings: u32,
     /// The iterations of every attempt together, at most (default 1500).
     pub iterations: u32,
+    /// The largest conformal distortion the repaired pose may have, anywhere: a repair
+    /// that cannot unfold the pose within it returns the pose given (unless
+    /// [`UntangleOptions::best_effort`]). `None` (the default): the larger of
+    /// 10 and the largest distortion of the pose's unflipped triangles away
+    /// from the fold (more than [`UntangleOptions::rings`] rings from every flip), what the
+    /// pose had before it folded; stated in [`UntangleReport::limit`]. A repair never trades
+    /// a fold for a blob.
+    pub limit: Option<f64>,
+    /// Whether a repair that cannot meet [`UntangleOptions::limit`] returns its best
+    /// attempt anyway (fewest flips, then lowest distortion), as the meshing of in-betweens
+    /// wants (default `false`: the pose given comes back unchanged, and the report says
+    /// what the best attempt reached).
+    pub best_effort: bool,
 }
+
+/// The least of the distortion limits [`untangle`] chooses by itself
+/// ([`UntangleOptions::limit`]).
+const DEFAULT_LIMIT: f64 = 10.0;
 
 impl Default for UntangleOptions {
     fn default() -> Self {
@@ -48,6 +68,8 @@ impl Default for UntangleOptions {
             raises: 6,
             rings: 4,
             iterations: 1500,
+            limit: None,
+            best_effort: false,
         }
     }
 }
@@ -73,14 +95,34 @@ impl UntangleOptions {
         self.iterations = iterations;
         self
     }
+    /// Sets the largest distortion the repaired pose may have.
+    pub fn with_limit(mut self, limit: f64) -> Self {
+        self.limit = Some(limit);
+        self
+    }
+    /// Sets whether a repair that cannot meet the limit returns its best attempt.
+    pub fn with_best_effort(mut self, best_effort: bool) -> Self {
+        self.best_effort = best_effort;
+        self
+    }
 }
 
 /// What [`untangle`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct UntangleReport {
-    /// Whether no triangle is left flipped.
+    /// Whether the pose returned has no flipped triangle and no distortion over
+    /// [`UntangleReport::limit`]. When false (and not [`UntangleOptions::best_effort`]), the
+    /// pose returned is the pose given.
     pub success: bool,
+    /// The largest distortion the repaired pose was allowed ([`UntangleOptions::limit`],
+    /// or the one chosen from the pose).
+    pub limit: f64,
+    /// The best attempt's flipped triangles, whether it was kept or not.
+    pub best_flipped: usize,
+    /// The best attempt's largest distortion of an unflipped triangle, whether it was kept
+    /// or not.
+    pub best_distortion: f64,
     /// Triangles with non-positive signed area in the pose given.
     pub flipped_before: usize,
     /// Triangles with non-positive signed area in the pose returned.
@@ -130,13 +172,17 @@ pub struct Untangled {
 ///   without one keeps the vertex furthest from its flips, or its rim, where it is).
 /// - A pose without a flipped triangle comes back as it is, bit for bit; a piece without
 ///   one is not moved; vertices further than the region from every flip do not move.
-/// - When flips remain after the bound was raised as far as
-///   [`UntangleOptions::raises`] allows, the iteration budget spent or the region grown
-///   over the whole of the flipped pieces, the result is `Ok` with
-///   [`UntangleReport::success`] false: the attempt with the fewest flips left (then the
-///   lowest distortion) is returned, and the pose given when no attempt left fewer flips
-///   (a disk's centre pinned outside its pinned rim, say). The positions returned are
-///   always finite.
+/// - The repair states a limit ([`UntangleReport::limit`]; [`UntangleOptions::limit`]):
+///   the largest distortion the repaired pose may have, anywhere, by default the larger of
+///   10 and what the pose has away from its fold. It succeeds when no triangle is left
+///   flipped and none is over the limit; otherwise the result is `Ok` with
+///   [`UntangleReport::success`] false and the pose given, unchanged (a fold is never
+///   traded for a blob), the report saying what the best attempt reached
+///   ([`UntangleReport::best_flipped`], [`UntangleReport::best_distortion`]); with
+///   [`UntangleOptions::best_effort`], that best attempt (the fewest flips left, then the
+///   lowest distortion) is returned instead, and the pose given when no attempt left
+///   fewer flips (a disk's centre pinned outside its pinned rim, say). The positions
+///   returned are always finite.
 ///
 /// # How
 ///
@@ -157,7 +203,8 @@ pub struct Untangled {
 /// An attempt that does not meet the bound is followed by another from the pose again,
 /// with the region twice as wide when a triangle left flipped or over the bound touches
 /// the rim (the rim holds it), or with `K` doubled otherwise, up to
-/// [`UntangleOptions::raises`] doublings; the iteration budget covers every attempt.
+/// [`UntangleOptions::raises`] doublings and never past the limit; the iteration budget
+/// covers every attempt.
 ///
 /// # Errors
 /// [`DeformError::Mesh`] for an invalid rest shape, [`DeformError::PositionCount`] and
@@ -201,7 +248,10 @@ pub fn untangle(
         return Err(DeformError::NonFiniteTarget { index });
     }
     let pinned = pinned_vertices(n, pins)?;
-    if let Some(k) = options.max_distortion {
+    for k in [options.max_distortion, options.limit]
+        .into_iter()
+        .flatten()
+    {
         if !(k >= 1.0 && k.is_finite()) {
             return Err(DeformError::BadBound(k));
         }
@@ -221,10 +271,15 @@ pub fn untangle(
     let flipped_before = before.iter().filter(|d| d.is_none()).count();
     let worst_of = |d: &[Option<f64>]| d.iter().flatten().fold(1.0f64, |a, &b| a.max(b));
     if flipped_before == 0 {
+        let worst = worst_of(&before);
+        let limit = options.limit.unwrap_or(DEFAULT_LIMIT.max(worst));
         return Ok(Untangled {
             positions: pose.to_vec(),
             report: UntangleReport {
-                success: true,
+                success: worst <= limit * (1.0 + LIMIT_SLACK),
+                limit,
+                best_flipped: 0,
+                best_distortion: worst,
                 flipped_before: 0,
                 flipped_after: 0,
                 max_distortion: worst_of(&before),
@@ -301,7 +356,20 @@ pub fn untangle(
             .filter_map(|(_, d)| *d)
             .fold(3.0f64, f64::max)
     });
-    let cap = first_bound * 2f64.powi(options.raises.min(1000) as i32);
+    // What the pose has away from the fold: every vertex further than the first region.
+    let away = faces
+        .iter()
+        .zip(&before)
+        .filter(|(f, _)| {
+            f.iter()
+                .all(|&v| rings_from_flips[v as usize] > first_rings)
+        })
+        .filter_map(|(_, d)| *d)
+        .fold(1.0f64, f64::max);
+    let limit = options.limit.unwrap_or(DEFAULT_LIMIT.max(away));
+    let first_bound = first_bound.min(limit);
+    let cap = (first_bound * 2f64.powi(options.raises.min(1000) as i32)).min(limit);
+    let within = |worst: f64| worst <= limit * (1.0 + LIMIT_SLACK);
 
     let mut k = first_bound;
     let mut rings = first_rings;
@@ -369,7 +437,10 @@ pub fn untangle(
         let flipped = after.iter().filter(|d| d.is_none()).count();
         let limit = k * (1.0 + bounded.tolerance);
         let bad = |f: usize| after[f].is_none_or(|d| d > limit);
-        let met = finite && flipped == unmendable && !region.faces.iter().any(|&f| bad(f));
+        let met = finite
+            && flipped == unmendable
+            && !region.faces.iter().any(|&f| bad(f))
+            && within(worst_of(&after));
         let attempt = Attempt {
             flipped,
             met,
@@ -403,6 +474,19 @@ pub fn untangle(
             break;
         }
     }
+    let success = best.flipped == 0 && within(best.worst);
+    let (best_flipped, best_distortion) = (best.flipped, best.worst);
+    if !success && !options.best_effort {
+        // No blob for a fold: the pose given, as it was.
+        kept.copy_from_slice(pose);
+        best = Attempt {
+            flipped: flipped_before,
+            met: false,
+            worst: worst_of(&before),
+            bound: None,
+            rings: 0,
+        };
+    }
     let (mut moved_vertices, mut max_move) = (0, 0.0f64);
     for (a, b) in kept.iter().zip(pose) {
         if a != b {
@@ -413,7 +497,10 @@ pub fn untangle(
     Ok(Untangled {
         positions: kept,
         report: UntangleReport {
-            success: best.flipped == 0,
+            success,
+            limit,
+            best_flipped,
+            best_distortion,
             flipped_before,
             flipped_after: best.flipped,
             max_distortion: best.worst,

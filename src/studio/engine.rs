@@ -14,7 +14,7 @@
 
 use super::edit::Touched;
 use super::project::{MethodData, Project};
-use crate::deform::{DragReport, KvfOptions, PoseMethod};
+use crate::deform::{DragReport, DragStatus, KvfOptions, PoseMethod};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
 use crate::parts::{JointedDeformer, Placement, Weld};
@@ -322,7 +322,12 @@ impl Engine {
 
     /// Moves the pins of keyframe `k` (the one loaded) to `targets` and writes the pose into
     /// `doc`. The pose is checked before it is kept: every point finite, no triangle
-    /// collapsed, not mirrored; otherwise the keyframe keeps its pose and the drag is refused.
+    /// collapsed, not mirrored; otherwise (or when the deformer reverted to the pose before
+    /// the drag) the keyframe keeps its pose and the drag is refused. A drag that leaves more
+    /// flipped triangles than the keyframe had (KVF's steps may fold a thin limb on the way)
+    /// is repaired by [`crate::deform::untangle`] before it is kept, within the bound the
+    /// repair states, or refused: the studio never keeps a new fold. The report's flips and
+    /// distortion are the kept pose's.
     pub fn drag(
         &mut self,
         doc: &mut Project,
@@ -340,6 +345,11 @@ impl Engine {
         let result = self.deformer.drag(&self.targets);
         let bad = match &result {
             Err(e) => Some(people(&e.to_string())),
+            // The deformer kept the pose before the drag: say why nothing moved.
+            Ok(r) if r.status == DragStatus::Reverted => Some(
+                "the handles are too far apart for the mesh to follow (the pose would not be finite)"
+                    .into(),
+            ),
             Ok(_) => pose_problem(&self.rest, self.deformer.positions()),
         };
         if let Some(why) = bad {
@@ -347,7 +357,16 @@ impl Engine {
             let _ = self.deformer.set_positions(&doc.keyframes[k].positions);
             return Err(format!("the drag was not kept: {why}"));
         }
-        let report = result.map_err(|e| e.to_string())?;
+        let mut report = result.map_err(|e| e.to_string())?;
+        let before = flipped(&self.rest.faces, &doc.keyframes[k].positions);
+        if report.flipped_triangles > before {
+            // The drag folded triangles: repaired where they are, within the bound the repair
+            // states, or the drag is refused. The studio never keeps a new fold.
+            if let Err(why) = self.unfold(k, doc, &mut report) {
+                let _ = self.deformer.set_positions(&doc.keyframes[k].positions);
+                return Err(format!("the drag was not kept: {why}"));
+            }
+        }
         // Held pieces keep their places exactly (a soft hold moves them by round-off).
         let key = &mut doc.keyframes[k].positions;
         for (v, p) in self.deformer.positions().iter().enumerate() {
@@ -362,6 +381,47 @@ impl Engine {
         self.path_error = None;
         self.flips[k] = report.flipped_triangles;
         Ok(report)
+    }
+
+    /// Repairs the folds a drag of keyframe `k` left in the deformer's pose
+    /// ([`crate::deform::untangle`], the handles, the held pieces and every joint's vertices
+    /// held where the drag put them) and measures the repaired pose into `report`; why not,
+    /// when the repair cannot unfold it within its stated bound.
+    fn unfold(&mut self, k: usize, doc: &Project, report: &mut DragReport) -> Result<(), String> {
+        let mut pins = doc.keyframes[k].pins.clone();
+        pins.extend_from_slice(&self.held);
+        let weld = self.deformer.weld();
+        let mut members = vec![0u32; weld.first.len()];
+        for &w in &weld.of {
+            members[w as usize] += 1;
+        }
+        pins.extend(
+            (0..weld.of.len() as u32).filter(|&v| members[weld.of[v as usize] as usize] > 1),
+        );
+        pins.sort_unstable();
+        pins.dedup();
+        let pose = self.deformer.positions().to_vec();
+        let repaired = crate::deform::untangle(
+            &self.rest,
+            &pose,
+            &pins,
+            &crate::deform::UntangleOptions::default(),
+        )
+        .map_err(|e| people(&e.to_string()))?;
+        let r = repaired.report;
+        if !r.success {
+            return Err(format!(
+                "it would fold {} triangles, which cannot be unfolded within distortion {:.1}; move the handle less at a time, or try ARAP or bounded",
+                r.flipped_before, r.limit
+            ));
+        }
+        self.deformer
+            .set_positions(&repaired.positions)
+            .map_err(|e| e.to_string())?;
+        let (worst, flips) = self.measure(&repaired.positions);
+        report.max_distortion = worst;
+        report.flipped_triangles = flips;
+        Ok(())
     }
 
     /// The compiled path through the keyframes (compiled again after any change). Keyframes

@@ -958,11 +958,21 @@ impl Session {
             &crate::deform::UntangleOptions::default(),
         )
         .map_err(|e| people(&e.to_string()))?;
-        let after = repaired.report.flipped_after;
-        if after >= before {
+        let r = repaired.report;
+        if !r.success {
+            // The pose is left as it was: a repair never trades a fold for a blob.
+            let best = if r.best_flipped > 0 {
+                format!("the best attempt left {} of them flipped", r.best_flipped)
+            } else {
+                format!(
+                    "unfolding them needs a distortion of {:.1}",
+                    r.best_distortion
+                )
+            };
             return Err(format!(
-                "keyframe {}: the {before} flipped triangles could not be repaired (pins may hold a fold: move or remove them)",
-                nth(k)
+                "keyframe {}: the {before} flipped triangles cannot be repaired within distortion {:.1} ({best}); the pose is unchanged: drag the folded part back part of the way, or move or remove the pins that hold the fold",
+                nth(k),
+                r.limit
             ));
         }
         self.commit(
@@ -972,16 +982,15 @@ impl Session {
                 positions: repaired.positions,
             },
         )?;
-        if after > 0 {
-            self.note(
-                format!(
-                    "keyframe {}: {} of {before} flipped triangles repaired; {after} remain (pins may hold a fold)",
-                    nth(k),
-                    before - after
-                ),
-                true,
-            );
-        }
+        self.note(
+            format!(
+                "keyframe {}: {before} flipped triangles repaired; largest distortion {:.1} (bound {:.1})",
+                nth(k),
+                r.max_distortion,
+                r.limit
+            ),
+            false,
+        );
         Ok(())
     }
 

@@ -580,11 +580,12 @@ struct SolverArgs {
     #[arg(long)]
     allow_inverted: bool,
     /// How each frame is placed: `anchor` (by a vertex near the middle and one of its edges,
-    /// the original program's) or `fit` (by the rigid motion that best fits the keyframes,
-    /// the vertices that hold still between them weighing most, so that they hold still in
-    /// between). Keyframes are reached exactly either way.
-    #[arg(long, value_name = "HOW", default_value = "anchor", value_parser = parse_placement)]
-    placement: bdmorph::Placement,
+    /// the original program's; the default of `morph` and `blend`) or `fit` (by the rigid
+    /// motion that best fits the keyframes, the vertices that hold still between them weighing
+    /// most, so that they hold still in between; the default of `inbetween`). Keyframes are
+    /// reached exactly either way.
+    #[arg(long, value_name = "HOW", value_parser = parse_placement)]
+    placement: Option<bdmorph::Placement>,
 }
 
 fn parse_placement(text: &str) -> Result<bdmorph::Placement, String> {

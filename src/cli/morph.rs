@@ -192,7 +192,7 @@ pub(super) fn morph_options(solver: &SolverArgs) -> MorphOptions {
         .with_tolerance(solver.tolerance)
         .with_max_iterations(solver.max_iterations)
         .with_allow_inverted(solver.allow_inverted)
-        .with_placement(solver.placement)
+        .with_placement(solver.placement.unwrap_or(bdmorph::Placement::Anchor))
 }
 
 impl Inputs {

@@ -693,7 +693,7 @@ impl Project {
 
 /// The path through `meshes` (the keyframes' poses, with `doc`'s triangles) with the
 /// document's times and easings and its placement; keyframes with flipped triangles are
-/// accepted (`--allow-inverted`) and reached exactly ([`MorphOptions::reach_inverted`]).
+/// accepted (`--allow-inverted`) and reached exactly ([`crate::MorphOptions::with_reach_inverted`]).
 ///
 /// # Errors
 /// The path's, when the keyframes cannot be morphed.

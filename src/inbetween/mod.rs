@@ -57,8 +57,12 @@
 mod baseline;
 mod compatible;
 mod correspondence;
+mod embed;
 mod fit;
+mod foldover;
+mod layout;
 mod outline;
+mod refine;
 
 pub use baseline::{linear_frame, ArapInterpolation};
 pub use compatible::{
@@ -110,7 +114,15 @@ pub struct InbetweenOptions {
     pub picture: PictureOptions,
     /// The morph's options.
     pub morph: MorphOptions,
+    /// Holes of a drawing whose area is below this many square pixels (at the drawing's
+    /// own scale) are filled: pinholes, such as a stray transparent pixel. Default
+    /// [`DEFAULT_PINHOLE`].
+    pub pinhole: f64,
 }
+
+/// The default [`InbetweenOptions::pinhole`]: 64 square pixels, a hole of 8 by 8 pixels (at
+/// a drawing scaled up 4 times, 2 by 2 of its own pixels).
+pub const DEFAULT_PINHOLE: f64 = 64.0;
 
 impl Default for InbetweenOptions {
     fn default() -> Self {
@@ -119,6 +131,7 @@ impl Default for InbetweenOptions {
             min_angle: DEFAULT_MIN_ANGLE,
             picture: PictureOptions::default(),
             morph: MorphOptions::default(),
+            pinhole: DEFAULT_PINHOLE,
         }
     }
 }
@@ -144,12 +157,23 @@ impl InbetweenOptions {
         self.morph = morph;
         self
     }
+    /// Holes under `area` square pixels are filled ([`InbetweenOptions::pinhole`]).
+    pub fn with_pinhole(mut self, area: f64) -> Self {
+        self.pinhole = area;
+        self
+    }
 
     fn validate(&self) -> Result<(), InbetweenError> {
         if !(3..=MAX_VERTICES).contains(&self.vertices) {
             return Err(InbetweenError::BadOption(format!(
                 "{} vertices: give from 3 to {MAX_VERTICES}",
                 self.vertices
+            )));
+        }
+        if !(self.pinhole >= 0.0 && self.pinhole.is_finite()) {
+            return Err(InbetweenError::BadOption(format!(
+                "pinholes under {} px²: give an area of 0 or more square pixels",
+                self.pinhole
             )));
         }
         Ok(())
@@ -192,6 +216,21 @@ pub enum InbetweenError {
         flipped: usize,
         /// Triangles of the mesh.
         faces: usize,
+    },
+    /// Even the re-embedding that refines A's mesh found no flip-free layout over a drawing
+    /// (see [`compatible_mesh`] for when it exists).
+    #[error(
+        "{flipped} of {faces} triangles stay flipped when drawing A's mesh is laid over {which}, and it could not be laid out again: {reason}"
+    )]
+    NoBijection {
+        /// The drawing it was laid over.
+        which: Drawing,
+        /// Triangles flipped before the re-embedding.
+        flipped: usize,
+        /// Triangles of the mesh.
+        faces: usize,
+        /// Why.
+        reason: String,
     },
     /// An option out of range.
     #[error("{0}")]

@@ -156,14 +156,16 @@ fn place(shape: &Shape, p: [f64; 2]) -> Place {
 }
 
 /// Builds the compatible mesh of drawings `a` and `b` (pictures of one subject, with the same
-/// pieces and holes) with the user's point pairs `matches`: see [`super`] for how.
+/// number of pieces; holes may differ) with the user's point pairs `matches`: see [`super`]
+/// for how, and for the guarantee that no flipped triangle is left.
 ///
 /// # Errors
 /// [`InbetweenError::Meshing`] when a picture has no subject or cannot be meshed,
-/// [`InbetweenError::Topology`] naming what differs, [`InbetweenError::Match`] for a pair
-/// that cannot be read (one point on an outline and the other inside, points on outlines
-/// that are not each other's, pairs in another order), [`InbetweenError::Flipped`] when no
-/// flip-free layout over B was found.
+/// [`InbetweenError::Topology`] when the numbers of pieces differ,
+/// [`InbetweenError::Match`] for a pair that cannot be read (one point on an outline and the
+/// other inside, points on outlines that are not each other's, pairs in another order),
+/// [`InbetweenError::NoBijection`] when even the re-embedding found no flip-free layout (B's
+/// outline as laid out crosses itself, or a floating-point limit).
 pub fn compatible_mesh(
     a: &Image,
     b: &Image,
@@ -425,8 +427,10 @@ pub fn compatible_path(
         pairings: &pairings,
         started,
     };
-    match build(&input, false) {
-        Err(Failure::EnclosesHole(_)) if shapes[0].loops.iter().any(|l| l.area < 0.0) => {
+    match build(&input, options.transparent_holes) {
+        Err(Failure::EnclosesHole(_))
+            if !options.transparent_holes && shapes[0].loops.iter().any(|l| l.area < 0.0) =>
+        {
             // A flipped region surrounds a hole: every hole laid out as a transparent region
             // instead (one piece without holes per piece: the guarantee holds for those).
             build(&input, true).map_err(Failure::into_error)
@@ -525,7 +529,7 @@ fn build(input: &Input<'_>, all_transparent: bool) -> Result<CompatiblePath, Fai
             "{} is meshed as a transparent region{}",
             hole_name(l, Drawing(0), a),
             if all_transparent {
-                " (a flipped region surrounded a hole)"
+                " (every hole is)"
             } else {
                 ", shrinking where a drawing has no hole there"
             }

@@ -244,9 +244,14 @@ pub fn outline_correspondence(
 ///
 /// # Errors
 /// As [`super::compatible_mesh`]: [`InbetweenError::Meshing`] when B has no subject,
-/// [`InbetweenError::Topology`] when B's pieces and holes differ from the mesh's,
-/// [`InbetweenError::Match`] for a pair that cannot be read, [`InbetweenError::Flipped`]
-/// when no flip-free layout was found.
+/// [`InbetweenError::Topology`] when B's pieces differ from the mesh's or B lacks one of the
+/// mesh's holes (holes of B's that the mesh lacks are covered by it, and said in the
+/// report's notes), [`InbetweenError::Match`] for a pair that cannot be read,
+/// [`InbetweenError::Flipped`] when no flip-free layout was found. The mesh is kept as it is
+/// (the studio's keyframes are places of its vertices), so the guarantee of
+/// [`super::compatible_mesh`], which refines the mesh, does not apply: every untangling
+/// stage is tried (the projections, the foldover-free untangling of Garanzha et al. 2021
+/// near the flips, the bounded-distortion mapping), and what they leave is an error.
 ///
 /// ```
 /// use bdmorph::generate;

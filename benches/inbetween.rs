@@ -8,7 +8,11 @@
 //! compatible mesh's build at the same size; and `correspondence`, the preview of where its
 //! outline goes), and `inbetween_frame/<method>` (one in-between at about 2K vertices, t alternating
 //! between 0.3 and 0.7 so that no frame is a repeat: BDMORPH against the as-rigid-as-possible
-//! interpolation and straight lines on the same compatible mesh). See BENCHMARKS.md.
+//! interpolation and straight lines on the same compatible mesh), and
+//! `inbetween_robust/<N>` (the whole [`compatible_mesh`] of two walk-cycle drawings whose
+//! layout needs the guarantee, robot walk2 to walk4 from the shared data scaled up 4 times:
+//! A's mesh refined where it has no flip-free layout, a hole of one drawing only as a
+//! transparent region; skipped without the shared data). See BENCHMARKS.md.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -38,6 +42,36 @@ fn benches(c: &mut Criterion) {
         });
     }
     group.finish();
+
+    let walk = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/animation2d/kenney-characters/robot"
+    ));
+    let read = |i: usize| {
+        bdmorph::render::raster::read_image(walk.join(format!("robot_walk{i}.png")))
+            .ok()
+            .map(|image| scale(&image, 4))
+    };
+    if let (Some(wa), Some(wb)) = (read(2), read(4)) {
+        let mut group = c.benchmark_group("inbetween_robust");
+        group
+            .sample_size(10)
+            .warm_up_time(Duration::from_secs(1))
+            .measurement_time(Duration::from_secs(5));
+        for n in [1_000usize, 10_000] {
+            let options = InbetweenOptions::default().with_vertices(n);
+            let made = compatible_mesh(&wa, &wb, &[], &options).expect("compatible");
+            eprintln!("[bdmorph inbetween robust {n}] {:?}", made.report);
+            group.bench_function(BenchmarkId::from_parameter(n), |bench| {
+                bench.iter(|| {
+                    compatible_mesh(black_box(&wa), &wb, &[], &options).expect("compatible")
+                });
+            });
+        }
+        group.finish();
+    } else {
+        eprintln!("SKIPPED inbetween_robust: {} not found", walk.display());
+    }
 
     let mut group = c.benchmark_group("inbetween_fit_drawing");
     group
@@ -111,6 +145,24 @@ fn benches(c: &mut Criterion) {
         bench.iter(|| linear_frame(&made.mesh.positions, &made.positions_b, black_box(next_t())));
     });
     group.finish();
+}
+
+/// `image` scaled up `k` times by nearest neighbour.
+fn scale(image: &bdmorph::render::Image, k: u32) -> bdmorph::render::Image {
+    let (w, h) = (image.width * k, image.height * k);
+    let mut rgba = vec![0u8; 4 * w as usize * h as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let s = 4 * ((y / k) * image.width + x / k) as usize;
+            let d = 4 * (y * w + x) as usize;
+            rgba[d..d + 4].copy_from_slice(&image.rgba[s..s + 4]);
+        }
+    }
+    bdmorph::render::Image {
+        width: w,
+        height: h,
+        rgba,
+    }
 }
 
 criterion_group!(inbetween, benches);

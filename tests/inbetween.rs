@@ -156,27 +156,19 @@ fn a_shape_with_a_hole_in_both_drawings() {
 }
 
 #[test]
-fn different_topology_is_refused_in_one_line() {
+fn a_different_number_of_pieces_is_refused_in_one_line() {
     let disk = generate::picture(160, 160, |x, y| {
         generate::capsule_distance([x, y], [80.0, 80.0], [80.0, 80.0], 60.0)
     });
-    let holed = generate::ring_picture(160, [80.0, 80.0], 60.0, [80.0, 80.0], 20.0);
-    let e = compatible_mesh(&disk, &holed, &[], &options(400)).unwrap_err();
-    assert!(matches!(e, InbetweenError::Topology(_)));
-    let text = e.to_string();
-    assert_eq!(text.lines().count(), 1);
-    assert!(
-        text.contains("0 holes in drawing A and 1 hole in drawing B"),
-        "{text}"
-    );
     let two = generate::picture(160, 160, |x, y| {
         generate::capsule_distance([x, y], [40.0, 80.0], [40.0, 80.0], 30.0).min(
             generate::capsule_distance([x, y], [120.0, 80.0], [120.0, 80.0], 30.0),
         )
     });
-    let text = compatible_mesh(&disk, &two, &[], &options(400))
-        .unwrap_err()
-        .to_string();
+    let e = compatible_mesh(&disk, &two, &[], &options(400)).unwrap_err();
+    assert!(matches!(e, InbetweenError::Topology(_)));
+    let text = e.to_string();
+    assert_eq!(text.lines().count(), 1);
     assert!(
         text.contains("drawing A has 1 piece and drawing B has 2 pieces"),
         "{text}"
@@ -423,9 +415,30 @@ fn a_picture_mesh_laid_over_another_drawing_keeps_its_triangles() {
         "{got:?} against {want:?}"
     );
     assert!((report.error - (q[0] - pa[0]).hypot(q[1] - pa[1])).abs() < 1e-9);
-    // A drawing with a hole is refused in one line.
+    // A drawing with a hole the mesh lacks: the mesh covers it (B's picture is
+    // transparent there), and a note says so.
     let holed = generate::ring_picture(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
-    let e = fit_drawing(&mesh, 256.0, &holed, &[], &options(800)).unwrap_err();
+    let disk = generate::picture(256, 256, |x, y| {
+        generate::capsule_distance([x, y], [128.0, 128.0], [128.0, 128.0], 90.0)
+    });
+    let round = fit_drawing(&mesh, 256.0, &disk, &[], &options(800)).unwrap();
+    assert_eq!(round.report.flipped, 0);
+    let covered = fit_drawing(&mesh, 256.0, &holed, &[], &options(800)).unwrap();
+    assert_eq!(covered.report.flipped, 0);
+    assert!(
+        covered
+            .report
+            .notes
+            .iter()
+            .any(|n| n.contains("covered by the mesh")),
+        "{:?}",
+        covered.report.notes
+    );
+    // A mesh with a hole laid over a drawing without it is refused in one line.
+    let ring = compatible_mesh(&holed, &holed, &[], &options(600))
+        .unwrap()
+        .mesh;
+    let e = fit_drawing(&ring, 256.0, &disk, &[], &options(600)).unwrap_err();
     assert!(e.to_string().contains("hole"), "{e}");
     assert!(!e.to_string().contains('\n'));
 }

@@ -247,20 +247,20 @@ fn stats_describe_the_compatible_mesh_then_each_frame() {
 fn mistakes_are_one_line_and_write_nothing() {
     let dir = scratch("mistakes");
     let (a, b) = drawings(&dir);
-    let holed = save(
+    let two = save(
         &dir,
-        "ring.png",
+        "two.png",
         &generate::picture(200, 200, |x, y| {
-            let outer = generate::capsule_distance([x, y], [100.0, 100.0], [100.0, 100.0], 80.0);
-            let hole = generate::capsule_distance([x, y], [100.0, 100.0], [100.0, 100.0], 30.0);
-            outer.max(-hole)
+            generate::capsule_distance([x, y], [50.0, 100.0], [50.0, 100.0], 30.0).min(
+                generate::capsule_distance([x, y], [150.0, 100.0], [150.0, 100.0], 30.0),
+            )
         }),
     );
     let target = dir.join("out.gif");
     let cases: Vec<(Vec<&std::ffi::OsStr>, &str)> = vec![
         (
-            vec![a.as_os_str(), holed.as_os_str(), os("--frames"), os("3")],
-            "0 holes in drawing A and 1 hole in drawing B",
+            vec![a.as_os_str(), two.as_os_str(), os("--frames"), os("3")],
+            "drawing A has 1 piece and drawing B has 2 pieces",
         ),
         (
             vec![

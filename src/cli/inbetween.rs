@@ -87,6 +87,9 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
     for (k, report) in path.reports.iter().enumerate() {
         if !quiet {
             eprintln!("bdmorph: {}", summary(report, Drawing(k + 1)));
+            for note in &report.notes {
+                eprintln!("bdmorph: note: {note}");
+            }
         }
         if args.out.stats {
             writeln!(stdout, "{}", report_json(report, k + 1)).map_err(|e| e.to_string())?;
@@ -177,8 +180,16 @@ fn summary(r: &CompatibleReport, over: Drawing) -> String {
     } else {
         format!(", {met} of {} pairs met", r.pairs.len())
     };
+    let added = if r.added_vertices > 0 {
+        format!(
+            " ({} added where A's mesh as meshed had no flip-free layout)",
+            r.added_vertices
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "compatible mesh: {} vertices, {} triangles, none flipped over {over}, largest distortion {:.2}{pairs}, in {:.2} s",
+        "compatible mesh: {} vertices{added}, {} triangles, none flipped over {over}, largest distortion {:.2}{pairs}, in {:.2} s",
         r.vertices, r.faces, r.max_distortion, r.seconds
     )
 }
@@ -204,9 +215,15 @@ fn report_json(r: &CompatibleReport, over: usize) -> String {
             )
         })
         .collect();
+    let notes: Vec<String> = r
+        .notes
+        .iter()
+        .map(|n| format!("\"{}\"", json_escape(n)))
+        .collect();
     format!(
-        "{{\"compatible_mesh\":{{\"drawing\":{over},\"vertices\":{},\"faces\":{},\"flipped\":{},\"outline_error\":{:e},\"max_distortion\":{},\"tolerance\":[{},{}],\"seconds\":{},\"pairs\":[{}]}}}}",
+        "{{\"compatible_mesh\":{{\"drawing\":{over},\"vertices\":{},\"added_vertices\":{},\"faces\":{},\"flipped\":{},\"outline_error\":{:e},\"max_distortion\":{},\"tolerance\":[{},{}],\"seconds\":{},\"pairs\":[{}],\"notes\":[{}]}}}}",
         r.vertices,
+        r.added_vertices,
         r.faces,
         r.flipped,
         r.outline_error,
@@ -214,6 +231,7 @@ fn report_json(r: &CompatibleReport, over: usize) -> String {
         r.tolerance[0],
         r.tolerance[1],
         r.seconds,
-        pairs.join(",")
+        pairs.join(","),
+        notes.join(",")
     )
 }

@@ -5,21 +5,23 @@ use std::time::Instant;
 
 use super::correspondence::ArcMap;
 use super::correspondence::{arc_map, common_polygon, rigid_alignment, Anchor, Corner};
-use super::outline::{closest_on_segment, pair_loops, Loop, Shape};
+use super::embed::EmbedFailure;
+use super::layout::{
+    guarantee, lay_out_with_pairs, lay_over, max_distortion, polish, signed_area, smooth,
+    squared_size, BUILD_STAGES, REFINED_AREA_SHARE,
+};
+use super::outline::{closest_on_segment, pair_loops, Loop, LoopPairing, Shape};
+use super::refine::{fill_holes, split_boundary_chords};
 use super::{Drawing, InbetweenError, InbetweenOptions, Match};
-use crate::deform::{untangle, Deformer, PoseMethod, UntangleOptions};
-use crate::io::{SurfaceMesh, TexCoords};
+use crate::io::TexCoords;
 use crate::mesh::PlanarMesh;
 use crate::meshing::{fit_loops_to_vertices, mesh_outline, picture_outline, MeshOptions, Outline};
-use crate::param::bounded::{BoundedDistortion, BoundedOptions};
 use crate::render::Image;
 
 /// How far from an outline (in pixels, or this share of the subject's size when larger) a
 /// matched point counts as a point of the outline: 3 pixels, 2%.
 const ON_OUTLINE_PIXELS: f64 = 3.0;
 const ON_OUTLINE_SHARE: f64 = 0.02;
-/// Rounds of ARAP iterations (10 each) for the first layout over B.
-const ARAP_ROUNDS: usize = 40;
 
 /// What became of one of the user's point pairs.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,8 +59,17 @@ pub struct CompatibleReport {
     pub max_distortion: f64,
     /// Triangles flipped by the first layout (ARAP with the outline fixed), before untangling.
     pub flipped_before_untangling: usize,
-    /// Rounds of the bounded-distortion mapping that lowered the largest distortion.
+    /// Vertices added to A's mesh where it had no flip-free layout over this drawing as it
+    /// was (the guarantee's refinement, see [`super`]); 0 when none was needed.
+    pub added_vertices: usize,
+    /// Rounds of the bounded-distortion mapping that lowered the largest distortion (none
+    /// when transparent regions are let shrink instead).
     pub polish_rounds: usize,
+    /// What was done about the drawings' holes, one line each: pinholes filled (holes under
+    /// [`super::InbetweenOptions::pinhole`]), holes of drawing A that this drawing lacks
+    /// (meshed as transparent regions that shrink here), holes of this drawing that A lacks
+    /// (covered by the mesh, transparent in its picture). Empty when the holes match.
+    pub notes: Vec<String>,
     /// Wall-clock seconds from the start of the build to this layout (with several drawings,
     /// the layouts are made in order).
     pub seconds: f64,
@@ -91,21 +102,24 @@ impl CompatibleMesh {
     }
 }
 
-/// A drawing's outline, simplified to fit about half the vertices of the mesh.
+/// A drawing's outline without its pinholes (holes under [`InbetweenOptions::pinhole`]),
+/// simplified to fit about half the vertices of the mesh; the tolerance it was simplified
+/// to, and how many pinholes were filled.
 pub(super) fn shape_of(
     image: &Image,
     which: Drawing,
     options: &InbetweenOptions,
-) -> Result<(Shape, f64), InbetweenError> {
+) -> Result<(Shape, f64, usize), InbetweenError> {
     let traced = picture_outline(image, &options.picture, None)
         .map_err(|source| InbetweenError::Meshing { which, source })?;
-    let shape = Shape::of(&traced.outline);
+    let (shape, pinholes) = Shape::of(&traced.outline).without_pinholes(options.pinhole);
     let loops: Vec<Vec<[f64; 2]>> = shape.loops.iter().map(|l| l.points.clone()).collect();
     let fitted = fit_loops_to_vertices(&loops, (options.vertices / 2).max(3));
     let tolerance = traced.tolerance + fitted.tolerance.unwrap_or(0.0);
     Ok((
         Shape::from_loops(fitted.loops.into_iter().map(Loop::new).collect()),
         tolerance,
+        pinholes,
     ))
 }
 
@@ -142,14 +156,16 @@ fn place(shape: &Shape, p: [f64; 2]) -> Place {
 }
 
 /// Builds the compatible mesh of drawings `a` and `b` (pictures of one subject, with the same
-/// pieces and holes) with the user's point pairs `matches`: see [`super`] for how.
+/// number of pieces; holes may differ) with the user's point pairs `matches`: see [`super`]
+/// for how, and for the guarantee that no flipped triangle is left.
 ///
 /// # Errors
 /// [`InbetweenError::Meshing`] when a picture has no subject or cannot be meshed,
-/// [`InbetweenError::Topology`] naming what differs, [`InbetweenError::Match`] for a pair
-/// that cannot be read (one point on an outline and the other inside, points on outlines
-/// that are not each other's, pairs in another order), [`InbetweenError::Flipped`] when no
-/// flip-free layout over B was found.
+/// [`InbetweenError::Topology`] when the numbers of pieces differ,
+/// [`InbetweenError::Match`] for a pair that cannot be read (one point on an outline and the
+/// other inside, points on outlines that are not each other's, pairs in another order),
+/// [`InbetweenError::NoBijection`] when even the re-embedding found no flip-free layout (B's
+/// outline as laid out crosses itself, or a floating-point limit).
 pub fn compatible_mesh(
     a: &Image,
     b: &Image,
@@ -317,6 +333,7 @@ pub(super) type Pins = Vec<(u32, [f64; 2])>;
 /// mesh and, per other drawing, the place of every boundary vertex over it.
 fn mesh_polygons(
     polygons: &[Vec<Corner>],
+    internal: &[Vec<[f64; 2]>],
     a: &Image,
     vertices: usize,
     min_angle: f64,
@@ -325,7 +342,9 @@ fn mesh_polygons(
     let a_loops: Vec<Vec<[f64; 2]>> = polygons
         .iter()
         .map(|p| p.iter().map(|c| c.a).collect())
+        .chain(internal.iter().cloned())
         .collect();
+    // The transparent regions are meshed as holes first, then filled.
     let mut outline = Outline::from_loops(&a_loops);
     outline.texture_frame = Some([0.0, 0.0, f64::from(a.width), f64::from(a.height)]);
     let meshed = mesh_outline(
@@ -338,7 +357,11 @@ fn mesh_polygons(
         which: Drawing(0),
         source,
     })?;
-    let mesh = meshed.mesh;
+    let mut mesh = meshed.mesh;
+    fill_holes(&mut mesh, internal, min_angle).ok_or_else(|| {
+        InbetweenError::Internal("a transparent region could not be meshed".into())
+    })?;
+    split_boundary_chords(&mut mesh);
     let segments: Vec<(&Corner, &Corner)> = polygons
         .iter()
         .flat_map(|p| (0..p.len()).map(move |i| (&p[i], &p[(i + 1) % p.len()])))
@@ -382,19 +405,176 @@ pub fn compatible_path(
             drawings.len()
         )));
     }
-    let a = drawings[0];
-    let others = drawings.len() - 1;
     let mut shapes = Vec::with_capacity(drawings.len());
     let mut tolerances = Vec::with_capacity(drawings.len());
+    let mut pinholes = Vec::with_capacity(drawings.len());
     for (d, image) in drawings.iter().enumerate() {
-        let (shape, tolerance) = shape_of(image, Drawing(d), options)?;
+        let (shape, tolerance, filled) = shape_of(image, Drawing(d), options)?;
         shapes.push(shape);
         tolerances.push(tolerance);
+        pinholes.push(filled);
     }
-    let shape_a = &shapes[0];
-    let loop_pairs: Vec<Vec<(usize, usize)>> = (1..drawings.len())
-        .map(|d| pair_loops(shape_a, &shapes[d], Drawing(d)))
+    let pairings: Vec<LoopPairing> = (1..drawings.len())
+        .map(|d| pair_loops(&shapes[0], &shapes[d], Drawing(d)))
         .collect::<Result<_, _>>()?;
+    let input = Input {
+        drawings,
+        matches,
+        options,
+        shapes: &shapes,
+        tolerances: &tolerances,
+        pinholes: &pinholes,
+        pairings: &pairings,
+        started,
+    };
+    match build(&input, options.transparent_holes) {
+        Err(Failure::EnclosesHole(_))
+            if !options.transparent_holes && shapes[0].loops.iter().any(|l| l.area < 0.0) =>
+        {
+            // A flipped region surrounds a hole: every hole laid out as a transparent region
+            // instead (one piece without holes per piece: the guarantee holds for those).
+            build(&input, true).map_err(Failure::into_error)
+        }
+        result => result.map_err(Failure::into_error),
+    }
+}
+
+/// What [`build`] works from.
+struct Input<'a> {
+    drawings: &'a [&'a Image],
+    matches: &'a [Match],
+    options: &'a InbetweenOptions,
+    shapes: &'a [Shape],
+    tolerances: &'a [f64],
+    pinholes: &'a [usize],
+    pairings: &'a [LoopPairing],
+    started: Instant,
+}
+
+/// Why [`build`] failed: an error, or the one the hole-free retry can mend.
+enum Failure {
+    Error(InbetweenError),
+    EnclosesHole(InbetweenError),
+}
+
+impl Failure {
+    fn into_error(self) -> InbetweenError {
+        match self {
+            Failure::Error(e) | Failure::EnclosesHole(e) => e,
+        }
+    }
+}
+
+impl From<InbetweenError> for Failure {
+    fn from(e: InbetweenError) -> Failure {
+        Failure::Error(e)
+    }
+}
+
+/// How a hole is named in notes: where it is in its picture (pixels from the top-left
+/// corner) and its area.
+fn hole_name(l: &Loop, which: Drawing, image: &Image) -> String {
+    format!(
+        "{which}'s hole at ({:.0}, {:.0}) ({:.0} px²)",
+        l.centroid[0],
+        f64::from(image.height) - l.centroid[1],
+        -l.area
+    )
+}
+
+/// The compatible path with A's holes that some drawing lacks (all of them with
+/// `all_transparent`) meshed as transparent regions.
+fn build(input: &Input<'_>, all_transparent: bool) -> Result<CompatiblePath, Failure> {
+    let Input {
+        drawings,
+        matches,
+        options,
+        shapes,
+        tolerances,
+        pinholes,
+        pairings,
+        started,
+    } = *input;
+    let a = drawings[0];
+    let others = drawings.len() - 1;
+    // Which loops are laid onto each other: A's outer loops and the holes every drawing has.
+    let full_a = &shapes[0];
+    let partner = |d: usize, la: usize| {
+        pairings[d - 1]
+            .pairs
+            .iter()
+            .find(|p| p.0 == la)
+            .map(|p| p.1)
+    };
+    let keep_a: Vec<usize> = (0..full_a.loops.len())
+        .filter(|&l| {
+            full_a.loops[l].area > 0.0
+                || (!all_transparent && (1..drawings.len()).all(|d| partner(d, l).is_some()))
+        })
+        .collect();
+    let transparent: Vec<&Loop> = (0..full_a.loops.len())
+        .filter(|l| !keep_a.contains(l))
+        .map(|l| &full_a.loops[l])
+        .collect();
+    let mut notes: Vec<Vec<String>> = vec![Vec::new(); others];
+    if pinholes[0] > 0 {
+        notes[0].push(format!(
+            "{} in drawing A filled (holes under {} px²)",
+            plural(pinholes[0], "pinhole"),
+            options.pinhole
+        ));
+    }
+    for l in &transparent {
+        notes[0].push(format!(
+            "{} is meshed as a transparent region{}",
+            hole_name(l, Drawing(0), a),
+            if all_transparent {
+                " (every hole is)"
+            } else {
+                ", shrinking where a drawing has no hole there"
+            }
+        ));
+    }
+    let mut reduced: Vec<Shape> = Vec::with_capacity(drawings.len());
+    reduced.push(full_a.subset(&keep_a));
+    // Per other drawing, its holes not laid onto A's (the mesh covers them; its picture is
+    // transparent there).
+    let mut uncovered: Vec<Vec<Loop>> = Vec::with_capacity(others);
+    for d in 1..drawings.len() {
+        let keep: Vec<usize> = keep_a
+            .iter()
+            .map(|&la| {
+                partner(d, la).ok_or_else(|| {
+                    InbetweenError::Internal(format!("loop {la} of A is not paired"))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        let full = &shapes[d];
+        let dropped: Vec<Loop> = (0..full.loops.len())
+            .filter(|l| !keep.contains(l))
+            .map(|l| full.loops[l].clone())
+            .collect();
+        if pinholes[d] > 0 {
+            notes[d - 1].push(format!(
+                "{} in {} filled (holes under {} px²)",
+                plural(pinholes[d], "pinhole"),
+                Drawing(d),
+                options.pinhole
+            ));
+        }
+        for l in &dropped {
+            notes[d - 1].push(format!(
+                "{} is covered by the mesh, transparent in its picture",
+                hole_name(l, Drawing(d), drawings[d])
+            ));
+        }
+        reduced.push(full.subset(&keep));
+        uncovered.push(dropped);
+    }
+    let shapes = &reduced;
+    let shape_a = &shapes[0];
+    let loop_pairs: Vec<Vec<(usize, usize)>> =
+        vec![(0..keep_a.len()).map(|i| (i, i)).collect(); others];
     // The user's pairs, between A and B, in the mesh frame (y up).
     let height = |img: &Image| f64::from(img.height);
     let points: Vec<([f64; 2], [f64; 2])> = matches
@@ -453,8 +633,15 @@ pub fn compatible_path(
         let map_refs: Vec<&ArcMap> = maps.iter().collect();
         polygons.push(common_polygon(loop_a, &loops_x, &map_refs, &anchors[la]));
     }
-    let (mut mesh, boundary_targets) =
-        mesh_polygons(&polygons, a, options.vertices, options.min_angle, others)?;
+    let internal: Vec<Vec<[f64; 2]>> = transparent.iter().map(|l| l.points.clone()).collect();
+    let (mut mesh, boundary_targets) = mesh_polygons(
+        &polygons,
+        &internal,
+        a,
+        options.vertices,
+        options.min_angle,
+        others,
+    )?;
     // Interior pairs pin the vertex nearest A's point, moved onto it (over B only).
     let mut is_boundary = vec![false; mesh.positions.len()];
     for &(v, _) in &boundary_targets[0] {
@@ -484,6 +671,7 @@ pub fn compatible_path(
     let coarse = if mesh.positions.len() > COARSE_VERTICES * 3 / 2 {
         Some(mesh_polygons(
             &polygons,
+            &internal,
             a,
             COARSE_VERTICES,
             options.min_angle,
@@ -501,7 +689,8 @@ pub fn compatible_path(
         }
         let start = match &coarse {
             Some((coarse_mesh, coarse_targets)) => {
-                let coarse_layout = lay_over(coarse_mesh, &coarse_targets[k], None)?;
+                let coarse_layout =
+                    lay_over(coarse_mesh, &coarse_targets[k], None, None, BUILD_STAGES)?;
                 if coarse_layout.flipped == 0 {
                     let mut positions = coarse_layout.positions;
                     polish(coarse_mesh, &coarse_targets[k], &mut positions)?;
@@ -512,21 +701,93 @@ pub fn compatible_path(
             }
             None => None,
         };
-        let (layout, pins) = if k == 0 {
-            lay_out_with_pairs(&mesh, pins, &interior_pins, &mut reports, start)?
+        let weights = transparent_weights(&mesh, &internal);
+        let (mut layout, mut pins) = if k == 0 {
+            lay_out_with_pairs(
+                &mesh,
+                pins,
+                &interior_pins,
+                &mut reports,
+                start,
+                weights.as_deref(),
+                BUILD_STAGES,
+            )?
         } else {
-            (lay_over(&mesh, &pins, start)?, pins)
+            (
+                lay_over(&mesh, &pins, start, weights.as_deref(), BUILD_STAGES)?,
+                pins,
+            )
         };
         let flipped_before_untangling = layout.flipped_before;
+        let mut added_vertices = 0;
         if layout.flipped > 0 {
-            return Err(InbetweenError::Flipped {
-                which: Drawing(k + 1),
-                flipped: layout.flipped,
-                faces: mesh.faces.len(),
-            });
+            // The guarantee: re-embed what is left, refining A's mesh there.
+            let embedded = guarantee(
+                &mesh,
+                &pins,
+                &layout.positions,
+                weights.as_deref(),
+                &mut layouts,
+            )
+            .map_err(|failure| {
+                let error = InbetweenError::NoBijection {
+                    which: Drawing(k + 1),
+                    flipped: layout.flipped,
+                    faces: mesh.faces.len(),
+                    reason: failure.to_string(),
+                };
+                if failure == EmbedFailure::EnclosesHole {
+                    Failure::EnclosesHole(error)
+                } else {
+                    Failure::Error(error)
+                }
+            })?;
+            added_vertices = embedded.mesh.positions.len() - mesh.positions.len();
+            for &v in &embedded.released {
+                if let Some(&(pair, _, _)) = interior_pins.iter().find(|p| p.1 == v) {
+                    reports[pair].met = false;
+                    reports[pair].reason = Some(
+                        "the mesh around it had to be laid out again to leave no triangle flipped over drawing B; the other pairs are met".into(),
+                    );
+                }
+            }
+            interior_pins.retain(|p| !embedded.released.contains(&p.1));
+            pins.retain(|p| !embedded.released.contains(&p.0));
+            mesh = embedded.mesh;
+            let floor = REFINED_AREA_SHARE * squared_size(&embedded.layout);
+            let floor_a = REFINED_AREA_SHARE * squared_size(&mesh.positions);
+            layout.flipped = mesh
+                .faces
+                .iter()
+                .filter(|f| {
+                    !(signed_area(&embedded.layout, f) > floor
+                        && signed_area(&mesh.positions, f) > floor_a)
+                })
+                .count();
+            layout.positions = embedded.layout;
+            if layout.flipped > 0 {
+                return Err(InbetweenError::Internal(format!(
+                    "{} triangles left flipped by the re-embedding",
+                    layout.flipped
+                ))
+                .into());
+            }
         }
         let mut positions = layout.positions;
-        let polish_rounds = polish(&mesh, &pins, &mut positions)?;
+        // Transparent regions, and the parts covering this drawing's holes that A lacks,
+        // are let shrink; otherwise the largest distortion is lowered.
+        let shrink = shrink_weights(&mesh, &internal, &positions, &uncovered[k]);
+        let mut fixed = vec![false; mesh.positions.len()];
+        for &(v, _) in &pins {
+            fixed[v as usize] = true;
+        }
+        let polish_rounds = match &shrink {
+            Some(w) => {
+                smooth(&mesh, &fixed, Some(w), &mut positions, SHRINK_STEPS);
+                0
+            }
+            None => polish(&mesh, &pins, &mut positions)?,
+        };
         let mut pair_reports = Vec::new();
         if k == 0 {
             for &(pair, v, pb) in &interior_pins {
@@ -546,7 +807,9 @@ pub fn compatible_path(
             pairs: pair_reports,
             max_distortion: max_distortion(&mesh, &positions),
             flipped_before_untangling,
+            added_vertices,
             polish_rounds,
+            notes: std::mem::take(&mut notes[k]),
             seconds: started.elapsed().as_secs_f64(),
         });
         layouts.push(positions);
@@ -573,6 +836,78 @@ pub fn compatible_path(
 
 /// A mesh of about this many vertices lays out a finer one first.
 const COARSE_VERTICES: usize = 2000;
+/// The weight of a triangle of a transparent region (or covering a hole of the drawing it
+/// is laid over that A lacks) in the smoothing that lets those regions shrink, against 1
+/// for the others.
+const TRANSPARENT_WEIGHT: f64 = 0.05;
+/// L-BFGS steps of that smoothing.
+const SHRINK_STEPS: usize = 600;
+
+fn plural(n: usize, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
+    }
+}
+
+/// Per triangle of `mesh`, whether it is inside one of the transparent regions' loops
+/// `internal` (in A).
+fn in_transparent(mesh: &PlanarMesh, internal: &[Vec<[f64; 2]>]) -> Vec<bool> {
+    let loops: Vec<Loop> = internal.iter().map(|l| Loop::new(l.clone())).collect();
+    mesh.faces
+        .iter()
+        .map(|f| {
+            let [p, q, r] = f.map(|v| mesh.positions[v as usize]);
+            let c = [(p[0] + q[0] + r[0]) / 3.0, (p[1] + q[1] + r[1]) / 3.0];
+            loops.iter().any(|l| l.contains(c))
+        })
+        .collect()
+}
+
+/// The triangle weights of the layout: [`TRANSPARENT_WEIGHT`] in the transparent regions;
+/// `None` without any.
+fn transparent_weights(mesh: &PlanarMesh, internal: &[Vec<[f64; 2]>]) -> Option<Vec<f64>> {
+    if internal.is_empty() {
+        return None;
+    }
+    Some(
+        in_transparent(mesh, internal)
+            .into_iter()
+            .map(|t| if t { TRANSPARENT_WEIGHT } else { 1.0 })
+            .collect(),
+    )
+}
+
+/// The weights of the smoothing that lets transparent regions shrink: the transparent
+/// regions' triangles, and those whose centre over the drawing is in one of its holes that A
+/// lacks (`uncovered`), at [`TRANSPARENT_WEIGHT`]; `None` when there are none.
+fn shrink_weights(
+    mesh: &PlanarMesh,
+    internal: &[Vec<[f64; 2]>],
+    layout: &[[f64; 2]],
+    uncovered: &[Loop],
+) -> Option<Vec<f64>> {
+    if internal.is_empty() && uncovered.is_empty() {
+        return None;
+    }
+    let inside_a = in_transparent(mesh, internal);
+    Some(
+        mesh.faces
+            .iter()
+            .zip(inside_a)
+            .map(|(f, t)| {
+                let [p, q, r] = f.map(|v| layout[v as usize]);
+                let c = [(p[0] + q[0] + r[0]) / 3.0, (p[1] + q[1] + r[1]) / 3.0];
+                if t || uncovered.iter().any(|l| l.contains(c)) {
+                    TRANSPARENT_WEIGHT
+                } else {
+                    1.0
+                }
+            })
+            .collect(),
+    )
+}
 
 /// The place of every point of `points` (inside `coarse`'s region) under the layout
 /// `positions` of `coarse`: through the coarse triangle holding it (or nearest).
@@ -660,191 +995,6 @@ fn texcoords_of(mesh: &PlanarMesh, a: &Image) -> TexCoords {
     }
 }
 
-/// Rounds of [`polish`] at most, and the share of the largest distortion each aims for.
-const POLISH_ROUNDS: usize = 4;
-const POLISH_SHARE: f64 = 0.6;
-/// Iterations of the bounded-distortion mapping when the untangling left flips.
-const RESCUE_ITERATIONS: u32 = 1500;
-/// Iterations of one round of [`polish`].
-const POLISH_ITERATIONS: u32 = 400;
-
-/// Lowers the largest distortion of a flip-free layout by the bounded-distortion mapping
-/// with the pins held: each round asks for [`POLISH_SHARE`] of the largest distortion and is
-/// kept when it gets there without a flip. Returns the rounds kept.
-pub(super) fn polish(
-    mesh: &PlanarMesh,
-    pins: &[(u32, [f64; 2])],
-    positions: &mut [[f64; 2]],
-) -> Result<usize, InbetweenError> {
-    let surface = SurfaceMesh::from(mesh);
-    let mut kept = 0;
-    for _ in 0..POLISH_ROUNDS {
-        let current = max_distortion(mesh, positions);
-        let k = (POLISH_SHARE * current).max(1.5);
-        if k >= current {
-            break;
-        }
-        let options = BoundedOptions::new(k).with_iterations(POLISH_ITERATIONS);
-        let mut solver = BoundedDistortion::new(&surface, pins, options).map_err(|e| {
-            InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-        })?;
-        let mut trial = positions.to_vec();
-        let report = solver.solve_with(&mut trial, |_, _| {}).map_err(|e| {
-            InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-        })?;
-        let better = report.inverted == 0
-            && flipped(&mesh.faces, &trial) == 0
-            && max_distortion(mesh, &trial) < current;
-        if !better {
-            break;
-        }
-        positions.copy_from_slice(&trial);
-        kept += 1;
-        if !report.converged {
-            break;
-        }
-    }
-    Ok(kept)
-}
-
-/// Interior pins of the user's pairs: `(pair, vertex, target)`.
-pub(super) type InteriorPins = [(usize, u32, [f64; 2])];
-
-/// [`lay_over`] with `pins` (the boundary's and the interior pairs' `interior`); when
-/// triangles stay flipped, the interior pairs next to them are let go (and their reports say
-/// so) if that leaves fewer flips. Returns the layout and the pins it holds.
-pub(super) fn lay_out_with_pairs(
-    mesh: &PlanarMesh,
-    pins: Pins,
-    interior: &InteriorPins,
-    reports: &mut [PairReport],
-    start: Option<Vec<[f64; 2]>>,
-) -> Result<(Layout, Pins), InbetweenError> {
-    let mut pins = pins;
-    let mut layout = lay_over(mesh, &pins, start)?;
-    if layout.flipped > 0 && !interior.is_empty() {
-        // Let go of the interior pairs next to what stays flipped, and try again.
-        let near = near_flips(mesh, &layout.positions, 3);
-        let dropped: Vec<usize> = interior
-            .iter()
-            .filter(|&&(_, v, _)| near[v as usize])
-            .map(|&(k, _, _)| k)
-            .collect();
-        if !dropped.is_empty() {
-            let kept: Pins = pins
-                .iter()
-                .copied()
-                .filter(|(v, _)| {
-                    !interior
-                        .iter()
-                        .any(|&(k, w, _)| w == *v && dropped.contains(&k))
-                })
-                .collect();
-            let retry = lay_over(mesh, &kept, Some(layout.positions.clone()))?;
-            if retry.flipped < layout.flipped {
-                for &k in &dropped {
-                    reports[k].met = false;
-                    reports[k].reason = Some(
-                        "no flip-free layout over drawing B meets it with the outline where it is; the other pairs are met".into(),
-                    );
-                }
-                layout = retry;
-                pins = kept;
-            }
-        }
-    }
-    Ok((layout, pins))
-}
-
-/// A layout of the mesh over another drawing and how many of its triangles are flipped.
-pub(super) struct Layout {
-    pub positions: Vec<[f64; 2]>,
-    pub flipped: usize,
-    /// Triangles flipped before the untangling.
-    pub flipped_before: usize,
-}
-
-/// A layout with every pin at its target: from `start` when given, otherwise by ARAP from
-/// A's layout; then [`untangle`] with the same pins, and when flips remain the
-/// bounded-distortion mapping over the whole mesh.
-pub(super) fn lay_over(
-    mesh: &PlanarMesh,
-    pins: &[(u32, [f64; 2])],
-    start: Option<Vec<[f64; 2]>>,
-) -> Result<Layout, InbetweenError> {
-    let (vertices, targets): (Vec<u32>, Vec<[f64; 2]>) = pins.iter().copied().unzip();
-    let pose = match start {
-        Some(mut pose) => {
-            for &(v, t) in pins {
-                pose[v as usize] = t;
-            }
-            pose
-        }
-        None => {
-            let mut deformer = Deformer::new(mesh, PoseMethod::arap())?;
-            deformer.set_pins(&vertices)?;
-            let size = mesh.diameter().max(f64::MIN_POSITIVE);
-            let mut previous = deformer.positions().to_vec();
-            for _ in 0..ARAP_ROUNDS {
-                deformer.drag(&targets)?;
-                let moved = deformer
-                    .positions()
-                    .iter()
-                    .zip(&previous)
-                    .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
-                    .fold(0.0, f64::max);
-                previous.copy_from_slice(deformer.positions());
-                if moved < 1e-5 * size {
-                    break;
-                }
-            }
-            deformer.positions().to_vec()
-        }
-    };
-    let flipped_before = flipped(&mesh.faces, &pose);
-    let repaired = untangle(mesh, &pose, &vertices, &UntangleOptions::default())?;
-    let mut layout = Layout {
-        flipped: flipped(&mesh.faces, &repaired.positions),
-        positions: repaired.positions,
-        flipped_before,
-    };
-    if layout.flipped > 0 {
-        // The untangling works near the flips; the bounded-distortion mapping over the whole
-        // mesh, flipped triangles projected well inside the bound, may mend what it left.
-        let bound = (2.0 * max_distortion_unflipped(mesh, &layout.positions)).max(10.0);
-        let options = BoundedOptions::new(bound)
-            .with_inverted_bound(2.0)
-            .with_iterations(RESCUE_ITERATIONS);
-        let mut solver =
-            BoundedDistortion::new(&SurfaceMesh::from(mesh), pins, options).map_err(|e| {
-                InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-            })?;
-        let mut trial = layout.positions.clone();
-        solver.solve_with(&mut trial, |_, _| {}).map_err(|e| {
-            InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-        })?;
-        let left = flipped(&mesh.faces, &trial);
-        if left < layout.flipped && trial.iter().all(|p| p[0].is_finite() && p[1].is_finite()) {
-            layout.positions = trial;
-            layout.flipped = left;
-        }
-    }
-    Ok(layout)
-}
-
-fn signed_area(p: &[[f64; 2]], f: &[u32; 3]) -> f64 {
-    let (a, b, c) = (p[f[0] as usize], p[f[1] as usize], p[f[2] as usize]);
-    0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-}
-
-/// Triangles whose signed area is not positive.
-pub(crate) fn flipped(faces: &[[u32; 3]], positions: &[[f64; 2]]) -> usize {
-    faces
-        .iter()
-        .filter(|f| signed_area(positions, f) <= 0.0)
-        .count()
-}
-
 /// The mesh's boundary edges (edges of one triangle), directed as in their triangle: the
 /// outer loops run counter-clockwise, holes clockwise.
 pub(super) fn boundary_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
@@ -918,30 +1068,6 @@ fn moves_cleanly(mesh: &PlanarMesh, v: u32, p: [f64; 2]) -> bool {
     })
 }
 
-/// Vertices within `rings` rings of a flipped triangle.
-fn near_flips(mesh: &PlanarMesh, positions: &[[f64; 2]], rings: usize) -> Vec<bool> {
-    let mut near = vec![false; mesh.positions.len()];
-    for f in &mesh.faces {
-        if signed_area(positions, f) <= 0.0 {
-            for &v in f {
-                near[v as usize] = true;
-            }
-        }
-    }
-    for _ in 0..rings {
-        let mut next = near.clone();
-        for f in &mesh.faces {
-            if f.iter().any(|&v| near[v as usize]) {
-                for &v in f {
-                    next[v as usize] = true;
-                }
-            }
-        }
-        near = next;
-    }
-    near
-}
-
 /// The largest distance of a corner of B's outline from the boundary of the layout over B.
 pub(super) fn outline_error(shape_b: &Shape, faces: &[[u32; 3]], positions: &[[f64; 2]]) -> f64 {
     let boundary: Vec<([f64; 2], [f64; 2])> = boundary_edges(faces)
@@ -959,22 +1085,4 @@ pub(super) fn outline_error(shape_b: &Shape, faces: &[[u32; 3]], positions: &[[f
         }
     }
     worst
-}
-
-/// The largest conformal distortion of the unflipped triangles of the map.
-pub(super) fn max_distortion_unflipped(mesh: &PlanarMesh, positions: &[[f64; 2]]) -> f64 {
-    let rest = crate::distortion::RestShape::new(&mesh.positions, &mesh.faces);
-    let mut out = vec![0.0; mesh.faces.len()];
-    rest.distortion_into(positions, &mut out);
-    out.into_iter()
-        .filter(|d| d.is_finite())
-        .fold(1.0, f64::max)
-}
-
-/// The largest conformal distortion of the map from `mesh` to `positions` (infinite with a
-/// flipped triangle).
-pub(crate) fn max_distortion(mesh: &PlanarMesh, positions: &[[f64; 2]]) -> f64 {
-    let rest = crate::distortion::RestShape::new(&mesh.positions, &mesh.faces);
-    let mut out = vec![0.0; mesh.faces.len()];
-    rest.distortion_into(positions, &mut out).max(1.0)
 }

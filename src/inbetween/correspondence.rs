@@ -30,6 +30,9 @@ const STEP_COST: f64 = 0.004;
 const SMOOTHING: usize = 3;
 /// The share of arc-length proportion mixed into the warped map (keeps it strictly monotone).
 const LINEAR_SHARE: f64 = 0.1;
+/// A corner and a user's pair closer than this share of the merging distance (a third of a
+/// mean segment) on every loop are one corner, at the pair's place.
+const TOUCHING: f64 = 0.15;
 
 /// A point of the user's pair lying on a loop pair: its arc lengths on A's and B's loops.
 #[derive(Clone, Copy, Debug)]
@@ -352,9 +355,15 @@ struct Entry {
 
 impl Entry {
     /// `self` and `other` as one corner, when they can be: neither is a pair and no drawing
-    /// gave both.
-    fn merge(&self, other: &Entry) -> Option<Entry> {
+    /// gave both; or one is a pair and the other is at (almost) the same place, `touching`
+    /// (the pair's place kept).
+    fn merge(&self, other: &Entry, touching: bool) -> Option<Entry> {
         match (self.pair, other.pair) {
+            (Some(_), Some(_)) => None,
+            // A point of the user's on (or next to) a corner: one corner, at the user's
+            // place. Two corners there would make a segment of no length.
+            (Some(_), None) if touching => Some(self.clone()),
+            (None, Some(_)) if touching => Some(other.clone()),
             // A pair's place is the user's, and a corner next to it is kept: dropping it
             // would cut a corner off the outline.
             (Some(_), _) | (_, Some(_)) => None,
@@ -433,11 +442,16 @@ pub(crate) fn common_polygon(
         gap(p.sa, q.sa, len_a) < near_a
             || (0..m).any(|k| gap(p.sx[k], q.sx[k], lx[k].length()) < near_x[k])
     };
+    // Within this share of a mean segment on every loop, a pair and a corner are one.
+    let touching = |p: &Entry, q: &Entry| {
+        gap(p.sa, q.sa, len_a) < TOUCHING * near_a
+            && (0..m).all(|k| gap(p.sx[k], q.sx[k], lx[k].length()) < TOUCHING * near_x[k])
+    };
     let mut merged: Vec<Entry> = Vec::with_capacity(entries.len());
     for e in entries {
         if let Some(last) = merged.last_mut() {
             if close(last, &e) {
-                if let Some(both) = last.merge(&e) {
+                if let Some(both) = last.merge(&e, touching(last, &e)) {
                     *last = both;
                     continue;
                 }
@@ -451,7 +465,7 @@ pub(crate) fn common_polygon(
         if !close(last, first) {
             break;
         }
-        let Some(both) = first.merge(last) else {
+        let Some(both) = first.merge(last, touching(first, last)) else {
             break;
         };
         merged[0] = both;
@@ -593,5 +607,35 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("pairs"), "{e}");
+    }
+
+    #[test]
+    fn a_pair_on_a_corner_makes_one_corner() {
+        // The pair's point in A is exactly corner 5 of A's loop.
+        let la = ellipse([0.0, 0.0], 2.0, 1.0, 40, 0.0);
+        let lb = ellipse([0.0, 0.0], 2.0, 1.2, 48, 0.1);
+        let (a, b) = (
+            Shape::from_loops(vec![la.clone()]),
+            Shape::from_loops(vec![lb.clone()]),
+        );
+        let anchors = [Anchor {
+            sa: la.cum[5],
+            sb: lb.cum[6],
+            pair: 0,
+        }];
+        let map = arc_map(&a, &la, &b, &lb, 0.0, &anchors).unwrap();
+        let corners = common_polygon(&la, &[&lb], &[&map], &anchors);
+        let n = corners.len();
+        for i in 0..n {
+            let (p, q) = (&corners[i], &corners[(i + 1) % n]);
+            assert!(
+                p.a != q.a && p.images[0] != q.images[0],
+                "corners {i} and {} coincide",
+                (i + 1) % n
+            );
+        }
+        let c = corners.iter().find(|c| c.pair == Some(0)).unwrap();
+        assert_eq!(c.a, la.points[5]);
+        assert_eq!(c.images[0], lb.at(lb.cum[6]));
     }
 }

@@ -4,10 +4,11 @@
 use std::time::Instant;
 
 use super::compatible::{
-    boundary_edges, boundary_vertices, lay_out_with_pairs, max_distortion, nearest_free_vertex,
-    outline_error, polish, read_pairs, shape_of, CompatibleReport, PairKind, Pins, ReadPairs,
+    boundary_edges, boundary_vertices, nearest_free_vertex, outline_error, read_pairs, shape_of,
+    CompatibleReport, PairKind, Pins, ReadPairs,
 };
 use super::correspondence::{arc_map, rigid_alignment};
+use super::layout::{lay_out_with_pairs, max_distortion, polish, FIT_STAGES};
 use super::outline::{pair_loops, Loop, Shape};
 use super::{Drawing, InbetweenError, InbetweenOptions, Match};
 use crate::mesh::PlanarMesh;
@@ -75,6 +76,8 @@ struct Setup {
     reports: Vec<super::compatible::PairReport>,
     /// The boundary vertices and their places over B.
     pins: Pins,
+    /// What was done about B's holes.
+    notes: Vec<String>,
 }
 
 /// The correspondence of the mesh's boundary with B's outline (see [`fit_drawing`]).
@@ -102,8 +105,49 @@ fn setup(
     );
     // B's outline simplified to about as many corners as the mesh has boundary vertices.
     let boundary = boundary_vertices(mesh).len();
-    let (shape_b, tolerance_b) = shape_of(b, Drawing(1), &options.with_vertices(2 * boundary))?;
-    let loop_pairs = pair_loops(&shape_a, &shape_b, Drawing(1))?;
+    let (full_b, tolerance_b, pinholes) =
+        shape_of(b, Drawing(1), &options.with_vertices(2 * boundary))?;
+    let pairing = pair_loops(&shape_a, &full_b, Drawing(1))?;
+    if let Some(&hole) = pairing.a_only.first() {
+        return Err(InbetweenError::Topology(format!(
+            "{} of the mesh has no hole to go onto in drawing B: the studio's mesh keeps its holes; draw the hole, or make the rest picture without it",
+            shape_a.name(hole)
+        )));
+    }
+    // B's holes the mesh lacks are covered by it (B's picture is transparent there).
+    let mut notes = Vec::new();
+    if pinholes > 0 {
+        notes.push(format!(
+            "{} in drawing B filled (holes under {} px²)",
+            if pinholes == 1 {
+                "1 pinhole".to_string()
+            } else {
+                format!("{pinholes} pinholes")
+            },
+            options.pinhole
+        ));
+    }
+    for &h in &pairing.b_only {
+        let l = &full_b.loops[h];
+        notes.push(format!(
+            "drawing B's hole at ({:.0}, {:.0}) ({:.0} px²) is covered by the mesh, transparent in its picture",
+            l.centroid[0],
+            f64::from(b.height) - l.centroid[1],
+            -l.area
+        ));
+    }
+    let keep: Vec<usize> = (0..shape_a.loops.len())
+        .map(|la| {
+            pairing
+                .pairs
+                .iter()
+                .find(|p| p.0 == la)
+                .map(|p| p.1)
+                .ok_or_else(|| InbetweenError::Internal(format!("loop {la} of A is not paired")))
+        })
+        .collect::<Result<_, _>>()?;
+    let shape_b = full_b.subset(&keep);
+    let loop_pairs: Vec<(usize, usize)> = (0..keep.len()).map(|i| (i, i)).collect();
     let points: Vec<([f64; 2], [f64; 2])> = matches
         .iter()
         .map(|m| {
@@ -148,6 +192,7 @@ fn setup(
         kinds,
         reports,
         pins,
+        notes,
     })
 }
 
@@ -199,9 +244,14 @@ pub fn outline_correspondence(
 ///
 /// # Errors
 /// As [`super::compatible_mesh`]: [`InbetweenError::Meshing`] when B has no subject,
-/// [`InbetweenError::Topology`] when B's pieces and holes differ from the mesh's,
-/// [`InbetweenError::Match`] for a pair that cannot be read, [`InbetweenError::Flipped`]
-/// when no flip-free layout was found.
+/// [`InbetweenError::Topology`] when B's pieces differ from the mesh's or B lacks one of the
+/// mesh's holes (holes of B's that the mesh lacks are covered by it, and said in the
+/// report's notes), [`InbetweenError::Match`] for a pair that cannot be read,
+/// [`InbetweenError::Flipped`] when no flip-free layout was found. The mesh is kept as it is
+/// (the studio's keyframes are places of its vertices), so the guarantee of
+/// [`super::compatible_mesh`], which refines the mesh, does not apply: every untangling
+/// stage is tried (the projections, the foldover-free untangling of Garanzha et al. 2021
+/// near the flips, the bounded-distortion mapping), and what they leave is an error.
 ///
 /// ```
 /// use bdmorph::generate;
@@ -235,6 +285,7 @@ pub fn fit_drawing(
         kinds,
         mut reports,
         mut pins,
+        notes,
         ..
     } = setup(mesh, a_height, b, matches, options)?;
     let n = mesh.positions.len();
@@ -267,7 +318,8 @@ pub fn fit_drawing(
             }
         }
     }
-    let (layout, pins) = lay_out_with_pairs(mesh, pins, &interior, &mut reports, None)?;
+    let (layout, pins) =
+        lay_out_with_pairs(mesh, pins, &interior, &mut reports, None, None, FIT_STAGES)?;
     if layout.flipped > 0 {
         return Err(InbetweenError::Flipped {
             which: Drawing(1),
@@ -290,7 +342,9 @@ pub fn fit_drawing(
             pairs: reports,
             max_distortion: max_distortion(mesh, &positions),
             flipped_before_untangling,
+            added_vertices: 0,
             polish_rounds,
+            notes,
             seconds: started.elapsed().as_secs_f64(),
         },
         positions,

@@ -12,10 +12,11 @@
 //!
 //! 1. **Outlines.** Each picture's subject is traced and simplified (as
 //!    [`crate::meshing::picture_outline`] does, then fitted to about half the vertices
-//!    asked for). The two must have the same pieces and, piece by piece, the same number of
-//!    holes; otherwise [`InbetweenError::Topology`] says in one line what differs. Pieces
-//!    and holes are paired by place and size in each drawing's frame (centred on its area,
-//!    scaled to unit area).
+//!    asked for); holes under [`InbetweenOptions::pinhole`] square pixels are filled. The
+//!    two must have the same number of pieces; otherwise [`InbetweenError::Topology`] says
+//!    so in one line. Pieces, and each piece's holes, are paired by place and size in each
+//!    drawing's frame (centred on its area, scaled to unit area); a hole without a partner
+//!    close enough is in one drawing only.
 //! 2. **Correspondence.** Each pair of loops gets a monotone map of arc length: a rigid
 //!    alignment (the rotation and cyclic shift that bring A's outline closest to B's), then
 //!    a dynamic time warping that matches corners with corners and turning with turning.
@@ -23,15 +24,31 @@
 //!    warped with their ends fixed. Pairs inside the drawings pin a vertex of the mesh.
 //! 3. **A's mesh.** A's outline with B's corners carried back onto it is meshed (a
 //!    constrained Delaunay triangulation refined to [`InbetweenOptions::min_angle`]), so
-//!    that B's outline is reproduced exactly by the mesh laid over B.
+//!    that B's outline is reproduced exactly by the mesh laid over B. A hole of A that
+//!    another drawing lacks is meshed too, as a transparent region (A's picture is
+//!    transparent there); a hole of B that A lacks is covered by the mesh (B's picture is
+//!    transparent there). Edges inside the mesh joining two outline vertices are split.
 //! 4. **Over B.** The boundary goes to its place on B's outline, interior pairs to B's
 //!    points; the interior follows by as-rigid-as-possible posing (a mesh over 3,000
 //!    vertices starts instead from the layout of a 2,000-vertex mesh of the same outline),
 //!    and the triangles it flips are repaired by [`crate::deform::untangle`]
-//!    (bounded-distortion projections, Kovalsky et al. 2015) with every pin held, then the
+//!    (bounded-distortion projections, Kovalsky et al. 2015) with every pin held. What stays
+//!    flipped is laid out again with a guarantee: a disk-shaped region around it, whose
+//!    outline over B is a simple polygon, is drawn on a circle by Tutte's embedding, and so
+//!    is a triangulation of that polygon; composing the two is a bijection, and A's mesh is
+//!    refined along the second's edges to carry it (Progressive Embedding, Shen et al. 2019,
+//!    has the same guarantee by other means). The vertices this adds are merged away again
+//!    wherever no layout needs them, thin triangles are flipped round and the layout is
+//!    smoothed without folding. So no build fails with flipped triangles when B's outline
+//!    and the pairs admit a bijective map with that correspondence: it can only fail when
+//!    the outline over B crosses itself, or at a floating-point limit
+//!    ([`InbetweenError::NoBijection`] then says which). A region that would have to surround
+//!    a hole is avoided by laying every hole out as a transparent region instead
+//!    ([`InbetweenOptions::transparent_holes`]). Transparent regions weigh less in a last
+//!    smoothing, so they shrink where their drawing has no hole; otherwise the
 //!    bounded-distortion mapping lowers the largest distortion. An interior pair that no
-//!    flip-free layout can meet is let go, and said so ([`PairReport`]); when triangles stay
-//!    flipped, [`InbetweenError::Flipped`].
+//!    flip-free layout can meet is let go, and said so ([`PairReport`]). What was done about
+//!    holes is in [`CompatibleReport::notes`].
 //!
 //! ```
 //! use bdmorph::generate;
@@ -57,8 +74,12 @@
 mod baseline;
 mod compatible;
 mod correspondence;
+mod embed;
 mod fit;
+mod foldover;
+mod layout;
 mod outline;
+mod refine;
 
 pub use baseline::{linear_frame, ArapInterpolation};
 pub use compatible::{
@@ -110,7 +131,20 @@ pub struct InbetweenOptions {
     pub picture: PictureOptions,
     /// The morph's options.
     pub morph: MorphOptions,
+    /// Holes of a drawing whose area is below this many square pixels (at the drawing's
+    /// own scale) are filled: pinholes, such as a stray transparent pixel. Default
+    /// [`DEFAULT_PINHOLE`].
+    pub pinhole: f64,
+    /// Every hole of drawing A meshed as a transparent region (the mesh has no hole), as
+    /// holes in one drawing only always are (default false: holes in every drawing stay
+    /// holes). [`compatible_mesh`] does this by itself when a flipped region surrounds a
+    /// hole, and [`Inbetween`] when the morph cannot set up a hole.
+    pub transparent_holes: bool,
 }
+
+/// The default [`InbetweenOptions::pinhole`]: 64 square pixels, a hole of 8 by 8 pixels (at
+/// a drawing scaled up 4 times, 2 by 2 of its own pixels).
+pub const DEFAULT_PINHOLE: f64 = 64.0;
 
 impl Default for InbetweenOptions {
     fn default() -> Self {
@@ -119,6 +153,8 @@ impl Default for InbetweenOptions {
             min_angle: DEFAULT_MIN_ANGLE,
             picture: PictureOptions::default(),
             morph: MorphOptions::default(),
+            pinhole: DEFAULT_PINHOLE,
+            transparent_holes: false,
         }
     }
 }
@@ -144,12 +180,28 @@ impl InbetweenOptions {
         self.morph = morph;
         self
     }
+    /// Every hole as a transparent region ([`InbetweenOptions::transparent_holes`]).
+    pub fn with_transparent_holes(mut self, on: bool) -> Self {
+        self.transparent_holes = on;
+        self
+    }
+    /// Holes under `area` square pixels are filled ([`InbetweenOptions::pinhole`]).
+    pub fn with_pinhole(mut self, area: f64) -> Self {
+        self.pinhole = area;
+        self
+    }
 
     fn validate(&self) -> Result<(), InbetweenError> {
         if !(3..=MAX_VERTICES).contains(&self.vertices) {
             return Err(InbetweenError::BadOption(format!(
                 "{} vertices: give from 3 to {MAX_VERTICES}",
                 self.vertices
+            )));
+        }
+        if !(self.pinhole >= 0.0 && self.pinhole.is_finite()) {
+            return Err(InbetweenError::BadOption(format!(
+                "pinholes under {} px²: give an area of 0 or more square pixels",
+                self.pinhole
             )));
         }
         Ok(())
@@ -179,7 +231,8 @@ pub enum InbetweenError {
         /// Why.
         reason: String,
     },
-    /// No layout of A's mesh over B without flipped triangles was found.
+    /// No layout of a mesh kept as it is ([`fit_drawing`]) over B without flipped triangles
+    /// was found (the compatible mesh's own build refines its mesh instead).
     #[error(
         "{flipped} of {faces} triangles stay flipped when drawing A's mesh is laid over {which}: \
          the drawings may be too different for this mesh; add point pairs where they differ most, \
@@ -192,6 +245,21 @@ pub enum InbetweenError {
         flipped: usize,
         /// Triangles of the mesh.
         faces: usize,
+    },
+    /// Even the re-embedding that refines A's mesh found no flip-free layout over a drawing
+    /// (see [`compatible_mesh`] for when it exists).
+    #[error(
+        "{flipped} of {faces} triangles stay flipped when drawing A's mesh is laid over {which}, and it could not be laid out again: {reason}"
+    )]
+    NoBijection {
+        /// The drawing it was laid over.
+        which: Drawing,
+        /// Triangles flipped before the re-embedding.
+        flipped: usize,
+        /// Triangles of the mesh.
+        faces: usize,
+        /// Why.
+        reason: String,
     },
     /// An option out of range.
     #[error("{0}")]
@@ -260,7 +328,22 @@ impl Inbetween {
         options: &InbetweenOptions,
     ) -> Result<Inbetween, InbetweenError> {
         let path = compatible_path(drawings, matches, options)?;
-        Inbetween::from_path(path, options.morph)
+        let holes = has_holes(&path.mesh);
+        match Inbetween::from_path(path, options.morph) {
+            // The morph could not set up a hole of the mesh (it fills holes for its solve):
+            // every hole as a transparent region instead, and the reports say why.
+            Err(InbetweenError::Morph(e)) if holes && !options.transparent_holes => {
+                let mut path =
+                    compatible_path(drawings, matches, &options.with_transparent_holes(true))?;
+                for report in &mut path.reports {
+                    report.notes.push(format!(
+                        "the holes are transparent regions because the morph could not use them as holes: {e}"
+                    ));
+                }
+                Inbetween::from_path(path, options.morph)
+            }
+            made => made,
+        }
     }
 
     /// Prepares the morph of a compatible mesh already built.
@@ -340,6 +423,69 @@ impl Inbetween {
             Animation::Path(p) => p.frame(t)?,
         })
     }
+}
+
+/// Whether `mesh` has a hole: more boundary loops than pieces.
+fn has_holes(mesh: &crate::mesh::PlanarMesh) -> bool {
+    count_loops(&mesh.faces) > pieces(&mesh.faces)
+}
+
+/// Boundary loops of `faces`.
+fn count_loops(faces: &[[u32; 3]]) -> usize {
+    let edges = compatible::boundary_edges(faces);
+    let next: std::collections::HashMap<u32, u32> = edges.iter().copied().collect();
+    let mut seen = std::collections::HashSet::new();
+    let mut loops = 0;
+    for &(start, _) in &edges {
+        if seen.contains(&start) {
+            continue;
+        }
+        loops += 1;
+        let mut v = start;
+        while seen.insert(v) {
+            match next.get(&v) {
+                Some(&w) => v = w,
+                None => break,
+            }
+        }
+    }
+    loops
+}
+
+/// Pieces of `faces` (joined across vertices).
+fn pieces(faces: &[[u32; 3]]) -> usize {
+    let n = faces
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for f in faces {
+        for k in 1..3 {
+            let (a, b) = (
+                root(&mut parent, f[0] as usize),
+                root(&mut parent, f[k] as usize),
+            );
+            parent[a] = b;
+        }
+    }
+    let mut used = vec![false; n];
+    for f in faces {
+        for &v in f {
+            used[v as usize] = true;
+        }
+    }
+    (0..n)
+        .filter(|&v| used[v] && root(&mut parent, v) == v)
+        .count()
 }
 
 /// How the two pictures are cross-faded along `t`.

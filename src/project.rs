@@ -10,7 +10,7 @@
 //!   "version": 3,
 //!   "mesh": { "positions": [[0, 0], [1, 0], [0, 1]], "faces": [[0, 1, 2]], "texcoords": null },
 //!   "texture": null,
-//!   "method": { "name": "kvf", "weight": 100, "max_distortion": 3 },
+//!   "method": { "name": "sd", "weight": 100, "max_distortion": 3 },
 //!   "fps": 25,
 //!   "outline": [[[0, 0], [1, 0], [0, 1]]],
 //!   "picture": { "background": null, "threshold": null },
@@ -46,8 +46,8 @@ pub const MAX_KEYFRAMES: usize = 1000;
 pub const MAX_KEYFRAME_POINTS: usize = 20_000_000;
 /// The most points of all outline loops together.
 pub const MAX_OUTLINE_POINTS: usize = 200_000;
-/// The smallest and largest KVF handle weight the studio takes (beyond them the posing system
-/// cannot be factored reliably).
+/// The smallest and largest handle weight (of `sd` and `kvf`) the studio takes (beyond them
+/// the posing system cannot be factored reliably).
 pub const KVF_WEIGHTS: (f64, f64) = (1e-3, 1e6);
 /// The largest distortion bound the studio takes.
 pub const MAX_BOUND: f64 = 1e4;
@@ -327,9 +327,9 @@ pub struct MeshData {
 /// The posing method and its parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodData {
-    /// `kvf`, `arap` or `bounded`.
+    /// `sd`, `kvf`, `arap` or `bounded`.
     pub name: String,
-    /// KVF's handle weight.
+    /// The handles' weight of `sd` and `kvf`.
     pub weight: f64,
     /// The bounded method's bound `K`.
     pub max_distortion: f64,
@@ -338,16 +338,16 @@ pub struct MethodData {
 impl MethodData {
     /// Whether the method is one the studio knows, with parameters it can use.
     pub fn check(&self) -> Result<(), String> {
-        if !["kvf", "arap", "bounded"].contains(&self.name.as_str()) {
+        if !["sd", "kvf", "arap", "bounded"].contains(&self.name.as_str()) {
             return Err(format!(
-                "unknown method \"{}\" (kvf, arap or bounded)",
+                "unknown method \"{}\" (sd, kvf, arap or bounded)",
                 self.name
             ));
         }
         let (lo, hi) = KVF_WEIGHTS;
         if !(self.weight >= lo && self.weight <= hi) {
             return Err(format!(
-                "KVF weight {}: give one from {lo} to {hi}",
+                "handle weight {}: give one from {lo} to {hi}",
                 self.weight
             ));
         }
@@ -406,9 +406,12 @@ pub fn check_pins(pins: &[u32], n: usize) -> Result<(), String> {
 }
 
 impl Default for MethodData {
+    /// What new projects pose with: `sd` (symmetric Dirichlet, soft handles of weight 100),
+    /// which neither flips nor crushes a triangle. Project files name their method, so an
+    /// older project keeps the one it names (`kvf`, before).
     fn default() -> Self {
         MethodData {
-            name: "kvf".into(),
+            name: "sd".into(),
             weight: 100.0,
             max_distortion: 3.0,
         }
@@ -854,7 +857,7 @@ mod tests {
             .expect_err("refused")
             .to_string()
             .contains("keyframe 2: its drawing has"));
-        assert!(broken("\"name\": \"kvf\"", "\"name\": \"magic\"").contains("unknown method"));
+        assert!(broken("\"name\": \"sd\"", "\"name\": \"magic\"").contains("unknown method"));
         assert!(Project::from_json(b"{ not json").is_err());
         assert!(Project::from_json(&project.to_json()[..100]).is_err());
         let mut short = project.clone();

@@ -1,10 +1,10 @@
-//! Posing by handles (`bdmorph::deform`): KVF with soft handles, ARAP with hard pins, and
-//! bounded distortion.
+//! Posing by handles (`bdmorph::deform`): KVF with soft handles, ARAP with hard pins,
+//! bounded distortion, and symmetric Dirichlet with soft handles.
 
 mod common;
 
 use bdmorph::deform::{
-    ArapOptions, BoundedPoseOptions, DeformError, Deformer, KvfOptions, PoseMethod,
+    ArapOptions, BoundedPoseOptions, DeformError, Deformer, KvfOptions, PoseMethod, SdOptions,
 };
 use bdmorph::{generate, PlanarMesh};
 use common::max_distance;
@@ -138,6 +138,15 @@ fn kvf_converging() -> PoseMethod {
     )
 }
 
+/// Symmetric Dirichlet run to convergence in one drag.
+fn sd_converging() -> PoseMethod {
+    PoseMethod::Sd(
+        SdOptions::default()
+            .with_iterations(5000)
+            .with_tolerance(1e-14),
+    )
+}
+
 /// Drags until the pose stops moving (`last_change` below `1e-13` of the size).
 fn settle(pose: &mut Deformer, targets: &[[f64; 2]]) -> bdmorph::deform::DragReport {
     let mut report = pose.drag(targets).expect("drag");
@@ -182,13 +191,17 @@ fn figure_with_handles() -> (PlanarMesh, Vec<u32>) {
 }
 
 #[test]
-fn kvf_moves_the_whole_mesh_rigidly_when_every_handle_moves_rigidly() {
-    // Stated tolerance: 1e-9 of the mesh's size once the drag has converged (the rigid pose
-    // is where the steps stop: every strain and every spring at zero).
+fn soft_handles_move_the_whole_mesh_rigidly_when_every_handle_moves_rigidly() {
+    // KVF and symmetric Dirichlet. Stated tolerance: 1e-9 of the mesh's size once the drag
+    // has converged (the rigid pose is where the steps stop: every strain and every spring
+    // at zero).
     let rest = generate::disk(8, 0.2);
     let pins = handles(&rest);
-    for angle in [0.3f64, 1.5, -2.5] {
-        let mut pose = Deformer::new(&rest, kvf_converging()).expect("set up");
+    for (angle, method) in [0.3f64, 1.5, -2.5]
+        .into_iter()
+        .flat_map(|a| [(a, kvf_converging()), (a, sd_converging())])
+    {
+        let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let (s, c) = angle.sin_cos();
         let motion = |p: [f64; 2]| [c * p[0] - s * p[1] + 0.3, s * p[0] + c * p[1] - 1.2];
@@ -201,7 +214,8 @@ fn kvf_moves_the_whole_mesh_rigidly_when_every_handle_moves_rigidly() {
         let err = max_distance(pose.positions(), &expected);
         assert!(
             err < 1e-9 * rest.diameter(),
-            "angle {angle}: {err} after {report:?}"
+            "{} angle {angle}: {err} after {report:?}",
+            method.name()
         );
         assert_eq!(report.flipped_triangles, 0);
         assert!(report.pin_residual < 1e-9 * rest.diameter(), "{report:?}");
@@ -216,29 +230,37 @@ fn soft_handles_tighten_as_their_weight_grows() {
     let mut targets: Vec<[f64; 2]> = pins.iter().map(|&v| rest.positions[v as usize]).collect();
     targets[3] = [13.0, 4.0];
     targets[4] = [12.0, 4.3];
-    let mut pose = Deformer::new(&rest, kvf_converging()).expect("set up");
-    pose.set_pins(&pins).expect("pins");
-    let mut residuals = Vec::new();
-    for weight in [1.0, 10.0, 100.0, 1000.0, 10000.0] {
-        pose.set_weight(weight).expect("weight");
-        let report = settle(&mut pose, &targets);
-        assert_eq!(report.flipped_triangles, 0, "weight {weight}");
-        residuals.push(report.pin_residual);
+    for method in [kvf_converging(), sd_converging()] {
+        let mut pose = Deformer::new(&rest, method).expect("set up");
+        pose.set_pins(&pins).expect("pins");
+        let mut residuals = Vec::new();
+        for weight in [1.0, 10.0, 100.0, 1000.0, 10000.0] {
+            pose.set_weight(weight).expect("weight");
+            let report = settle(&mut pose, &targets);
+            assert_eq!(report.flipped_triangles, 0, "weight {weight}");
+            residuals.push(report.pin_residual);
+        }
+        eprintln!("{}: residuals {residuals:?}", method.name());
+        // Strictly tighter with each weight, and about in proportion to it once small.
+        for w in residuals.windows(2) {
+            assert!(w[1] < 0.5 * w[0], "{}: {residuals:?}", method.name());
+        }
+        assert!(residuals[0] > 1e-2, "{}: {residuals:?}", method.name());
+        assert!(
+            residuals[4] < 1e-3 * residuals[0],
+            "{}: {residuals:?}",
+            method.name()
+        );
+        assert!(matches!(
+            pose.set_weight(0.0),
+            Err(DeformError::BadWeight(_))
+        ));
+        assert!(matches!(
+            pose.set_weight(f64::NAN),
+            Err(DeformError::BadWeight(_))
+        ));
+        assert_eq!(pose.method().name(), method.name());
     }
-    // Strictly tighter with each weight, and about in proportion to it once small.
-    for w in residuals.windows(2) {
-        assert!(w[1] < 0.5 * w[0], "{residuals:?}");
-    }
-    assert!(residuals[0] > 1e-2, "{residuals:?}");
-    assert!(residuals[4] < 1e-3 * residuals[0], "{residuals:?}");
-    assert!(matches!(
-        pose.set_weight(0.0),
-        Err(DeformError::BadWeight(_))
-    ));
-    assert!(matches!(
-        pose.set_weight(f64::NAN),
-        Err(DeformError::BadWeight(_))
-    ));
     // ARAP and bounded pins are hard: met exactly.
     for method in [PoseMethod::arap(), PoseMethod::bounded(3.0)] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
@@ -265,6 +287,7 @@ fn every_method_returns_the_rest_shape_when_the_hand_comes_back() {
         PoseMethod::kvf(),
         PoseMethod::arap(),
         PoseMethod::bounded(2.0),
+        PoseMethod::sd(),
     ] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
@@ -296,10 +319,10 @@ fn every_method_returns_the_rest_shape_when_the_hand_comes_back() {
 }
 
 #[test]
-fn bounded_flips_nothing_on_a_drag_that_folds_the_others() {
+fn bounded_and_sd_flip_nothing_on_a_drag_that_folds_the_others() {
     // The hand pulled in to the chest in 20 moves: ARAP folds a triangle on the way (and KVF
     // may), reported as counted here; bounded distortion never flips one, and reports its
-    // bound met or not, truthfully, after every move.
+    // bound met or not, truthfully, after every move; symmetric Dirichlet flips none either.
     let (rest, pins) = figure_with_handles();
     let start: Vec<[f64; 2]> = pins.iter().map(|&v| rest.positions[v as usize]).collect();
     let chest = [0.0, 1.3];
@@ -309,6 +332,7 @@ fn bounded_flips_nothing_on_a_drag_that_folds_the_others() {
         PoseMethod::kvf(),
         PoseMethod::arap(),
         PoseMethod::bounded(k),
+        PoseMethod::sd(),
     ] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
@@ -333,6 +357,10 @@ fn bounded_flips_nothing_on_a_drag_that_folds_the_others() {
                     assert!((report.max_distortion - worst).abs() < 1e-9 * worst);
                 }
                 PoseMethod::Arap(_) => arap_flips += counted,
+                PoseMethod::Sd(_) => {
+                    assert_eq!(counted, 0, "sd flipped at move {step}");
+                    assert_eq!(report.bound_met, None);
+                }
                 _ => assert_eq!(report.bound_met, None),
             }
         }
@@ -377,6 +405,7 @@ fn pieces_and_holes_pose_with_every_method() {
         kvf_converging(),
         converging(),
         PoseMethod::Bounded(BoundedPoseOptions::new(2.0).with_arap_iterations(50)),
+        sd_converging(),
     ] {
         let mut pose = Deformer::new(&mesh, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
@@ -414,6 +443,19 @@ fn bad_options_are_refused() {
     assert!(matches!(
         pose.set_pins(&[0]),
         Err(DeformError::BadWeight(_))
+    ));
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let mut pose = Deformer::new(&rest, PoseMethod::Sd(SdOptions::default().with_weight(bad)))
+            .expect("set up");
+        assert!(matches!(
+            pose.set_pins(&[0]),
+            Err(DeformError::BadWeight(_))
+        ));
+    }
+    let mut pose = Deformer::new(&rest, PoseMethod::sd()).expect("set up");
+    assert!(matches!(
+        pose.drag(&[[0.0, 0.0]]),
+        Err(DeformError::TargetCount { pins: 0, got: 1 })
     ));
     let mut pose = Deformer::new(&rest, PoseMethod::kvf()).expect("set up");
     assert!(matches!(

@@ -1,23 +1,24 @@
 //! Large drags (`bdmorph::deform`): every method returns finite positions and a report
 //! measured from them, KVF's globalised step never raises its energy nor flips a triangle,
-//! one large drag poses as the same drag split into 20, the deformer stays usable after a
-//! drag it cannot follow, and the studio's default method never flips a triangle.
+//! symmetric Dirichlet never flips one, one large drag poses as the same drag split into 20,
+//! and the deformer stays usable after a drag it cannot follow. (The studio's default
+//! method on a limb dragged across the body: `tests/deform_crush.rs`.)
 
 mod common;
 
 use bdmorph::deform::{Deformer, DragReport, DragStatus, KvfOptions, PoseMethod};
 use bdmorph::distortion::RestShape;
-use bdmorph::meshing::{mesh_picture, MeshOptions, PictureOptions};
 use bdmorph::{generate, PlanarMesh};
 use common::max_distance;
 
 /// Every method, KVF both as by default (its steps may fold on the way) and flip-free.
-fn methods() -> [(&'static str, PoseMethod); 4] {
+fn methods() -> [(&'static str, PoseMethod); 5] {
     [
         ("kvf", PoseMethod::kvf()),
         ("kvf-flip-free", flip_free()),
         ("arap", PoseMethod::arap()),
         ("bounded", PoseMethod::bounded(3.0)),
+        ("sd", PoseMethod::sd()),
     ]
 }
 
@@ -126,7 +127,10 @@ fn large_drags_are_finite_and_reported_as_they_are() {
                 assert_eq!(r.flipped_triangles, 0, "{what}");
                 assert!(r.max_distortion <= 10.0 * (1.0 + 1e-9), "{what}: {r:?}");
             }
-            if name.starts_with("kvf") {
+            if name == "sd" {
+                assert_eq!(r.flipped_triangles, 0, "{what}");
+            }
+            if name.starts_with("kvf") || name == "sd" {
                 let away = (distance * size).hypot(0.3 * distance * size);
                 assert!(r.pin_residual <= away, "{what}: {r:?}");
             }
@@ -188,9 +192,18 @@ fn one_large_drag_is_twenty_small_ones_for_every_method() {
             }
             // KVF and ARAP have one minimum for the stretch and the swing, and reach it
             // both ways; the bounded method's ARAP iterations and projections end where
-            // the bound stopped them, which depends on the way there.
-            if drag != "back" && !matches!(method, PoseMethod::Bounded(_)) {
+            // the bound stopped them, which depends on the way there. Symmetric Dirichlet,
+            // whose barrier keeps the bar from folding on its way back, reaches the same
+            // pose both ways for all three, unflipped.
+            if drag != "back" && !matches!(method, PoseMethod::Bounded(_)) || name == "sd" {
                 assert!(apart < 1e-8, "{what}: {apart}");
+            }
+            if name == "sd" {
+                assert_eq!(
+                    (r1.flipped_triangles, r20.flipped_triangles),
+                    (0, 0),
+                    "{what}"
+                );
             }
         }
     }
@@ -269,7 +282,7 @@ fn the_jointed_deformer_is_finite_and_honest_on_large_drags() {
         let p = pose.positions();
         assert!(p.iter().flatten().all(|c| c.is_finite()), "{name}: {r:?}");
         assert_eq!(r.flipped_triangles, flipped(&mesh, p), "{name}");
-        if name == "kvf-flip-free" {
+        if name == "kvf-flip-free" || name == "sd" {
             assert_eq!(r.flipped_triangles, 0, "{name}: {r:?}");
         }
         assert_eq!(
@@ -288,98 +301,13 @@ fn nearest(p: &[[f64; 2]], q: [f64; 2]) -> u32 {
         .expect("vertices") as u32
 }
 
-/// A torso, a head and an arm `arm` pixels across (230 long) on a 512-pixel picture,
-/// meshed to about `vertices`; positions in pixels, y up.
-fn character(arm: f64, vertices: usize) -> PlanarMesh {
-    let s = 512.0;
-    let picture = generate::picture(512, 512, |x, y| {
-        let p = [x / s, y / s];
-        let torso = generate::capsule_distance(p, [0.45, 0.45], [0.45, 0.7], 0.13);
-        let head = generate::capsule_distance(p, [0.45, 0.2], [0.45, 0.2], 0.09);
-        let arm = generate::capsule_distance(p, [0.5, 0.42], [0.95, 0.42], 0.5 * arm / s);
-        s * torso.min(head).min(arm)
-    });
-    let options = MeshOptions::default().with_vertices(vertices);
-    mesh_picture(&picture, &PictureOptions::default(), &options)
-        .expect("meshed")
-        .mesh
-}
-
 #[test]
-fn the_studios_default_method_never_keeps_a_flipped_triangle() {
-    // The studio's engine with the project's default method (KVF, whose steps may fold),
-    // an arm 8 or 36 pixels wide dragged across the body in 12 quick mouse moves, then down
-    // past the hip in 6: after every move the keyframe has no flipped triangle (a fold is
-    // repaired within the repair's bound, or the move refused and the pose kept), and the
-    // report is the kept pose's.
-    use bdmorph::studio::engine::Engine;
-    use bdmorph::studio::project::{Keyframe, MethodData, Project};
-    let method = bdmorph::studio::engine::method_of(&MethodData::default()).expect("method");
-    assert!(matches!(method, PoseMethod::Kvf(_)), "{method:?}");
-    for (arm, vertices) in [(8.0, 4000), (36.0, 3000)] {
-        let rest = character(arm, vertices);
-        let p = &rest.positions;
-        let arm_y = 512.0 * (1.0 - 0.42);
-        let pins: Vec<u32> = [
-            [230.0, 200.0],
-            [230.0, 100.0],
-            [230.0, 400.0],
-            [486.0, arm_y],
-        ]
-        .iter()
-        .map(|&q| nearest(p, q))
-        .collect();
-        let mut doc = Project::new(&rest, None);
-        doc.keyframes.push(Keyframe {
-            time: 1.0,
-            easing: "linear".into(),
-            positions: rest.positions.clone(),
-            pins: pins.clone(),
-            drawing: None,
-        });
-        let mut engine = Engine::new(&doc, 1).expect("engine");
-        let start = places(&rest, &pins);
-        let mut t = start.clone();
-        let (mut worst_seen, mut refused) = (1.0f64, 0);
-        let moves = (1..=12)
-            .map(|k| [-330.0 * f64::from(k) / 12.0, 20.0 * f64::from(k) / 12.0])
-            .chain((1..=6).map(|k| [-330.0, 20.0 - 200.0 * f64::from(k) / 6.0]));
-        for (k, d) in moves.enumerate() {
-            t[3] = [start[3][0] + d[0], start[3][1] + d[1]];
-            let before = doc.keyframes[1].positions.clone();
-            match engine.drag(&mut doc, 1, &t) {
-                Ok(r) => {
-                    let pose = &doc.keyframes[1].positions;
-                    assert_eq!(r.flipped_triangles, flipped(&rest, pose), "move {k}");
-                    let w = worst(&rest, pose);
-                    assert!((r.max_distortion - w).abs() <= 1e-9 * w, "move {k}: {r:?}");
-                    worst_seen = worst_seen.max(w);
-                }
-                Err(why) => {
-                    eprintln!("arm {arm} px, move {k}: {why}");
-                    assert_eq!(
-                        doc.keyframes[1].positions, before,
-                        "a refused move keeps the pose"
-                    );
-                    refused += 1;
-                }
-            }
-            let now = flipped(&rest, &doc.keyframes[1].positions);
-            assert_eq!(now, 0, "arm {arm} px, move {k}");
-        }
-        eprintln!(
-            "arm {arm} px: none flipped after any move; largest distortion {worst_seen:.2}, {refused} of 18 moves refused"
-        );
-        assert!(refused < 18, "arm {arm} px: the arm moved");
-    }
-}
-
-#[test]
-fn the_figures_drags_with_flip_free_kvf() {
+fn the_figures_drags_with_flip_free_kvf_and_sd() {
     // The demo figure (examples/posing.rs), feet and head held: the right hand raised 65
     // degrees about the shoulder in 20 moves then 20 drags there, and pulled into the chest
     // in 20 moves. Flip-free KVF: the raised arm as before (ARAP's pose, 1.45), and no
-    // triangle flipped at any move of the pull into the chest, where ARAP folds.
+    // triangle flipped at any move of the pull into the chest, where ARAP folds. Symmetric
+    // Dirichlet: no triangle flipped either.
     let rest = generate::figure(0.01);
     let p = &rest.positions;
     let pins: Vec<u32> = [[-0.45, -1.5], [0.45, -1.5], [0.0, 2.8], [1.72, 1.4]]
@@ -392,7 +320,7 @@ fn the_figures_drags_with_flip_free_kvf() {
     let a0 = (hand[1] - shoulder[1]).atan2(hand[0] - shoulder[0]);
     let mut raised = Vec::new();
     let mut chest_flips = Vec::new();
-    for method in [flip_free(), PoseMethod::arap()] {
+    for method in [flip_free(), PoseMethod::arap(), PoseMethod::sd()] {
         let mut pose = Deformer::new(&rest, method).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut t = start.clone();
@@ -427,6 +355,7 @@ fn the_figures_drags_with_flip_free_kvf() {
     }
     assert!((raised[0] - raised[1]).abs() < 0.01, "{raised:?}");
     assert_eq!(chest_flips[0], 0, "kvf: {chest_flips:?}");
+    assert_eq!(chest_flips[2], 0, "sd: {chest_flips:?}");
     assert!(
         chest_flips[1] > 0,
         "the pull is meant to fold ARAP: {chest_flips:?}"

@@ -3,7 +3,7 @@
 //! bends, under every method; and weights of exactly 1 change nothing.
 
 use bdmorph::deform::{
-    ArapOptions, BoundedPoseOptions, DeformError, Deformer, KvfOptions, PoseMethod,
+    ArapOptions, BoundedPoseOptions, DeformError, Deformer, KvfOptions, PoseMethod, SdOptions,
 };
 use bdmorph::{generate, PlanarMesh};
 
@@ -11,7 +11,8 @@ use bdmorph::{generate, PlanarMesh};
 /// 100 is the smallest round weight within 1% for all three methods (worst painted
 /// triangle 0.53%), but the disk's harsher drag takes it to 3.8% (arap), 3.6% (kvf), 2.9%
 /// (bounded); 1000 holds both (strip 0.05%, disk 0.32% kvf, 0.39% arap, 0.45% bounded).
-/// The deviation falls about as 1 / weight.
+/// The deviation falls about as 1 / weight. Symmetric Dirichlet (sd): strip 0.10%, disk
+/// 1.10% at 1000 (100 holds the strip to 0.97%, not the disk: 10%).
 const STIFF: f64 = 1000.0;
 
 /// Each triangle's singular values' worst deviation from 1, `max |σ − 1|` (infinite when
@@ -145,9 +146,9 @@ fn disk() -> Scene {
     }
 }
 
-/// The methods, each run to convergence: KVF and ARAP with many iterations per drag, the
-/// bounded method with the bound `K = 3`.
-fn methods() -> [PoseMethod; 3] {
+/// The methods, each run to convergence: KVF, ARAP and symmetric Dirichlet with many
+/// iterations per drag, the bounded method with the bound `K = 3`.
+fn methods() -> [PoseMethod; 4] {
     [
         // Not flip-free: the disk's drag folds a triangle for ARAP and KVF unweighted (and
         // KVF at weight 1000 on its way), where flip-free steps stop short, stalled.
@@ -158,6 +159,7 @@ fn methods() -> [PoseMethod; 3] {
         ),
         PoseMethod::Arap(ArapOptions::default().with_iterations(50)),
         PoseMethod::Bounded(BoundedPoseOptions::new(3.0).with_iterations(200)),
+        PoseMethod::Sd(SdOptions::default().with_iterations(50)),
     ]
 }
 
@@ -213,7 +215,15 @@ fn stiff_region_stays_rigid(scene: &Scene) {
              the rest {other:.3}",
             method.name()
         );
-        assert!(painted <= 0.01, "{}: {painted}", method.name());
+        // Symmetric Dirichlet holds the disk's cap to 1.1% at 1000 (0.1% on the strip): the
+        // disk's drag squashes the triangles around the cap, and their barrier pushes on it
+        // harder than ARAP's energy would (the deviation falls as 1 / weight: 0.09% at
+        // 10,000).
+        let within = match method {
+            PoseMethod::Sd(_) => 0.0125,
+            _ => 0.01,
+        };
+        assert!(painted <= within, "{}: {painted}", method.name());
         assert!(other > 0.05, "{}: {other}", method.name());
         // The weight is what held it: unweighted, the same region bends.
         assert!(unweighted > 0.05, "{}: {unweighted}", method.name());

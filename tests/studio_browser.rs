@@ -784,7 +784,7 @@ fn defect_4_every_kind_of_edit_is_undone() {
     page.set_value("#method", "arap");
     page.wait("studio.state.method.name === 'arap'", 10);
     page.undo();
-    assert_eq!(page.eval("studio.state.method.name"), "kvf");
+    assert_eq!(page.eval("studio.state.method.name"), "sd");
     page.undo();
     assert_eq!(page.eval("studio.state.keyframes[1].easing"), "linear");
     page.undo();
@@ -1452,7 +1452,7 @@ fn thirty_random_edits_undo_and_redo_exactly_across_a_reload_and_two_tabs() {
                 let fps = [12, 24, 30][rnd(3)];
                 a.set_value("#fps", &fps.to_string());
             }
-            6 => a.set_value("#method", ["kvf", "arap", "bounded"][rnd(3)]),
+            6 => a.set_value("#method", ["sd", "kvf", "arap", "bounded"][rnd(4)]),
             7 => {
                 if keys > 2 {
                     a.click_on(&format!("#keys .key:nth-child({})", keys));
@@ -2563,7 +2563,7 @@ fn a_stiff_region_keeps_its_shape_under_every_method() {
     assert!(painted > 20 && painted < stiff.len() / 2, "{painted} stiff");
     page.click_on("#tool-drag");
     let (left_low, left_high, tip) = (nearest(0.0, 0.0), nearest(0.0, 2.0), nearest(10.0, 1.0));
-    for method in ["kvf", "arap", "bounded"] {
+    for method in ["sd", "kvf", "arap", "bounded"] {
         page.set_value("#method", method);
         page.wait(&format!("studio.state.method.name === '{method}'"), 20);
         page.settle();

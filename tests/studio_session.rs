@@ -209,7 +209,9 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
         }
         10 => Request::DragEnd,
         11 => Request::Method {
-            name: rng.pick(&["kvf", "arap", "bounded", "magic"]).to_owned(),
+            name: rng
+                .pick(&["sd", "kvf", "arap", "bounded", "magic"])
+                .to_owned(),
             weight: [None, Some(50.0), Some(1e-300), Some(f64::NAN), Some(1e9)][rng.below(5)],
             max_distortion: [None, Some(2.0), Some(0.5), Some(f64::INFINITY)][rng.below(4)],
         },
@@ -527,7 +529,7 @@ fn keyframes_with_flipped_triangles_do_not_block_the_timeline() {
 /// refused or the pose kept finite; the document never holds a non-finite point, and saves.
 #[test]
 fn poses_that_are_not_finite_are_never_kept() {
-    for method in ["kvf", "arap", "bounded"] {
+    for method in ["sd", "kvf", "arap", "bounded"] {
         let mut s = session(animated(5, 2), &format!("nan-{method}"));
         ask(
             &mut s,

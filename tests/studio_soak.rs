@@ -100,7 +100,7 @@ fn random_request(rng: &mut Rng, c: &mut Client) -> String {
         }
         17 => serde_json::json!({"op": "select", "keyframe": k(rng)}),
         18 => {
-            let name = ["kvf", "arap", "bounded"][rng.below(3)];
+            let name = ["sd", "kvf", "arap", "bounded"][rng.below(4)];
             let weight = [50.0, 100.0, 1e-300][rng.below(3)];
             serde_json::json!({"op": "method", "name": name, "weight": weight})
         }

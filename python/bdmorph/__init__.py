@@ -717,12 +717,16 @@ def bounded_distortion(V, F, max_distortion: float, *, pins=None, init: str = "t
 
 class Deformer:
     """Poses a planar mesh by handles: ``method`` ``"kvf"`` (as-Killing-as-possible fields,
-    soft handles with ``weight``, default 100), ``"arap"`` or ``"bounded"`` (with
-    ``max_distortion``). :meth:`set_pins` factors once; each :meth:`drag` is cheap and
-    warm-started from the last pose. ``iterations`` per drag (kvf steps, default 2; arap
-    local/global iterations, default 10; bounded projections, default 100) and ``tolerance``
-    (kvf, arap: stop when no vertex moves more than this fraction of the mesh's size) trade
-    speed for convergence; drag again to the same targets to go on converging.
+    soft handles with ``weight``, default 100), ``"arap"``, ``"bounded"`` (with
+    ``max_distortion``) or ``"sd"`` (symmetric Dirichlet by projected Newton, soft handles
+    with ``weight``, default 100: no triangle is ever flipped or crushed; a handle stops
+    short where following it would crush the mesh, and ``report["pin_residual"]`` says by
+    how much). :meth:`set_pins` factors once (sd factors as it goes, reusing its factor
+    while it serves); each :meth:`drag` is cheap and warm-started from the last pose.
+    ``iterations`` per drag (kvf steps, default 2; arap local/global iterations, default 10;
+    bounded projections, default 100; sd Newton iterations, default 4) and ``tolerance``
+    (kvf, arap, sd: stop when no vertex moves more than this fraction of the mesh's size)
+    trade speed for convergence; drag again to the same targets to go on converging.
 
     ``stiffness`` (or :meth:`set_stiffness`): one weight per triangle, each a finite number
     >= 1 (1: the mesh's own; larger holds the triangle closer to its rest shape up to a
@@ -762,7 +766,7 @@ class Deformer:
         return self._d.drag(_points2(targets, "targets"))
 
     def set_weight(self, weight: float) -> None:
-        """KVF's handle weight (refactors; the pins stay)."""
+        """The handles' weight of kvf (refactors) or sd; the pins stay."""
         self._d.set_weight(_number(weight, "weight", DeformError))
 
     def set_stiffness(self, weights) -> None:
@@ -795,7 +799,7 @@ class Deformer:
 
     @property
     def method(self) -> str:
-        """``"kvf"``, ``"arap"`` or ``"bounded"``."""
+        """``"kvf"``, ``"arap"``, ``"bounded"`` or ``"sd"``."""
         return self._d.method
 
     @property

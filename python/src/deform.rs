@@ -1,5 +1,5 @@
-//! `Deformer`: posing a planar mesh by handles (kvf, arap, bounded), factored once per set
-//! of pins, each drag warm-started from the last pose.
+//! `Deformer`: posing a planar mesh by handles (kvf, arap, bounded, sd), factored once per
+//! set of pins (sd: once per mesh), each drag warm-started from the last pose.
 
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -7,12 +7,13 @@ use pyo3::types::PyDict;
 
 use bdmorph::deform::{
     ArapOptions, BoundedPoseOptions, DragReport, DragStatus, KvfOptions, PoseMethod as Method,
+    SdOptions,
 };
 
 use crate::arrays;
 use crate::errors;
 
-/// Refuses a KVF handle weight that is not a finite number > 0.
+/// Refuses a handle weight (kvf, sd) that is not a finite number > 0.
 fn check_weight(w: f64) -> PyResult<()> {
     if w.is_finite() && w > 0.0 {
         Ok(())
@@ -48,8 +49,10 @@ impl Deformer {
         stiffness: Option<PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<Deformer> {
         let mesh = arrays::planar(&v, &f, "V", false)?;
-        if weight.is_some() && method != "kvf" {
-            return Err(errors::deform("only method 'kvf' has a handle weight"));
+        if weight.is_some() && !matches!(method, "kvf" | "sd") {
+            return Err(errors::deform(
+                "only methods 'kvf' and 'sd' have a handle weight",
+            ));
         }
         if max_distortion.is_some() && method != "bounded" {
             return Err(errors::deform("only method 'bounded' has max_distortion"));
@@ -117,9 +120,22 @@ impl Deformer {
                 }
                 Method::Bounded(o)
             }
+            "sd" => {
+                let mut o = SdOptions::default();
+                if let Some(w) = weight {
+                    o = o.with_weight(w);
+                }
+                if let Some(n) = iterations {
+                    o = o.with_iterations(n);
+                }
+                if let Some(t) = tolerance {
+                    o = o.with_tolerance(t);
+                }
+                Method::Sd(o)
+            }
             other => {
                 return Err(errors::deform(format!(
-                    "unknown method '{other}' (use kvf, arap or bounded)"
+                    "unknown method '{other}' (use kvf, arap, bounded or sd)"
                 )))
             }
         };
@@ -158,7 +174,7 @@ impl Deformer {
         Ok(arrays::out2(py, self.inner.positions()))
     }
 
-    /// KVF's handle weight (refactors; the pins stay).
+    /// The handles' weight of kvf (refactors) or sd; the pins stay.
     fn set_weight(&mut self, py: Python<'_>, weight: f64) -> PyResult<()> {
         check_weight(weight)?;
         let inner = &mut self.inner;
@@ -209,7 +225,7 @@ impl Deformer {
         self.inner.pins().to_vec()
     }
 
-    /// `kvf`, `arap` or `bounded`.
+    /// `kvf`, `arap`, `bounded` or `sd`.
     #[getter]
     fn method(&self) -> &'static str {
         self.inner.method().name()

@@ -81,6 +81,38 @@ def test_bounded_holds_its_bound_and_says_so(plate):
     assert np.abs(P[pins] - targets).max() < 1e-9
 
 
+def test_sd_flips_nothing_where_arap_folds(plate):
+    # The plate's right corner pulled back over its left end in three quick moves: ARAP
+    # (two iterations a move) folds it; symmetric Dirichlet flips no triangle at any move,
+    # its report measured from the pose it returns, and settles with the handle followed.
+    V, F = plate
+    pins, _ = pins_of(V)
+    goal = np.array([V[pins[0]], [-1.0, 1.5]])
+    folds = {}
+    for method, extra in [("arap", {"iterations": 2}), ("sd", {})]:
+        d = bdmorph.Deformer(V, F, method, **extra)
+        d.set_pins(pins)
+        most = 0
+        for k in range(1, 4):
+            P = d.drag(V[pins] + (goal - V[pins]) * k / 3)
+            most = max(most, d.report["flipped_triangles"])
+            assert np.isfinite(P).all()
+        folds[method] = most
+        if method == "sd":
+            for _ in range(200):
+                P = d.drag(goal)
+                if d.report["status"] == "converged":
+                    break
+            assert d.report["flipped_triangles"] == 0
+            assert d.report["pin_residual"] < 0.05
+            assert d.method == "sd"
+            d.set_weight(10.0)                 # softer handles: further from their targets
+            for _ in range(200):
+                d.drag(goal)
+            assert d.report["flipped_triangles"] == 0
+    assert folds["arap"] > 0 and folds["sd"] == 0, folds
+
+
 def test_undo_reset_weight_and_layouts(plate):
     V, F = plate
     pins, targets = pins_of(V)
@@ -103,8 +135,11 @@ def test_errors(plate):
         bdmorph.Deformer(V, F, "spring")
     with pytest.raises(bdmorph.DeformError, match="needs max_distortion"):
         bdmorph.Deformer(V, F, "bounded")
-    with pytest.raises(bdmorph.DeformError, match="only method 'kvf' has a handle weight"):
+    with pytest.raises(bdmorph.DeformError,
+                       match="only methods 'kvf' and 'sd' have a handle weight"):
         bdmorph.Deformer(V, F, "arap", weight=3.0)
+    with pytest.raises(bdmorph.DeformError, match="weight must be a finite number > 0"):
+        bdmorph.Deformer(V, F, "sd", weight=0.0)
     with pytest.raises(bdmorph.DeformError):
         bdmorph.Deformer(V, F, "bounded", max_distortion=0.5)
     d = bdmorph.Deformer(V, F, "arap")
@@ -141,7 +176,8 @@ def test_stiffness_keeps_a_painted_region_rigid_and_is_checked(plate):
             out = max(out, np.abs(s - 1).max())
         return out
 
-    for method, extra in [("kvf", {}), ("arap", {}), ("bounded", {"max_distortion": 3.0})]:
+    for method, extra in [("kvf", {}), ("arap", {}), ("bounded", {"max_distortion": 3.0}),
+                          ("sd", {})]:
         plain = bdmorph.Deformer(V, F, method, **extra)
         stiff = bdmorph.Deformer(V, F, method, stiffness=weights, **extra)
         later = bdmorph.Deformer(V, F, method, **extra)

@@ -77,6 +77,7 @@
 
 use bdmorph_cholesky::Cholesky;
 
+use super::stretch::Stretches;
 use super::{DeformError, DragReport, DragStatus};
 use crate::param::frames::Frames;
 use crate::param::local_global::{fit_each, free_laplacian_plus, global_rhs, weighted_edges, Fit};
@@ -84,18 +85,6 @@ use crate::param::local_global::{fit_each, free_laplacian_plus, global_rhs, weig
 /// The shortest fraction of a step the line search tries (2⁻⁴⁰): below it the step is not
 /// taken and the drag stops, stalled.
 const MIN_STEP: f64 = 9.094947017729282e-13;
-
-/// The farthest a handle's target moves in one stretch of a drag, relative to the mesh's
-/// size: a drag that moves a handle further is followed in stretches of at most this
-/// (each with [`KvfOptions::iterations`] steps), as a mouse moving there would. Chosen on
-/// the bar of `tests/deform_large.rs` (a tip swung 1.1 sizes): in one stretch the springs'
-/// first steps shear the bar into slivers the flip-free steps cannot open again; in
-/// stretches of 0.05 it bends as in 20 mouse moves.
-const STRETCH: f64 = 0.05;
-
-/// The most stretches of one drag (a drag of more than `STRETCHES × STRETCH` mesh sizes takes
-/// longer strides).
-const STRETCHES: usize = 400;
 
 /// The most a step may shrink a triangle: its area stays above this fraction of the area it
 /// had (as projected Newton's line search stops short of a flip, at a fraction of the
@@ -223,12 +212,8 @@ pub(crate) struct Kvf {
     cap: Vec<f64>,
     /// The straight step's target: the field's first solve, `ω = 0` (x then y rows).
     straight: Vec<f64>,
-    /// The handles' targets of the last drag, where the next drag's stretches start when
-    /// `known` (otherwise at the handles' places in the pose: after new pins or a new pose).
-    previous: Vec<[f64; 2]>,
-    known: bool,
-    /// The targets of one stretch.
-    stretch: Vec<[f64; 2]>,
+    /// How a drag is split into stretches.
+    stretches: Stretches,
 }
 
 impl Kvf {
@@ -279,9 +264,7 @@ impl Kvf {
             det: vec![1.0; m],
             cap: vec![options.max_distortion; m],
             straight: vec![0.0; 2 * n],
-            previous: Vec::new(),
-            known: false,
-            stretch: Vec::new(),
+            stretches: Stretches::default(),
         }
     }
 
@@ -319,15 +302,13 @@ impl Kvf {
             &extra,
         )?);
         self.pins = pins.to_vec();
-        self.known = false;
-        self.previous = vec![[0.0; 2]; pins.len()];
-        self.stretch = vec![[0.0; 2]; pins.len()];
+        self.stretches.reset(pins.len());
         Ok(())
     }
 
     /// The pose was replaced: the next drag's stretches start from the handles' places.
     pub(crate) fn forget_targets(&mut self) {
-        self.known = false;
+        self.stretches.forget();
     }
 
     /// Sets the handles' weight and refactors (pins unchanged).
@@ -350,52 +331,13 @@ impl Kvf {
         uv: &mut [[f64; 2]],
         size: f64,
     ) -> Result<DragReport, DeformError> {
-        // Where the handles' targets start from, and in how many stretches they go.
-        if !self.known || self.previous.len() != targets.len() {
-            self.previous.clear();
-            self.previous
-                .extend(self.pins.iter().map(|&p| uv[p as usize]));
-        }
-        // The handles' move split into the rigid motion that best fits it (about their
-        // centroid) and what is left: the stretches follow the rigid part along its arc and
-        // the rest along straight lines, so handles that all turn together turn the mesh
-        // rather than pull it through their chords.
-        let motion = Motion::fit(&self.previous, targets);
-        let far = self
-            .previous
-            .iter()
-            .zip(targets)
-            .map(|(&a, &b)| motion.path_length(a, b))
-            .fold(0.0, f64::max);
-        let stretches = ((far / (STRETCH * size)).ceil() as usize).clamp(1, STRETCHES);
-        let mut stretch = std::mem::take(&mut self.stretch);
-        stretch.resize(targets.len(), [0.0; 2]);
-        let mut report = DragReport::default();
-        for k in 1..=stretches {
-            if k == stretches {
-                stretch.copy_from_slice(targets);
-            } else {
-                let s = k as f64 / stretches as f64;
-                for ((out, &a), &b) in stretch.iter_mut().zip(&self.previous).zip(targets) {
-                    *out = motion.along(a, b, s);
-                }
-            }
-            let r = self.iterate(frames, &stretch, uv, size);
-            let r = match r {
-                Ok(r) => r,
-                Err(e) => {
-                    self.stretch = stretch;
-                    return Err(e);
-                }
-            };
-            report.iterations += r.iterations;
-            report.last_change = r.last_change;
-            report.status = r.status;
-        }
-        self.stretch = stretch;
-        self.previous.copy_from_slice(targets);
-        self.known = true;
-        Ok(report)
+        let mut stretches = std::mem::take(&mut self.stretches);
+        stretches.start(&self.pins, uv);
+        let result = stretches.follow(targets, uv, size, |stretch, uv| {
+            self.iterate(frames, stretch, uv, size)
+        });
+        self.stretches = stretches;
+        result
     }
 
     /// Up to [`KvfOptions::iterations`] steps towards `targets`.
@@ -659,71 +601,6 @@ impl Kvf {
             *out = new;
         }
         change
-    }
-}
-
-/// The rigid motion that best takes one set of handle places to another (least squares,
-/// about their centroids), to split a drag into stretches along it.
-struct Motion {
-    from: [f64; 2],
-    to: [f64; 2],
-    angle: f64,
-}
-
-impl Motion {
-    fn fit(a: &[[f64; 2]], b: &[[f64; 2]]) -> Motion {
-        let k = a.len().max(1) as f64;
-        let centroid = |p: &[[f64; 2]]| {
-            let s = p.iter().fold([0.0; 2], |s, q| [s[0] + q[0], s[1] + q[1]]);
-            [s[0] / k, s[1] / k]
-        };
-        let (from, to) = (centroid(a), centroid(b));
-        let (mut dot, mut cross) = (0.0, 0.0);
-        for (p, q) in a.iter().zip(b) {
-            let (x, y) = (
-                [p[0] - from[0], p[1] - from[1]],
-                [q[0] - to[0], q[1] - to[1]],
-            );
-            dot += x[0] * y[0] + x[1] * y[1];
-            cross += x[0] * y[1] - x[1] * y[0];
-        }
-        let angle = if dot == 0.0 && cross == 0.0 {
-            0.0
-        } else {
-            cross.atan2(dot)
-        };
-        Motion { from, to, angle }
-    }
-
-    /// Where the handle going from `a` to `b` is a fraction `s` of the way: `a` turned by
-    /// `s` of the angle about the centroid as it moves, plus `s` of what the motion leaves.
-    fn along(&self, a: [f64; 2], b: [f64; 2], s: f64) -> [f64; 2] {
-        let rigid = |t: f64| {
-            let (sin, cos) = (t * self.angle).sin_cos();
-            let x = [a[0] - self.from[0], a[1] - self.from[1]];
-            [
-                self.from[0] + t * (self.to[0] - self.from[0]) + cos * x[0] - sin * x[1],
-                self.from[1] + t * (self.to[1] - self.from[1]) + sin * x[0] + cos * x[1],
-            ]
-        };
-        let end = rigid(1.0);
-        let now = rigid(s);
-        [now[0] + s * (b[0] - end[0]), now[1] + s * (b[1] - end[1])]
-    }
-
-    /// A bound on the length of the handle's path from `a` to `b` along the motion.
-    fn path_length(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
-        let r = (a[0] - self.from[0]).hypot(a[1] - self.from[1]);
-        let shift = (self.to[0] - self.from[0]).hypot(self.to[1] - self.from[1]);
-        let rigid_end = {
-            let (sin, cos) = self.angle.sin_cos();
-            let x = [a[0] - self.from[0], a[1] - self.from[1]];
-            [
-                self.to[0] + cos * x[0] - sin * x[1],
-                self.to[1] + sin * x[0] + cos * x[1],
-            ]
-        };
-        self.angle.abs() * r + shift + (b[0] - rigid_end[0]).hypot(b[1] - rigid_end[1])
     }
 }
 

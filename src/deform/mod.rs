@@ -49,6 +49,8 @@
 mod arap;
 mod bounded;
 mod kvf;
+mod sd;
+mod stretch;
 mod untangle;
 
 use crate::mesh::{MeshError, PlanarMesh};
@@ -57,6 +59,7 @@ use crate::param::frames::Frames;
 pub use arap::ArapOptions;
 pub use bounded::BoundedPoseOptions;
 pub use kvf::KvfOptions;
+pub use sd::SdOptions;
 pub use untangle::{untangle, UntangleOptions, UntangleReport, Untangled};
 
 /// How the mesh follows its handles.
@@ -69,6 +72,9 @@ pub enum PoseMethod {
     Arap(ArapOptions),
     /// Bounded distortion with hard pins.
     Bounded(BoundedPoseOptions),
+    /// Symmetric Dirichlet with soft handles, by projected Newton: no triangle ever flips
+    /// or is crushed; a handle stops short where following it would crush the mesh.
+    Sd(SdOptions),
 }
 
 /// The former name of [`PoseMethod`], which clashed with [`crate::param::ParamMethod`]'s when both were
@@ -89,12 +95,17 @@ impl PoseMethod {
     pub fn bounded(max_distortion: f64) -> PoseMethod {
         PoseMethod::Bounded(BoundedPoseOptions::new(max_distortion))
     }
-    /// The method's name on the command line: `kvf`, `arap` or `bounded`.
+    /// Symmetric Dirichlet with the default options.
+    pub fn sd() -> PoseMethod {
+        PoseMethod::Sd(SdOptions::default())
+    }
+    /// The method's name: `kvf`, `arap`, `bounded` or `sd`.
     pub fn name(&self) -> &'static str {
         match self {
             PoseMethod::Kvf(_) => "kvf",
             PoseMethod::Arap(_) => "arap",
             PoseMethod::Bounded(_) => "bounded",
+            PoseMethod::Sd(_) => "sd",
         }
     }
 }
@@ -104,6 +115,7 @@ enum Solver {
     Kvf(Box<kvf::Kvf>),
     Arap(Box<arap::Arap>),
     Bounded(Box<bounded::Bounded>),
+    Sd(Box<sd::Sd>),
 }
 
 impl From<crate::io::ReadError> for DeformError {
@@ -177,7 +189,7 @@ pub enum DeformError {
     #[error("the handles' weight must be a finite number > 0, not {0}")]
     BadWeight(f64),
     /// `set_weight` on a method without handle weights.
-    #[error("only kvf has a handle weight")]
+    #[error("only kvf and sd have a handle weight")]
     NoWeight,
     /// The bounded-distortion solver failed.
     #[error(transparent)]
@@ -295,6 +307,7 @@ impl Deformer {
             PoseMethod::Bounded(options) => {
                 Solver::Bounded(Box::new(bounded::Bounded::new(&frames, n, options)?))
             }
+            PoseMethod::Sd(options) => Solver::Sd(Box::new(sd::Sd::new(&frames, n, options)?)),
         };
         Ok(Deformer {
             pool: crate::threads::Pool::default(),
@@ -315,6 +328,7 @@ impl Deformer {
             Solver::Kvf(s) => PoseMethod::Kvf(s.options()),
             Solver::Arap(s) => PoseMethod::Arap(s.options()),
             Solver::Bounded(s) => PoseMethod::Bounded(s.options()),
+            Solver::Sd(s) => PoseMethod::Sd(s.options()),
         }
     }
 
@@ -354,6 +368,7 @@ impl Deformer {
             Solver::Kvf(s) => s.set_pins(&self.frames, pins)?,
             Solver::Arap(s) => s.set_pins(&self.frames, pins)?,
             Solver::Bounded(s) => s.set_pins(&self.frames, n, pins)?,
+            Solver::Sd(s) => s.set_pins(pins)?,
         }
         self.pins = pins.to_vec();
         Ok(())
@@ -449,15 +464,18 @@ impl Deformer {
             Solver::Kvf(s) => s.set_stiffness(frames, weights),
             Solver::Arap(s) => s.set_stiffness(frames, weights),
             Solver::Bounded(s) => s.set_stiffness(frames, weights),
+            Solver::Sd(s) => s.set_stiffness(weights),
         }
         self.stiffness = weights.map(<[f64]>::to_vec);
     }
 
-    /// Sets [`PoseMethod::Kvf`]'s handle weight and refactors; the pins stay.
+    /// Sets the handles' weight of [`PoseMethod::Kvf`] (and refactors) or [`PoseMethod::Sd`];
+    /// the pins stay.
     pub fn set_weight(&mut self, weight: f64) -> Result<(), DeformError> {
         let (pool, frames) = (&self.pool, &self.frames);
         match &mut self.solver {
             Solver::Kvf(s) => pool.run(|| s.set_weight(frames, weight)),
+            Solver::Sd(s) => s.set_weight(weight),
             _ => Err(DeformError::NoWeight),
         }
     }
@@ -490,6 +508,7 @@ impl Deformer {
             Solver::Bounded(s) => {
                 s.drag(&self.frames, targets, &self.pins, &mut self.positions, size)
             }
+            Solver::Sd(s) => s.drag(&self.frames, targets, &mut self.positions, size),
         };
         let finite = self.positions.iter().flatten().all(|c| c.is_finite());
         if result.is_err() || !finite {
@@ -569,8 +588,10 @@ impl Deformer {
 
     /// The pose was replaced: KVF's next drag starts from the handles' places.
     fn forget_targets(&mut self) {
-        if let Solver::Kvf(s) = &mut self.solver {
-            s.forget_targets();
+        match &mut self.solver {
+            Solver::Kvf(s) => s.forget_targets(),
+            Solver::Sd(s) => s.forget_targets(),
+            _ => {}
         }
     }
 

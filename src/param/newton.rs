@@ -42,6 +42,43 @@ pub(crate) struct Newton {
     trial: Vec<[f64; 2]>,
     /// Vertices held where they are (positional constraints).
     fixed: Vec<bool>,
+    /// What posing adds to the energy ([`Newton::set_face_weights`], [`Newton::set_springs`],
+    /// [`Newton::set_inverted_energy`]); nothing for parameterisation.
+    extra: Extra,
+    /// The longest vertex move of the last full step solved for (before the line search).
+    longest: f64,
+    /// Whether `chol` holds a factor of a Hessian of the current energy (its terms unchanged
+    /// since): [`Newton::iterate_reusing`] may solve with it.
+    factored: bool,
+}
+
+/// Terms posing adds to the energy: per-triangle weights, springs pulling vertices towards
+/// targets, and another energy for triangles inverted where an iteration starts.
+#[derive(Default)]
+struct Extra {
+    /// Per triangle, the factor of its term (`None`: all 1).
+    weights: Option<Vec<f64>>,
+    /// The sprung vertices, their targets, and each one's two diagonal slots.
+    springs: Vec<u32>,
+    targets: Vec<[f64; 2]>,
+    slots: Vec<[Option<u32>; 2]>,
+    /// The springs' weight `k`: each adds `½ k |u − t|²` to the (area-weighted mean) energy.
+    spring_weight: f64,
+    /// The energy of triangles inverted (or degenerate) where an iteration starts, if they are
+    /// to be solved at all: such a triangle does not limit the step either.
+    inverted_energy: Option<Energy>,
+    /// Per triangle, whether the current iteration gives it `inverted_energy`.
+    inverted: Vec<bool>,
+    /// Whether a full step whose energy change is below round-off is taken (see
+    /// [`Newton::set_roundoff_steps`]).
+    roundoff_steps: bool,
+}
+
+impl Extra {
+    /// Whether nothing is added: the energy is the plain area-weighted mean.
+    fn is_plain(&self) -> bool {
+        self.weights.is_none() && self.springs.is_empty() && self.inverted_energy.is_none()
+    }
 }
 
 /// What one iteration did.
@@ -116,7 +153,99 @@ impl Newton {
             step: vec![0.0; 2 * n],
             trial: vec![[0.0; 2]; n],
             fixed: vec![false; n],
+            extra: Extra {
+                inverted: vec![false; frames.len()],
+                ..Extra::default()
+            },
+            longest: 0.0,
+            factored: false,
         })
+    }
+
+    /// Multiplies each triangle's term of the energy by its weight (`None`: all 1; one
+    /// finite positive weight per triangle, checked by the caller).
+    pub fn set_face_weights(&mut self, weights: Option<&[f64]>) {
+        self.extra.weights = weights.map(<[f64]>::to_vec);
+        self.factored = false;
+    }
+
+    /// Springs: each of `vertices` pulled towards its target ([`Newton::set_spring_targets`],
+    /// at first where it is) by `½ weight |u − t|²` added to the area-weighted mean energy
+    /// (soft handles, a finite `weight > 0` checked by the caller).
+    pub fn set_springs(&mut self, vertices: &[u32], weight: f64) {
+        let x = &mut self.extra;
+        x.springs = vertices.to_vec();
+        x.targets = vec![[0.0; 2]; vertices.len()];
+        x.slots = vertices
+            .iter()
+            .map(|&v| [0, 1].map(|r| self.pattern.slot(2 * v + r, 2 * v + r)))
+            .collect();
+        x.spring_weight = weight;
+        self.factored = false;
+    }
+
+    /// The springs' targets, one per sprung vertex in [`Newton::set_springs`]' order.
+    /// Allocates nothing.
+    pub fn set_spring_targets(&mut self, targets: &[[f64; 2]]) {
+        self.extra.targets.copy_from_slice(targets);
+    }
+
+    /// With `Some(e)`, a triangle inverted or degenerate where an iteration starts is given
+    /// the energy `e` (which must be finite there, ARAP say) for that iteration and does not
+    /// limit its step, instead of making the energy infinite: a map that starts with
+    /// inverted triangles is then solved with them (they may come back), and the others
+    /// still never invert.
+    pub fn set_inverted_energy(&mut self, energy: Option<Energy>) {
+        self.extra.inverted_energy = energy;
+        self.extra.inverted.fill(false);
+    }
+
+    /// With `true`, a full step (`α = 1`, within the flip-free limit) whose predicted decrease
+    /// is below the energy's round-off is taken when the energy it reaches is the same
+    /// within round-off: near a minimum the Armijo test cannot see such steps, and refusing
+    /// them stops the iterations at about the square root of the machine precision.
+    pub fn set_roundoff_steps(&mut self, on: bool) {
+        self.extra.roundoff_steps = on;
+    }
+
+    /// The longest vertex move of the last step solved for, in full (before its line
+    /// search), in the map's units; NaN when the step is not finite.
+    pub fn proposed_move(&self) -> f64 {
+        self.longest
+    }
+
+    /// The energy [`Newton::iterate`] lowers, at `uv`: the area-weighted mean of the
+    /// triangles' energies (each by its weight; inverted ones as the last iteration gave
+    /// them), plus the springs.
+    pub fn energy_at(&self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
+        let x = &self.extra;
+        if x.is_plain() {
+            return mean_energy(self.energy, frames, uv);
+        }
+        let mut e = 0.0;
+        for f in 0..frames.len() {
+            let energy = match x.inverted_energy {
+                Some(inverted) if x.inverted[f] => inverted,
+                _ => self.energy,
+            };
+            let mut a = frames.area[f];
+            if let Some(w) = &x.weights {
+                a *= w[f];
+            }
+            e += a * energy.psi(sigma2(frames.gradient(f, uv)));
+        }
+        e / frames.total_area + self.spring_energy(uv)
+    }
+
+    /// `Σ ½ k |u − t|²` over the springs.
+    fn spring_energy(&self, uv: &[[f64; 2]]) -> f64 {
+        let x = &self.extra;
+        let mut e = 0.0;
+        for (&v, t) in x.springs.iter().zip(&x.targets) {
+            let u = uv[v as usize];
+            e += (u[0] - t[0]) * (u[0] - t[0]) + (u[1] - t[1]) * (u[1] - t[1]);
+        }
+        0.5 * x.spring_weight * e
     }
 
     /// Whether, once full steps are taken, the iterations try Hessians that keep part of
@@ -151,11 +280,41 @@ impl Newton {
         self.step_from_assembly(frames, uv, energy_before)
     }
 
+    /// [`Newton::iterate`], or, with `reuse` and a factor of an earlier iteration's Hessian
+    /// at hand (the energy's terms unchanged since), the same line search along the step
+    /// that factor gives: only the gradient is assembled and nothing is factored. Any
+    /// positive definite matrix gives a descent direction, so every step still lowers the
+    /// energy and keeps the triangles unflipped; a factor of a nearby pose's Hessian (the
+    /// previous mouse move's) makes it nearly a Newton step, at the cost of one solve. Such
+    /// a step never tries a partly projected Hessian.
+    pub fn iterate_reusing(
+        &mut self,
+        frames: &Frames,
+        uv: &mut [[f64; 2]],
+        reuse: bool,
+    ) -> Result<StepReport, ParamError> {
+        if !(reuse && self.factored) {
+            return self.iterate(frames, uv);
+        }
+        let energy_before = self.assemble_with(frames, uv, false);
+        let gradient_norm = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
+        self.solve_step()?;
+        Ok(self.search(frames, uv, energy_before, gradient_norm))
+    }
+
     /// Fills the gradient and the projected Hessian's values at `uv`; returns the energy.
     fn assemble(&mut self, frames: &Frames, uv: &[[f64; 2]]) -> f64 {
+        self.assemble_with(frames, uv, true)
+    }
+
+    /// Fills the gradient, and with `hessian` the projected Hessian's values, at `uv`;
+    /// returns the energy.
+    fn assemble_with(&mut self, frames: &Frames, uv: &[[f64; 2]], hessian: bool) -> f64 {
         let total = frames.total_area;
-        let partial = self.try_partial;
-        self.values.fill(0.0);
+        let partial = self.try_partial && hessian;
+        if hessian {
+            self.values.fill(0.0);
+        }
         if partial {
             self.negative.fill(0.0);
         }
@@ -164,16 +323,39 @@ impl Newton {
         for (f, face) in frames.faces.iter().enumerate() {
             let fmat = frames.gradient(f, uv);
             let svd = svd2(fmat);
-            let w = frames.area[f] / total;
-            energy_before += w * self.energy.psi(svd.sigma);
-            let p = self.energy.first_piola(&svd);
-            let h = self.energy.projected_hessian(&svd);
+            let mut w = frames.area[f] / total;
+            let mut energy = self.energy;
+            if let Some(inverted) = self.extra.inverted_energy {
+                let now = svd.sigma[1] <= 0.0;
+                self.extra.inverted[f] = now;
+                if now {
+                    energy = inverted;
+                }
+            }
+            if let Some(weights) = &self.extra.weights {
+                w *= weights[f];
+            }
+            energy_before += w * energy.psi(svd.sigma);
+            let p = energy.first_piola(&svd);
+            let g = &frames.g[f];
+            if !hessian {
+                for (k, &v) in face.iter().enumerate() {
+                    if self.fixed[v as usize] {
+                        continue;
+                    }
+                    for r in 0..2 {
+                        self.grad[2 * v as usize + r] +=
+                            w * (p[r][0] * g[k][0] + p[r][1] * g[k][1]);
+                    }
+                }
+                continue;
+            }
+            let h = energy.projected_hessian(&svd);
             let hx = if partial {
-                self.energy.negative_hessian(&svd)
+                energy.negative_hessian(&svd)
             } else {
                 [[0.0; 4]; 4]
             };
-            let g = &frames.g[f];
             // Gradient: ∂E/∂u[v][r] = Σ_c P[r][c] g[v][c].
             for (k, &v) in face.iter().enumerate() {
                 if self.fixed[v as usize] {
@@ -204,6 +386,27 @@ impl Newton {
                     self.negative[slot as usize] += w * sum_x;
                 }
             }
+        }
+        // The springs: ½ k |u − t|² each.
+        let x = &self.extra;
+        let k = x.spring_weight;
+        for ((&v, t), slots) in x.springs.iter().zip(&x.targets).zip(&x.slots) {
+            if self.fixed[v as usize] {
+                continue;
+            }
+            let u = uv[v as usize];
+            for r in 0..2 {
+                self.grad[2 * v as usize + r] += k * (u[r] - t[r]);
+                if let (true, Some(slot)) = (hessian, slots[r]) {
+                    self.values[slot as usize] += k;
+                }
+            }
+        }
+        if !x.springs.is_empty() {
+            energy_before += self.spring_energy(uv);
+        }
+        if !hessian {
+            return energy_before;
         }
         // A fixed vertex's rows are the identity (and its gradient zero): its step is zero.
         for (v, _) in self.fixed.iter().enumerate().filter(|(_, &f)| f) {
@@ -247,6 +450,7 @@ impl Newton {
             self.mu = if partial_step { mu } else { 1.0 };
         }
         if !partial_step {
+            self.factored = false;
             self.chol
                 .factorize(&self.values)
                 .map_err(|source| ParamError::Solver {
@@ -255,7 +459,30 @@ impl Newton {
                 })?;
             self.solve_step()?;
         }
-        let (max_step, limiting_face) = max_flip_free_step(frames, uv, &self.step);
+        self.factored = true;
+        let report = self.search(frames, uv, energy_before, gradient_norm);
+        self.try_partial = self.partial && report.step == 1.0;
+        if !(tried_partial && partial_step) {
+            self.mu = 1.0;
+        }
+        Ok(report)
+    }
+
+    /// The flip-free backtracking line search along `step` from `uv` (moved in place when
+    /// a step is taken).
+    fn search(
+        &mut self,
+        frames: &Frames,
+        uv: &mut [[f64; 2]],
+        energy_before: f64,
+        gradient_norm: f64,
+    ) -> StepReport {
+        let skip = self
+            .extra
+            .inverted_energy
+            .is_some()
+            .then_some(&self.extra.inverted[..]);
+        let (max_step, limiting_face) = max_flip_free_step(frames, uv, &self.step, skip);
         let slope: f64 = self.grad.iter().zip(&self.step).map(|(g, s)| g * s).sum();
         let mut alpha = (0.9 * max_step).min(1.0);
         let mut energy_after = energy_before;
@@ -267,8 +494,13 @@ impl Newton {
                     uv[v][1] + alpha * self.step[2 * v + 1],
                 ];
             }
-            let e = mean_energy(self.energy, frames, &self.trial);
-            if e.is_finite() && e <= energy_before + 1e-4 * alpha * slope {
+            let e = self.energy_at(frames, &self.trial);
+            // Near a minimum the predicted decrease may be below the energy's round-off.
+            let roundoff = self.extra.roundoff_steps
+                && alpha == 1.0
+                && -slope <= 1e-11 * energy_before.abs()
+                && e <= energy_before + 1e-12 * energy_before.abs();
+            if e.is_finite() && (e <= energy_before + 1e-4 * alpha * slope || roundoff) {
                 energy_after = e;
                 taken = alpha;
                 uv.copy_from_slice(&self.trial);
@@ -276,16 +508,17 @@ impl Newton {
             }
             alpha *= 0.5;
         }
-        self.try_partial = self.partial && taken == 1.0;
-        if !(tried_partial && partial_step) {
-            self.mu = 1.0;
-        }
         let longest = self
             .step
             .chunks_exact(2)
             .map(|d| d[0].hypot(d[1]))
             .fold(0.0, f64::max);
-        Ok(StepReport {
+        self.longest = if self.step.iter().all(|x| x.is_finite()) {
+            longest
+        } else {
+            f64::NAN
+        };
+        StepReport {
             energy_before,
             energy_after,
             gradient_norm,
@@ -293,7 +526,7 @@ impl Newton {
             max_step,
             limiting_face,
             moved: taken * longest / super::map_size(uv),
-        })
+        }
     }
 
     /// `step = −H⁻¹ grad` with the current factor; whether it is a descent direction.
@@ -333,15 +566,19 @@ pub(crate) fn mean_energy(energy: Energy, frames: &Frames, uv: &[[f64; 2]]) -> f
 
 /// The largest `α` (at most infinity) such that no triangle's `det F` reaches zero along
 /// `uv + α d`: per triangle the smallest positive root of `det(Ds + α dDs) = 0`; and the
-/// triangle that sets it.
+/// triangle that sets it. Triangles marked in `skip` (if any) are left out.
 pub(crate) fn max_flip_free_step(
     frames: &Frames,
     uv: &[[f64; 2]],
     d: &[f64],
+    skip: Option<&[bool]>,
 ) -> (f64, Option<usize>) {
     let mut best = f64::INFINITY;
     let mut face = None;
     for (f, &[a, b, c]) in frames.faces.iter().enumerate() {
+        if skip.is_some_and(|s| s[f]) {
+            continue;
+        }
         let p = |v: u32| uv[v as usize];
         let q = |v: u32| [d[2 * v as usize], d[2 * v as usize + 1]];
         let (e1, e2) = (

@@ -14,7 +14,7 @@
 
 use super::edit::Touched;
 use super::project::{MethodData, Project};
-use crate::deform::{DragReport, DragStatus, KvfOptions, PoseMethod};
+use crate::deform::{DragReport, DragStatus, KvfOptions, PoseMethod, SdOptions};
 use crate::distortion::RestShape;
 use crate::mesh::PlanarMesh;
 use crate::parts::{JointedDeformer, Placement, Weld};
@@ -28,6 +28,7 @@ pub fn method_of(m: &MethodData) -> Result<PoseMethod, String> {
     m.check()?;
     Ok(match m.name.as_str() {
         "kvf" => PoseMethod::Kvf(KvfOptions::default().with_weight(m.weight)),
+        "sd" => PoseMethod::Sd(SdOptions::default().with_weight(m.weight)),
         "arap" => PoseMethod::arap(),
         _ => PoseMethod::bounded(m.max_distortion),
     })

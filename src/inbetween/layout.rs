@@ -294,7 +294,8 @@ pub(super) fn lay_over(
                     mesh,
                     &layout.positions,
                     &vertices,
-                    &UntangleOptions::default(),
+                    // Any fewer flips are kept below: the layout is untangled further after.
+                    &UntangleOptions::default().with_best_effort(true),
                 )?;
                 let left = bad(&mesh.faces, &repaired.positions);
                 if left < layout.flipped {

@@ -23,14 +23,16 @@ fn handles(mesh: &PlanarMesh) -> Vec<u32> {
     vec![0, n - 1, n - 1 - n / 10, n - 1 - n / 5]
 }
 
-/// The methods, as named in the benchmark ids: KVF flip-free (the default) and with steps
-/// that may fold (`kvf-folding`: the line search on the energy only).
-fn methods() -> [(&'static str, PoseMethod); 4] {
+/// The methods, as named in the benchmark ids: symmetric Dirichlet (`sd`, the studio's
+/// default: no triangle flips or is crushed), KVF (steps that may fold, its default) and KVF
+/// with flip-free steps (`kvf-flip-free`), ARAP, and bounded distortion.
+fn methods() -> [(&'static str, PoseMethod); 5] {
     [
+        ("sd", PoseMethod::sd()),
         ("kvf", PoseMethod::kvf()),
         (
-            "kvf-folding",
-            PoseMethod::Kvf(KvfOptions::default().with_flip_free(false)),
+            "kvf-flip-free",
+            PoseMethod::Kvf(KvfOptions::default().with_flip_free(true)),
         ),
         ("arap", PoseMethod::arap()),
         ("bounded", PoseMethod::bounded(2.5)),

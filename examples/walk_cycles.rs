@@ -4,6 +4,7 @@
 //! ```sh
 //! cargo run --release --example walk_cycles                       # every character
 //! cargo run --release --example walk_cycles -- --characters robot --vertices 1000
+//! cargo run --release --example walk_cycles -- --placement anchor   # BDMORPH placed by anchor
 //! ```
 //!
 //! For every drawing `i` of a cycle, the triples `(i − 1, i, i + 1)` and `(i − 2, i, i + 2)`
@@ -12,7 +13,9 @@
 //! middle frame (t = 0.5) of every method in [`METHODS`] is drawn and compared with the real
 //! middle drawing: silhouette IoU (pixels of opacity at least one half) and mean colour error
 //! (each picture over white, the mean of |Δ| over R, G and B, 0-255, over the union of the two
-//! silhouettes). The drawings are 96 × 128 palette PNGs, scaled up 4 times by nearest
+//! silhouettes), and swelling (the silhouette's area over the real drawing's, minus 1); and
+//! in how many triples each method's IoU is at least straight lines'. The drawings are
+//! 96 × 128 palette PNGs, scaled up 4 times by nearest
 //! neighbour (384 × 512) before anything else.
 //!
 //! "With a folded frame" counts accepted triples where one of BDMORPH's frames at t = 0,
@@ -146,11 +149,25 @@ fn scale(image: &Image, k: u32) -> Image {
     }
 }
 
-/// Silhouette IoU and mean colour error of `frame` against the real drawing `truth`.
-fn compare(frame: &Image, truth: &Image) -> (f64, f64) {
+/// What a middle frame is measured by against the real drawing.
+#[derive(Clone, Copy)]
+struct Score {
+    /// Silhouette IoU.
+    iou: f64,
+    /// Mean colour error over the union of the silhouettes.
+    colour: f64,
+    /// The silhouette's area over the real drawing's, minus 1 (the swelling, or shrinking).
+    swelling: f64,
+}
+
+/// Silhouette IoU, mean colour error and swelling of `frame` against the real drawing `truth`.
+fn compare(frame: &Image, truth: &Image) -> Score {
     let (mut both, mut either, mut error) = (0usize, 0usize, 0.0);
+    let (mut area_p, mut area_q) = (0usize, 0usize);
     for (p, q) in frame.rgba.chunks_exact(4).zip(truth.rgba.chunks_exact(4)) {
         let (in_p, in_q) = (p[3] >= 128, q[3] >= 128);
+        area_p += usize::from(in_p);
+        area_q += usize::from(in_q);
         if in_p && in_q {
             both += 1;
         }
@@ -168,17 +185,25 @@ fn compare(frame: &Image, truth: &Image) -> (f64, f64) {
             / 3.0;
     }
     if either == 0 {
-        return (1.0, 0.0);
+        return Score {
+            iou: 1.0,
+            colour: 0.0,
+            swelling: 0.0,
+        };
     }
-    (both as f64 / either as f64, error / either as f64)
+    Score {
+        iou: both as f64 / either as f64,
+        colour: error / either as f64,
+        swelling: area_p as f64 / area_q.max(1) as f64 - 1.0,
+    }
 }
 
 /// One triple's outcome.
 struct Outcome {
     character: &'static str,
     triple: [usize; 3],
-    /// The reason it was refused, or per method (IoU, colour error).
-    result: Result<Vec<(f64, f64)>, String>,
+    /// The reason it was refused, or per method its score.
+    result: Result<Vec<Score>, String>,
     /// Of BDMORPH's frames at t = 0, 0.05, ... 1, how many have a flipped triangle.
     folded_frames: usize,
     seconds: f64,
@@ -207,23 +232,37 @@ fn table(outcomes: &[&Outcome], title: &str) {
         "\n### {title}: middle frame against the real drawing ({} accepted triples)\n",
         accepted.len()
     );
-    println!("| method | IoU worst | IoU median | colour error worst | colour error median |");
-    println!("|---|---:|---:|---:|---:|");
+    println!(
+        "| method | IoU worst | IoU median | colour error worst | colour error median | swelling worst | swelling median | IoU at least straight lines' |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+    let linear = METHODS
+        .iter()
+        .position(|(name, _)| *name == "linear")
+        .expect("straight lines are among the methods");
     for (m, (name, _)) in METHODS.iter().enumerate() {
-        let ious: Vec<f64> = accepted
+        let scores: Vec<(Score, Score)> = accepted
             .iter()
-            .filter_map(|o| o.result.as_ref().ok().map(|r| r[m].0))
+            .filter_map(|o| o.result.as_ref().ok().map(|r| (r[m], r[linear])))
             .collect();
-        let errors: Vec<f64> = accepted
+        let ious: Vec<f64> = scores.iter().map(|s| s.0.iou).collect();
+        let errors: Vec<f64> = scores.iter().map(|s| s.0.colour).collect();
+        let swellings: Vec<f64> = scores.iter().map(|s| s.0.swelling).collect();
+        let worst_swelling = swellings
             .iter()
-            .filter_map(|o| o.result.as_ref().ok().map(|r| r[m].1))
-            .collect();
+            .copied()
+            .max_by(|a, b| a.abs().total_cmp(&b.abs()))
+            .unwrap_or(f64::NAN);
+        let at_least = scores.iter().filter(|s| s.0.iou >= s.1.iou).count();
         println!(
-            "| {name} | {:.3} | {:.3} | {:.1} | {:.1} |",
+            "| {name} | {:.3} | {:.3} | {:.1} | {:.1} | {:+.1}% | {:+.1}% | {at_least}/{} |",
             ious.iter().copied().fold(f64::INFINITY, f64::min),
             median(ious),
             errors.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            median(errors)
+            median(errors),
+            100.0 * worst_swelling,
+            100.0 * median(swellings),
+            scores.len()
         );
     }
 }
@@ -237,10 +276,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut vertices = InbetweenOptions::default().vertices;
     let mut only: Option<Vec<String>> = None;
     let mut strips: Option<PathBuf> = None;
+    let mut placement = InbetweenOptions::default().morph.placement;
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--data" => data = PathBuf::from(args.next().ok_or("--data DIR")?),
             "--vertices" => vertices = args.next().ok_or("--vertices N")?.parse()?,
+            "--placement" => {
+                placement = args
+                    .next()
+                    .ok_or("--placement anchor|fit")?
+                    .parse()
+                    .map_err(|e: String| e)?
+            }
             "--strips" => strips = Some(PathBuf::from(args.next().ok_or("--strips DIR")?)),
             "--characters" => {
                 only = Some(
@@ -254,9 +301,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             other => return Err(format!("unknown argument {other}").into()),
         }
     }
-    let options = InbetweenOptions::default().with_vertices(vertices);
+    let defaults = InbetweenOptions::default();
+    let morph = defaults.morph.with_placement(placement);
+    let options = defaults.with_vertices(vertices).with_morph(morph);
     println!(
-        "Walk cycles from {} (drawings scaled up {SCALE}× by nearest neighbour), about {vertices} vertices.",
+        "Walk cycles from {} (drawings scaled up {SCALE}× by nearest neighbour), about {vertices} vertices, BDMORPH's frames placed by {placement:?}.",
         data.display()
     );
     let mut outcomes: Vec<Outcome> = Vec::new();
@@ -323,7 +372,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 match &result {
                     Ok(r) => eprintln!(
                         "{folder} {triple:?}: accepted in {seconds:.1} s, bdmorph IoU {:.3}",
-                        r[0].0
+                        r[0].iou
                     ),
                     Err(e) => eprintln!("{folder} {triple:?}: refused: {e}"),
                 }

@@ -99,7 +99,7 @@ pub struct Project {
     /// [`crate::parts`]). `None`: no joints.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joints: Option<Vec<[u32; 2]>>,
-    /// How the animation's frames are placed: `"fit"` (by the rigid motion that best fits the
+    /// How the animation's frames are placed: `"fit"` (by the similarity that best fits the
     /// keyframes, so that parts that hold still between keyframes hold still in between;
     /// what [`Project::new`] sets) or `"anchor"` (by a vertex and an edge, as projects saved
     /// without this field play). See [`crate::Placement`].

@@ -314,3 +314,174 @@ fn mistakes_are_one_line_and_write_nothing() {
         assert!(!target.exists(), "{args:?} wrote {}", target.display());
     }
 }
+
+/// The vertex positions of an OBJ file.
+fn obj_positions(path: &Path) -> Vec<[f64; 2]> {
+    std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let c: Vec<f64> = l
+                .split_whitespace()
+                .map(|x| x.parse().expect("number"))
+                .collect();
+            [c[0], c[1]]
+        })
+        .collect()
+}
+
+#[test]
+fn the_baselines_are_drawn_on_the_same_compatible_mesh() {
+    let dir = scratch("methods");
+    let (a, b) = drawings(&dir);
+    let frames = |method: &str| {
+        let out_dir = dir.join(method);
+        let out = run(&[
+            a.as_os_str(),
+            b.as_os_str(),
+            os("--frames"),
+            os("3"),
+            os("--vertices"),
+            os("600"),
+            os("--method"),
+            os(method),
+            os("-o"),
+            out_dir.as_os_str(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (0..3)
+            .map(|i| obj_positions(&out_dir.join(format!("frame_{i:04}.obj"))))
+            .collect::<Vec<_>>()
+    };
+    let (bd, arap, linear) = (frames("bdmorph"), frames("arap"), frames("linear"));
+    let far = |p: &[[f64; 2]], q: &[[f64; 2]]| {
+        p.iter()
+            .zip(q)
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .fold(0.0, f64::max)
+    };
+    // The same mesh, and the same drawings at the ends: every method starts at A's layout and
+    // ends at B's.
+    for k in [0, 2] {
+        assert_eq!(bd[k].len(), linear[k].len());
+        assert!(far(&bd[k], &linear[k]) < 1e-6, "frame {k}");
+        assert!(far(&arap[k], &linear[k]) < 1e-6, "frame {k}");
+    }
+    // Straight lines: the middle is the midpoint of the ends.
+    let mid: Vec<[f64; 2]> = linear[0]
+        .iter()
+        .zip(&linear[2])
+        .map(|(p, q)| [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])])
+        .collect();
+    assert!(far(&linear[1], &mid) < 1e-6);
+    // The other two bend the arm rather than cut across: their middles differ from it.
+    assert!(far(&arap[1], &mid) > 1.0);
+    assert!(far(&bd[1], &mid) > 1.0);
+    // A method that is not one is refused in one line, writing nothing.
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--method"),
+        os("spline"),
+        os("-o"),
+        dir.join("none").as_os_str(),
+    ]);
+    assert!(!out.status.success());
+    assert!(!dir.join("none").exists());
+}
+
+#[test]
+fn a_project_of_the_drawings_plays_the_command_lines_frames() {
+    let dir = scratch("project");
+    let (a, b) = drawings(&dir);
+    let common = |out: &Path| {
+        let out = run(&[
+            a.as_os_str(),
+            b.as_os_str(),
+            os("--frames"),
+            os("5"),
+            os("--vertices"),
+            os("600"),
+            os("-o"),
+            out.as_os_str(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let (objs, project) = (dir.join("objs"), dir.join("pair.json"));
+    common(&objs);
+    common(&project);
+    // The project names the drawings beside it, and opens.
+    let text = std::fs::read_to_string(&project).expect("project");
+    assert!(
+        text.contains("\"a.png\"") && text.contains("\"b.png\""),
+        "{text}"
+    );
+    // The studio's export of it (the frames at its 25 fps: 5 over 0.16 s) gives the command
+    // line's frames.
+    let exported = dir.join("exported");
+    let out = bin()
+        .arg("export")
+        .arg(&project)
+        .args(["--format", "obj", "-o"])
+        .arg(&exported)
+        .output()
+        .expect("run");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let size = {
+        let p = obj_positions(&objs.join("frame_0000.obj"));
+        let (lo, hi) = p
+            .iter()
+            .fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), q| {
+                (
+                    [lo[0].min(q[0]), lo[1].min(q[1])],
+                    [hi[0].max(q[0]), hi[1].max(q[1])],
+                )
+            });
+        (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&exported)
+        .expect("exported")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 5, "{files:?}");
+    for (i, file) in files.iter().enumerate() {
+        let cli = obj_positions(&objs.join(format!("frame_{i:04}.obj")));
+        let studio = obj_positions(file);
+        assert_eq!(cli.len(), studio.len());
+        let far = cli
+            .iter()
+            .zip(&studio)
+            .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+            .fold(0.0, f64::max);
+        assert!(far < 1e-7 * size, "frame {i}: {far} apart (size {size})");
+    }
+    // What a project cannot carry is refused, writing nothing.
+    let refused = dir.join("refused.json");
+    let out = run(&[
+        a.as_os_str(),
+        b.as_os_str(),
+        os("--frames"),
+        os("5"),
+        os("--method"),
+        os("linear"),
+        os("-o"),
+        refused.as_os_str(),
+    ]);
+    assert!(!out.status.success());
+    assert!(!refused.exists());
+}

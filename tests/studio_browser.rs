@@ -2851,8 +2851,14 @@ fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
         &dir.join("a.png"),
         &tinted(generate::figure_picture(256, 0.0, 0.0), [220, 40, 30]),
     );
-    let ring = generate::ring_picture(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
-    write_png(&dir.join("ring.png"), &ring);
+    // Two pieces: a drawing of another subject (holes that differ are handled; a different
+    // number of pieces is not).
+    let two = generate::picture(256, 256, |x, y| {
+        let left = generate::capsule_distance([x, y], [70.0, 128.0], [70.0, 128.0], 40.0);
+        let right = generate::capsule_distance([x, y], [190.0, 128.0], [190.0, 128.0], 40.0);
+        left.min(right)
+    });
+    write_png(&dir.join("two.png"), &two);
     std::fs::create_dir_all(dir.join("incoming")).expect("dir");
     let from_disk = dir.join("incoming").join("b.png");
     write_png(
@@ -2895,10 +2901,10 @@ fn a_drawing_becomes_a_keyframe_with_its_picture_cross_faded() {
         let n = marks.count_in(page.rect(side), saturated);
         assert!(n > 200, "correspondence marks on {side}: {n} pixels");
     }
-    // A drawing with a hole cannot be matched: said in the dialog, and not made.
-    page.set_value("#drawing-name", "ring.png");
+    // A drawing of two pieces cannot be matched: said in the dialog, and not made.
+    page.set_value("#drawing-name", "two.png");
     page.wait(
-        "document.getElementById('drawing-status').textContent.includes('hole') && document.getElementById('drawing-make').disabled",
+        "document.getElementById('drawing-status').textContent.includes('piece') && document.getElementById('drawing-make').disabled",
         30,
     );
     page.shot("drawing-refused.png");

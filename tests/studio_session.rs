@@ -874,8 +874,13 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         p[..3].copy_from_slice(&[20, 40, 240]);
     }
     std::fs::write(dir.join("b.png"), raster::encode_png(&blue).expect("png")).expect("write");
-    let holed = generate::ring_picture(256, [128.0, 128.0], 90.0, [128.0, 128.0], 30.0);
-    std::fs::write(dir.join("ring.png"), raster::encode_png(&holed).unwrap()).unwrap();
+    // Two pieces: holes that differ are handled, a different number of pieces is not.
+    let two = generate::picture(256, 256, |x, y| {
+        let left = generate::capsule_distance([x, y], [70.0, 128.0], [70.0, 128.0], 40.0);
+        let right = generate::capsule_distance([x, y], [190.0, 128.0], [190.0, 128.0], 40.0);
+        left.min(right)
+    });
+    std::fs::write(dir.join("two.png"), raster::encode_png(&two).unwrap()).unwrap();
     let mut s = Session::new(
         Project::new(&generate::disk(4, 0.1), None),
         dir.clone(),
@@ -1060,13 +1065,13 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         "{said}"
     );
     std::fs::rename(dir.join("b.kept"), dir.join("b.png")).unwrap();
-    // A drawing with a hole: the job fails, says why, and changes nothing.
+    // A drawing of two pieces: the job fails, says why, and changes nothing.
     let kept = s.project().to_json();
     assert_eq!(
         ask(
             &mut s,
             Request::DrawingKeyframe {
-                name: "ring.png".into(),
+                name: "two.png".into(),
                 pairs: vec![],
                 time: None,
             },
@@ -1077,7 +1082,7 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
     let state: serde_json::Value = serde_json::from_str(&s.state_json()).unwrap();
     let notes = state["notes"].to_string();
     assert!(
-        notes.contains("ring.png") && notes.contains("hole"),
+        notes.contains("two.png") && notes.contains("piece"),
         "{notes}"
     );
     // Refused before any work: a missing file, a time taken, too many pairs.

@@ -28,7 +28,7 @@ pub(super) fn run(args: BlendArgs) -> Result<(), String> {
     }
     check_size(plan.as_ref(), &args.out)?;
     let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
-    let options = morph_options(&args.solver);
+    let options = morph_options(&args.solver, bdmorph::Placement::Anchor);
     let blend = match &args.solver.program {
         Some(path) => {
             let program = super::compile::load(path, &args.meshes[0], &inputs.keyframes[0])?;

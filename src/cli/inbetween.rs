@@ -1,16 +1,26 @@
 //! `bdmorph inbetween A.png B.png ...`.
 
 use std::io::Write;
+use std::path::Path;
 
-use bdmorph::inbetween::{CompatibleReport, Drawing, Inbetween, InbetweenOptions};
-use bdmorph::meshing::PictureOptions;
+use bdmorph::distortion::RestShape;
+use bdmorph::inbetween::{
+    linear_frame, ArapInterpolation, CompatiblePath, CompatibleReport, Drawing, Inbetween,
+    InbetweenOptions,
+};
+use bdmorph::io::{self, TexCoords};
+use bdmorph::meshing::{Background, PictureOptions};
+use bdmorph::project::{Keyframe, KeyframeDrawing, PictureSettings, Project};
 use bdmorph::render::{raster, Image};
+use bdmorph::studio::open::per_vertex_uv;
+use bdmorph::Easing;
+use bdmorph::{FrameStats, PlanarMesh};
 
 use super::morph::{
     check_kept, check_options, check_size, json_escape, morph_options, plan_of, progress_bar,
 };
 use super::output::{self, Crossfade, Format, Look, Plan};
-use super::{times, InbetweenArgs};
+use super::{times, InbetweenArgs, InbetweenMethod};
 
 /// Formats that can cross-fade two pictures, or carry positions.
 fn check_format(plan: &Plan) -> Result<(), String> {
@@ -40,7 +50,18 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
     if args.solver.program.is_some() {
         return Err("--program is not available for in-betweens (the mesh is made here)".into());
     }
-    let plan = plan_of(&args.out, times.len())?;
+    // `-o NAME.json`: a studio project of the drawings (it plays these very frames).
+    let project_out = args.out.output.clone().filter(|p| {
+        p.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    });
+    if project_out.is_some() {
+        check_project_options(&args)?;
+    }
+    let plan = match project_out {
+        Some(_) => None,
+        None => plan_of(&args.out, times.len())?,
+    };
     if let Some(plan) = &plan {
         check_format(plan)?;
     }
@@ -64,7 +85,7 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
         .with_picture(picture)
         .with_vertices(args.vertices)
         .with_min_angle(args.min_angle)
-        .with_morph(morph_options(&args.solver));
+        .with_morph(morph_options(&args.solver, bdmorph::Placement::Fit));
     let names = args
         .drawings
         .iter()
@@ -95,6 +116,18 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
             writeln!(stdout, "{}", report_json(report, k + 1)).map_err(|e| e.to_string())?;
         }
     }
+    if let Some(out) = &project_out {
+        let project = project_of(&args, out, &path, times.len())?;
+        io::write_bytes_atomic(out, &project.to_json()).map_err(|e| e.to_string())?;
+        if !quiet {
+            eprintln!(
+                "wrote {} (open it with: bdmorph studio {})",
+                out.display(),
+                out.display()
+            );
+        }
+        return Ok(());
+    }
     let colour = args.out.color_by.is_some();
     let vertices = path.mesh.positions.len();
     let faces = path.mesh.faces.clone();
@@ -102,6 +135,17 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
         check_kept(plan, times.len(), vertices, colour.then_some(faces.len()))?;
     }
     let segments = path.layouts.len();
+    // The baselines' frames: drawing k's layout, and per segment ARAP's interpolation (made
+    // when first needed).
+    let layout = |k: usize| {
+        if k == 0 {
+            path.mesh.positions.as_slice()
+        } else {
+            path.layouts[k - 1].as_slice()
+        }
+    };
+    let mut arap: Vec<Option<ArapInterpolation>> = (0..segments).map(|_| None).collect();
+    let rest = RestShape::new(&path.mesh.positions, &faces);
     let bar = progress_bar(times.len(), quiet, "morphing");
     let mut frames = Vec::with_capacity(if plan.is_some() { times.len() } else { 0 });
     let mut blends = Vec::with_capacity(times.len());
@@ -110,24 +154,57 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
         let (k, s) = inbetween.segment(t);
         let eased = args.easing.as_ref().map_or(s, |e| e.apply(s));
         let at = (k as f64 + eased) / segments as f64;
-        let frame = inbetween
-            .frame(at)
-            .map_err(|e| format!("{names}: t = {t}: {e}"))?;
+        let (positions, distortion, stats) = match args.method {
+            InbetweenMethod::Bdmorph => {
+                let frame = inbetween
+                    .frame(at)
+                    .map_err(|e| format!("{names}: t = {t}: {e}"))?;
+                (
+                    frame.positions.to_vec(),
+                    frame.distortion.to_vec(),
+                    frame.stats,
+                )
+            }
+            method => {
+                let started = std::time::Instant::now();
+                let (a, b) = (layout(k), layout(k + 1));
+                let positions = if method == InbetweenMethod::Linear {
+                    linear_frame(a, b, eased)
+                } else {
+                    if arap[k].is_none() {
+                        let from = PlanarMesh {
+                            positions: a.to_vec(),
+                            faces: faces.clone(),
+                        };
+                        arap[k] = Some(
+                            ArapInterpolation::new(&from, b)
+                                .map_err(|e| format!("{names}: {e}"))?,
+                        );
+                    }
+                    let interpolation = arap[k].as_mut().expect("made above");
+                    interpolation
+                        .frame(eased)
+                        .map_err(|e| format!("{names}: t = {t}: {e}"))?
+                };
+                let (distortion, stats) = measure(&rest, &positions, t, started);
+                (positions, distortion, stats)
+            }
+        };
         if args.out.stats {
-            writeln!(stdout, "{}", frame.stats.to_json()).map_err(|e| e.to_string())?;
+            writeln!(stdout, "{}", stats.to_json()).map_err(|e| e.to_string())?;
         }
-        if frame.stats.flipped_triangles > 0 && !quiet {
+        if stats.flipped_triangles > 0 && !quiet {
             eprintln!(
                 "bdmorph: warning: t = {t}: {} flipped triangles",
-                frame.stats.flipped_triangles
+                stats.flipped_triangles
             );
         }
         if plan.is_some() {
             frames.push(output::Frame {
                 index,
                 t,
-                positions: frame.positions.to_vec(),
-                distortion: colour.then(|| frame.distortion.to_vec()),
+                positions,
+                distortion: colour.then_some(distortion),
             });
             blends.push((k, k + 1, args.crossfade.weight(eased)));
         }
@@ -170,6 +247,139 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Options that a project (`-o NAME.json`) cannot carry.
+fn check_project_options(args: &InbetweenArgs) -> Result<(), String> {
+    let refuse = |what: &str| {
+        Err(format!(
+            "{what}: a project (-o NAME.json) is played by the studio, which morphs by BDMORPH \
+             through its keyframes; give --frames N for its length"
+        ))
+    };
+    if args.method != InbetweenMethod::Bdmorph {
+        return refuse("--method");
+    }
+    if args.t.is_some() {
+        return refuse("--t");
+    }
+    if args.out.format.is_some() {
+        return refuse("--format");
+    }
+    Ok(())
+}
+
+/// `file`'s name as a project in `dir` keeps it: relative to `dir` when inside it, else
+/// absolute.
+fn name_for(dir: &Path, file: &Path) -> String {
+    let absolute = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
+    let dir = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    match absolute.strip_prefix(&dir) {
+        Ok(inside) => inside.display().to_string(),
+        Err(_) => absolute.display().to_string(),
+    }
+}
+
+/// The easing's text as projects (and `--easing`) write it.
+fn easing_text(easing: Option<&Easing>) -> String {
+    match easing {
+        None | Some(Easing::Linear) => "linear".into(),
+        Some(Easing::EaseInOut) => "ease-in-out".into(),
+        Some(Easing::CubicBezier([a, b, c, d])) => format!("cubic-bezier({a},{b},{c},{d})"),
+    }
+}
+
+/// The studio project of the drawings: the compatible mesh (drawing A's layout, textured by
+/// it) and one keyframe per other drawing (its layout, textured by it), `frames` frames long
+/// at `--fps`, with the command's placement and easing: the studio plays and exports the
+/// frames this command would write.
+fn project_of(
+    args: &InbetweenArgs,
+    out: &Path,
+    path: &CompatiblePath,
+    frames: usize,
+) -> Result<Project, String> {
+    let dir = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let n = path.mesh.positions.len();
+    let uv = |t: &TexCoords| {
+        per_vertex_uv(t, &path.mesh.faces, n).ok_or_else(|| {
+            "the compatible mesh's texture coordinates are not one per vertex".to_string()
+        })
+    };
+    let mut project = Project::new(&path.mesh, Some(uv(&path.texcoords[0])?));
+    project.texture = Some(name_for(dir, &args.drawings[0]));
+    project.fps = f64::from(args.out.fps);
+    project.placement = Some(
+        args.solver
+            .placement
+            .unwrap_or(bdmorph::Placement::Fit)
+            .to_string(),
+    );
+    project.picture = PictureSettings {
+        background: args.paper.as_ref().map(|p| match p {
+            Background::Auto => "auto".to_string(),
+            Background::Colour([r, g, b]) => format!("#{r:02x}{g:02x}{b:02x}"),
+        }),
+        threshold: args.threshold,
+    };
+    let easing = easing_text(args.easing.as_ref());
+    project.keyframes[0].easing = easing.clone();
+    let segments = path.layouts.len();
+    let duration = (frames.max(2) - 1) as f64 / project.fps;
+    for (k, layout) in path.layouts.iter().enumerate() {
+        project.keyframes.push(Keyframe {
+            time: duration * (k + 1) as f64 / segments as f64,
+            easing: easing.clone(),
+            positions: layout.clone(),
+            pins: Vec::new(),
+            drawing: Some(KeyframeDrawing {
+                picture: name_for(dir, &args.drawings[k + 1]),
+                texcoords: uv(&path.texcoords[k + 1])?,
+                pairs: Vec::new(),
+            }),
+        });
+    }
+    project.check().map_err(|e| e.to_string())?;
+    Ok(project)
+}
+
+/// A baseline's frame measured as the morph measures its own: each triangle's conformal
+/// distortion from drawing A's layout (infinite for a flipped one) and the statistics.
+fn measure(
+    rest: &RestShape,
+    positions: &[[f64; 2]],
+    t: f64,
+    started: std::time::Instant,
+) -> (Vec<f64>, FrameStats) {
+    let mut distortion = vec![0.0; rest.faces().len()];
+    rest.distortion_into(positions, &mut distortion);
+    let flipped = rest
+        .faces()
+        .iter()
+        .filter(|f| {
+            let [a, b, c] = f.map(|v| positions[v as usize]);
+            (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) <= 0.0
+        })
+        .count();
+    let largest = if flipped > 0 {
+        f64::INFINITY
+    } else {
+        distortion.iter().copied().fold(1.0, f64::max)
+    };
+    let stats = FrameStats {
+        t,
+        newton_iterations: 0,
+        factorizations: 0,
+        cg_iterations: 0,
+        gradient_norm: 0.0,
+        flipped_triangles: flipped,
+        max_conformal_distortion: largest,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    (distortion, stats)
 }
 
 /// One line about the compatible mesh over one drawing.

@@ -173,7 +173,10 @@ enum Command {
     /// --method arap poses as rigidly as possible instead (hard pins, local/global iterations
     /// on a prefactored Laplacian; no distortion bound, flipped triangles reported), and
     /// --method kvf by as-Killing-as-possible vector fields, the original BDMORPH editor's
-    /// deformation (soft handles, --pin-weight; flipped triangles reported).
+    /// deformation (soft handles, --pin-weight; flipped triangles reported), and --method sd
+    /// by the symmetric Dirichlet energy (soft handles; no triangle flips or is crushed, a
+    /// handle stops short where following it would crush the mesh: the pin residual says how
+    /// far).
     ///
     /// --stats prints one JSON object: method, iterations, largest conformal distortion,
     /// flipped triangles, pin residual, seconds (and, for bounded, its full report).
@@ -439,6 +442,11 @@ struct InbetweenArgs {
     /// to t = 0.5, then B's).
     #[arg(long, value_name = "CURVE", default_value = "smooth")]
     crossfade: bdmorph::inbetween::Crossfade,
+    /// How the frames between the drawings are made, on the same compatible mesh: bdmorph
+    /// (bounded distortion, the default), arap (as-rigid-as-possible interpolation of each
+    /// triangle's rotation and stretch) or linear (every vertex on a straight line).
+    #[arg(long, value_name = "METHOD", value_enum, default_value = "bdmorph")]
+    method: InbetweenMethod,
     /// About how many vertices the mesh has.
     #[arg(long, value_name = "N", default_value_t = bdmorph::meshing::DEFAULT_VERTICES)]
     vertices: usize,
@@ -553,6 +561,17 @@ struct OutputArgs {
     quiet: bool,
 }
 
+/// How `inbetween` makes the frames between the drawings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum InbetweenMethod {
+    /// Bounded-distortion interpolation (BDMORPH).
+    Bdmorph,
+    /// As-rigid-as-possible interpolation (Alexa, Cohen-Or and Levin 2000).
+    Arap,
+    /// Straight lines.
+    Linear,
+}
+
 /// What to colour triangles by.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum ColorBy {
@@ -580,10 +599,10 @@ struct SolverArgs {
     #[arg(long)]
     allow_inverted: bool,
     /// How each frame is placed: `anchor` (by a vertex near the middle and one of its edges,
-    /// the original program's; the default of `morph` and `blend`) or `fit` (by the rigid
-    /// motion that best fits the keyframes, the vertices that hold still between them weighing
-    /// most, so that they hold still in between; the default of `inbetween`). Keyframes are
-    /// reached exactly either way.
+    /// the original program's; the default of `morph` and `blend`) or `fit` (by the rotation,
+    /// scale and translation that best fit the keyframes, the vertices that hold still between
+    /// them weighing most, so that they hold still in between and the frame does not swell;
+    /// the default of `inbetween`). Keyframes are reached exactly either way.
     #[arg(long, value_name = "HOW", value_parser = parse_placement)]
     placement: Option<bdmorph::Placement>,
 }
@@ -802,6 +821,9 @@ enum DeformMethod {
     /// As-Killing-as-possible vector fields (the original editor's), soft handles weighted
     /// by --pin-weight.
     Kvf,
+    /// Symmetric Dirichlet with soft handles (--pin-weight) by projected Newton: no triangle
+    /// flips or is crushed; a handle stops short where following it would crush the mesh.
+    Sd,
 }
 
 /// Parses `X,Y`: two finite numbers.
@@ -872,8 +894,9 @@ struct DeformArgs {
     fixes: Vec<[f64; 2]>,
     /// How the mesh follows the handles: bounded (bounded distortion, needs
     /// --max-distortion), arap (as-rigid-as-possible with hard pins; no bound, flips
-    /// reported) or kvf (as-Killing-as-possible fields with soft handles, the original
-    /// editor's; no bound, flips reported).
+    /// reported), kvf (as-Killing-as-possible fields with soft handles, the original
+    /// editor's; no bound, flips reported) or sd (symmetric Dirichlet with soft handles:
+    /// nothing flips or is crushed).
     #[arg(long, value_enum, default_value_t = DeformMethod::Bounded)]
     method: DeformMethod,
     /// The bound K >= 1 on every triangle's conformal distortion (--method bounded).
@@ -883,8 +906,8 @@ struct DeformArgs {
     /// 1000 field steps for kvf).
     #[arg(long, value_name = "N")]
     iterations: Option<u32>,
-    /// KVF's handle weight, relative to the mesh's stiffness (default 100): larger holds the
-    /// handles closer to their targets.
+    /// The handles' weight of kvf and sd, relative to the mesh's stiffness (default 100):
+    /// larger holds the handles closer to their targets.
     #[arg(long, value_name = "W")]
     pin_weight: Option<f64>,
     /// Output: .obj, .svg or .png.

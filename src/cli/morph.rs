@@ -187,12 +187,13 @@ pub(super) fn read_depth(
 }
 
 /// The solver's options from the command line.
-pub(super) fn morph_options(solver: &SolverArgs) -> MorphOptions {
+/// The solver's settings as morph options; `placement` unless `--placement` says otherwise.
+pub(super) fn morph_options(solver: &SolverArgs, placement: bdmorph::Placement) -> MorphOptions {
     MorphOptions::default()
         .with_tolerance(solver.tolerance)
         .with_max_iterations(solver.max_iterations)
         .with_allow_inverted(solver.allow_inverted)
-        .with_placement(solver.placement.unwrap_or(bdmorph::Placement::Anchor))
+        .with_placement(solver.placement.unwrap_or(placement))
 }
 
 impl Inputs {
@@ -316,7 +317,7 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let plan = plan_of(&args.out, times.len())?;
     check_size(plan.as_ref(), &args.out)?;
     let inputs = read_inputs(&args.meshes, &args.out, &args.solver, plan.as_ref())?;
-    let options = morph_options(&args.solver);
+    let options = morph_options(&args.solver, bdmorph::Placement::Anchor);
     let program = match &args.solver.program {
         Some(path) => Some(super::compile::load(
             path,

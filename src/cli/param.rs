@@ -414,20 +414,21 @@ fn handles(args: &DeformArgs, mesh: &bdmorph::PlanarMesh) -> Result<Vec<(u32, [f
 /// A pose, why its bound was not met (if it was not), and a one-line summary.
 type Posed = (Vec<[f64; 2]>, Option<String>, String);
 
-/// `deform --method kvf|arap` through [`bdmorph::deform::Deformer`]: the pose, nothing unmet
+/// `deform --method kvf|sd|arap` through [`bdmorph::deform::Deformer`]: the pose, nothing unmet
 /// (neither has a bound to miss), and a summary; `--stats` prints the method, time, largest
 /// conformal distortion, flips and pin residual.
 ///
 /// ARAP's hard pins go to their targets in one drag iterated to convergence. KVF moves its
 /// handles there as a mouse would, in [`KVF_MOVES`] even moves of a few steps each, then
 /// iterates at the targets to convergence: its steps follow the handles, and one jump of
-/// the whole way would ask a single field for a large rotation.
+/// the whole way would ask a single field for a large rotation. The symmetric Dirichlet
+/// method (`sd`) is moved the same way.
 fn deformer_pose(
     args: &DeformArgs,
     planar: &bdmorph::PlanarMesh,
     pins: &[(u32, [f64; 2])],
 ) -> Result<Posed, String> {
-    use bdmorph::deform::{ArapOptions, Deformer, KvfOptions, PoseMethod as Method};
+    use bdmorph::deform::{ArapOptions, Deformer, KvfOptions, PoseMethod as Method, SdOptions};
     let in_file = |e: bdmorph::deform::DeformError| format!("{}: {e}", args.mesh.display());
     let started = std::time::Instant::now();
     let limit = args.iterations.unwrap_or(1000);
@@ -438,6 +439,13 @@ fn deformer_pose(
                 options = options.with_weight(w);
             }
             Method::Kvf(options)
+        }
+        super::DeformMethod::Sd => {
+            let mut options = SdOptions::default();
+            if let Some(w) = args.pin_weight {
+                options = options.with_weight(w);
+            }
+            Method::Sd(options)
         }
         _ => Method::Arap(
             ArapOptions::default()
@@ -452,7 +460,7 @@ fn deformer_pose(
     pose.set_pins(&vertices).map_err(in_file)?;
     let mut iterations = 0;
     let mut report = None;
-    if name == "kvf" {
+    if name == "kvf" || name == "sd" {
         let from: Vec<[f64; 2]> = vertices
             .iter()
             .map(|&v| planar.positions[v as usize])
@@ -542,7 +550,7 @@ pub(super) fn deform(args: DeformArgs) -> Result<(), String> {
     }
     let pins = handles(&args, &planar)?;
     let (uv, unmet, summary) = match args.method {
-        super::DeformMethod::Arap | super::DeformMethod::Kvf => {
+        super::DeformMethod::Arap | super::DeformMethod::Kvf | super::DeformMethod::Sd => {
             deformer_pose(&args, &planar, &pins)?
         }
         super::DeformMethod::Bounded => {

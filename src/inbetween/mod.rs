@@ -129,7 +129,9 @@ pub struct InbetweenOptions {
     pub min_angle: f64,
     /// How each picture's subject is told from its background.
     pub picture: PictureOptions,
-    /// The morph's options.
+    /// The morph's options (default: [`MorphOptions::default`] with
+    /// [`crate::Placement::Fit`], so that what holds still between the drawings holds still
+    /// in between).
     pub morph: MorphOptions,
     /// Holes of a drawing whose area is below this many square pixels (at the drawing's
     /// own scale) are filled: pinholes, such as a stray transparent pixel. Default
@@ -152,7 +154,7 @@ impl Default for InbetweenOptions {
             vertices: 2000,
             min_angle: DEFAULT_MIN_ANGLE,
             picture: PictureOptions::default(),
-            morph: MorphOptions::default(),
+            morph: MorphOptions::default().with_placement(crate::Placement::Fit),
             pinhole: DEFAULT_PINHOLE,
             transparent_holes: false,
         }

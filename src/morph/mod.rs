@@ -66,9 +66,10 @@ pub struct MorphOptions {
     /// plays its projects so: what the animator posed is what every export shows.
     pub reach_inverted: bool,
     /// How each piece of a frame is placed (default [`Placement::Anchor`], the original
-    /// program's: by an anchor vertex and edge). [`Placement::Fit`] places it by the rigid
-    /// motion that best fits the keyframes, so that parts that hold still between keyframes
-    /// hold still in between; keyframes are reached exactly either way.
+    /// program's: by an anchor vertex and edge). [`Placement::Fit`] places it by the
+    /// similarity that best fits the keyframes, so that parts that hold still between
+    /// keyframes hold still in between and the frame does not swell; keyframes are reached
+    /// exactly either way.
     pub placement: Placement,
 }
 

@@ -1,4 +1,4 @@
-//! Where a frame goes: the rigid motion that places the flattened shape.
+//! Where a frame goes: the motion that places the flattened shape.
 //!
 //! BDMORPH's metric fixes each piece's shape up to a rigid motion. The original program, and
 //! [`Placement::Anchor`], place it by one vertex and one edge: the anchor vertex at the
@@ -7,15 +7,22 @@
 //! alone: where the shape changes between the anchor and a part that does not move (an arm
 //! raised over a body that stands still), the standing part swings in the in-betweens.
 //!
-//! [`Placement::Fit`] places it by the rigid motion that best fits the keyframes instead: for
-//! each keyframe of the frame, the rotation that best maps the shape onto that keyframe
-//! (weighted least squares over all vertices, Procrustes), blended by the frame's weights, and
-//! the weighted centre of the keyframes' blended centres. Each vertex weighs its area times
+//! [`Placement::Fit`] places it by the similarity that best fits the keyframes instead: for
+//! each keyframe of the frame, the rotation and the uniform scale that best map the shape onto
+//! that keyframe (weighted least squares over all vertices, Procrustes), blended by the
+//! frame's weights (the angles linearly, the scales' logarithms linearly), and the weighted
+//! centre of the keyframes' blended centres. The scale undoes BDMORPH's swelling: blending
+//! squared edge lengths inflates a triangle whose shape differs between the keyframes, and
+//! the flattening (boundary lengths fixed) carries it to the whole shape; between two
+//! drawings of a walk cycle whose compatible mesh is strongly distorted, the middle frame's
+//! silhouette was 26% larger than the real middle drawing's (median over 48 pairs), 2% with
+//! the scale. A uniform scale changes no triangle's conformal distortion and flips none, so
+//! BDMORPH's bound holds. Each vertex weighs its area times
 //! how still it is between the frame's keyframes (`1 / (1 + (d / σ)²)` for a displacement
 //! `d` and `σ` a fiftieth of the first keyframe's size), so a part that holds still between
 //! the keyframes holds still in every in-between, and the parts that move do not pull it
 //! along. At a keyframe the shape is that keyframe's up to a rigid motion, which the fit
-//! finds exactly: keyframes are reached as with the anchor. Costs `O(n)` per keyframe of the
+//! finds exactly (the scale is 1): keyframes are reached as with the anchor. Costs `O(n)` per keyframe of the
 //! frame (two for a morph or a path), a fraction of a Newton iteration.
 
 /// How frames are placed (see the module notes).
@@ -26,9 +33,9 @@ pub enum Placement {
     /// blend of its keyframe positions, its edge at the blend of its keyframe angles.
     #[default]
     Anchor,
-    /// By the rigid motion that best fits the keyframes (weighted least squares over all
-    /// vertices, the still ones weighing most): parts that hold still between keyframes hold
-    /// still in between.
+    /// By the similarity (rotation, uniform scale, translation) that best fits the keyframes
+    /// (weighted least squares over all vertices, the still ones weighing most): parts that
+    /// hold still between keyframes hold still in between, and the frame does not swell.
     Fit,
 }
 
@@ -41,7 +48,7 @@ impl std::str::FromStr for Placement {
             "fit" => Ok(Placement::Fit),
             other => Err(format!(
                 "placement '{other}' is not one of anchor (by a vertex and an edge) and fit (by \
-                 the rigid motion that best fits the keyframes)"
+                 the similarity that best fits the keyframes)"
             )),
         }
     }
@@ -139,7 +146,7 @@ impl Fit {
         self.massed = Some(line);
     }
 
-    /// Moves the frame `out` (the piece's positions, placed any way) by the rigid motion that
+    /// Moves the frame `out` (the piece's positions, placed any way) by the similarity that
     /// best fits the keyframes with weights `weights`; `line` is the line of two keyframes the
     /// weights lie on, if any. Allocates nothing.
     pub(crate) fn place(
@@ -162,7 +169,12 @@ impl Fit {
             [c[0] / total, c[1] / total]
         };
         let here = centre(out, &self.mass);
-        let (mut angle, mut target) = (0.0, [0.0; 2]);
+        let (mut angle, mut target, mut log_scale) = (0.0, [0.0; 2], 0.0);
+        let spread: f64 = out
+            .iter()
+            .zip(&self.mass)
+            .map(|(p, m)| m * ((p[0] - here[0]).powi(2) + (p[1] - here[1]).powi(2)))
+            .sum();
         for (w, key) in weights.iter().zip(&self.keyframes) {
             if *w == 0.0 {
                 continue;
@@ -178,8 +190,17 @@ impl Fit {
             angle += w * cross.atan2(dot);
             target[0] += w * there[0];
             target[1] += w * there[1];
+            if spread > 0.0 {
+                // The scale of the similarity that best maps the frame onto this keyframe.
+                let scale = dot.hypot(cross) / spread;
+                if scale > 0.0 && scale.is_finite() {
+                    log_scale += w * scale.ln();
+                }
+            }
         }
+        let k = log_scale.exp();
         let (s, c) = angle.sin_cos();
+        let (s, c) = (k * s, k * c);
         for p in out.iter_mut() {
             let (x, y) = (p[0] - here[0], p[1] - here[1]);
             *p = [target[0] + c * x - s * y, target[1] + s * x + c * y];

@@ -65,8 +65,16 @@ def test_mistakes_raise_inbetween_error(drawings, tmp_path):
     y, x = np.mgrid[0:120, 0:120] + 0.5
     ring[np.hypot(x - 60, y - 60) < 15, 3] = 0
     write_png(tmp_path / "ring.png", ring)
-    with pytest.raises(bdmorph.InbetweenError, match="0 holes in drawing A and 1 hole in drawing B"):
-        bdmorph.compatible_mesh(a, tmp_path / "ring.png", vertices=300)
+    # Holes that differ are handled: B's hole is covered by the mesh (transparent in B).
+    VA, F, VB, _ = bdmorph.compatible_mesh(a, tmp_path / "ring.png", vertices=300)
+    assert (signed_areas(VA, F) > 0).all() and (signed_areas(VB, F) > 0).all()
+    # A different number of pieces is not.
+    two = np.maximum(
+        capsule_picture(120, (30, 50), (30, 70), 20), capsule_picture(120, (90, 50), (90, 70), 20)
+    )
+    write_png(tmp_path / "two.png", two)
+    with pytest.raises(bdmorph.InbetweenError, match="1 piece and drawing B has 2 pieces"):
+        bdmorph.compatible_mesh(a, tmp_path / "two.png", vertices=300)
     with pytest.raises(bdmorph.InbetweenError, match="k x 4"):
         bdmorph.compatible_mesh(a, b, matches=[[1.0, 2.0, 3.0]])
     with pytest.raises(bdmorph.InbetweenError, match="vertices"):

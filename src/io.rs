@@ -931,6 +931,16 @@ fn write_atomic(
     };
     let no_name = || io::Error::new(io::ErrorKind::InvalidInput, "the path has no file name");
     let name = path.file_name().ok_or_else(|| error(no_name()))?;
+    // Only a regular file is replaced: never a device, pipe, socket, folder or link (the
+    // rename would put a new file in its place).
+    if let Ok(meta) = fs::symlink_metadata(path) {
+        if !meta.file_type().is_file() {
+            return Err(error(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "not a regular file (a device, pipe, socket, folder or link): it is not replaced",
+            )));
+        }
+    }
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -1429,6 +1439,23 @@ mod tests {
         assert_eq!(fs::read(&path).unwrap(), b"two");
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
         assert!(write_bytes_atomic(dir.join("missing/x.bin"), b"x").is_err());
+        // What is not a regular file is never replaced.
+        #[cfg(unix)]
+        {
+            let link = dir.join("link.bin");
+            std::os::unix::fs::symlink(&path, &link).unwrap();
+            let err = write_bytes_atomic(&link, b"three").unwrap_err().to_string();
+            assert!(err.contains("not a regular file"), "{err}");
+            assert!(fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink());
+            assert_eq!(fs::read(&path).unwrap(), b"two");
+        }
+        let folder = dir.join("folder");
+        fs::create_dir(&folder).unwrap();
+        assert!(write_bytes_atomic(&folder, b"x").is_err());
+        assert!(folder.is_dir());
         let _ = fs::remove_dir_all(&dir);
     }
 

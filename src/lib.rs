@@ -50,6 +50,8 @@
 //! `bdmorph = { version = "0.1", default-features = false }`.
 #![warn(missing_docs)]
 
+pub mod budget;
+pub use budget::{Budget, Stopped};
 pub mod deform;
 pub mod distortion;
 pub mod generate;

@@ -101,6 +101,7 @@ fn main() {
                 depth: None,
             };
             raster::render(&moved.positions, &drawing, &view, size)
+                .expect("within the picture budget")
         })
         .collect();
     let ways: [Way; 5] = [

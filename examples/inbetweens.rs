@@ -59,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ..Drawing::default()
             };
             raster::render_on(&positions, &drawing, &view, image, Background::Transparent)
+                .expect("within the picture budget")
         };
         let (first, second) = (draw(&a, &uv_a), draw(&b, &uv_b));
         cells.push(raster::crossfade(

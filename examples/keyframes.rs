@@ -71,7 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 face_colours: Some(&colours),
                 depth: None,
             };
-            raster::render(positions, &drawing, &view, size)
+            raster::render(positions, &drawing, &view, size).expect("within the picture budget")
         })
         .collect();
     let sheet = raster::strip(&images, 5);

@@ -85,6 +85,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     depth: None,
                 };
                 raster::render(&positions[i], &drawing, &view, size)
+                    .expect("within the picture budget")
             })
             .collect();
         let start = Instant::now();

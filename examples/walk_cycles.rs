@@ -90,6 +90,7 @@ fn draw(context: &Context<'_>, positions: &[[f64; 2]]) -> Image {
             ..Drawing::default()
         };
         raster::render_on(positions, &drawing, &view, size, Background::Transparent)
+            .expect("within the picture budget")
     };
     let (pa, pb) = (picture(&uv_a, context.a), picture(&uv_b, context.b));
     raster::crossfade(&pa, &pb, 0.5, Background::Transparent)

@@ -44,6 +44,9 @@ pub const MAX_KEYFRAMES: usize = 1000;
 /// The most keyframe points (keyframes times vertices) a project holds: 20 million points,
 /// 320 MB of poses (100 keyframes of a 200,000-vertex mesh, 1,000 of a 20,000-vertex one).
 pub const MAX_KEYFRAME_POINTS: usize = 20_000_000;
+/// The largest project file read: 1 GiB (the most keyframe points, written as JSON text, fit
+/// in it with room to spare). Larger files are refused before they are read.
+pub const MAX_PROJECT_BYTES: u64 = crate::io::MAX_INPUT_BYTES;
 /// The most points of all outline loops together.
 pub const MAX_OUTLINE_POINTS: usize = 200_000;
 /// The smallest and largest handle weight (of `sd` and `kvf`) the studio takes (beyond them
@@ -586,9 +589,10 @@ impl Project {
         Ok(project)
     }
 
-    /// Reads and checks a project file.
+    /// Reads and checks a project file: a regular file (a pipe, device or folder is refused
+    /// before it is opened) of at most [`MAX_PROJECT_BYTES`].
     pub fn read(path: &Path) -> Result<Project, ProjectError> {
-        Project::from_json(&std::fs::read(path)?)
+        Project::from_json(&crate::io::read_input(path, MAX_PROJECT_BYTES)?)
     }
 
     /// The project as JSON.

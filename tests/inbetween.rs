@@ -134,7 +134,8 @@ fn frames_at_0_and_1_look_like_the_pictures() {
             texture: Some(picture),
             ..Drawing::default()
         };
-        let drawn = raster::render_on(&positions, &drawing, &view, size, Background::Transparent);
+        let drawn = raster::render_on(&positions, &drawing, &view, size, Background::Transparent)
+            .expect("within the picture budget");
         let (off, mean) = pixel_disagreement(picture, &drawn);
         // Stated tolerance: under 1% of the subject's inner pixels off by more than 24
         // levels (the texture is sampled bilinearly through the mesh), a mean under 3.

@@ -217,6 +217,7 @@ fn draw(
         height: 256,
     };
     raster::render_on(positions, &drawing, &view, size, Background::Transparent)
+        .expect("within the picture budget")
 }
 
 /// Whether a triangle of the layout `positions` holds the point `p` (pixels, y up).

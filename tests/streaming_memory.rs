@@ -154,6 +154,7 @@ impl Frames {
             height: SIDE,
         };
         raster::render(&moved.positions, &drawing, &self.view, size)
+            .expect("within the picture budget")
     }
 }
 

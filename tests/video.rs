@@ -323,7 +323,7 @@ fn a_video_streamed_into_a_file_decodes_with_every_frame() {
             face_colours: None,
             depth: None,
         };
-        raster::render(&moved.positions, &drawing, &view, size)
+        raster::render(&moved.positions, &drawing, &view, size).expect("within the picture budget")
     };
     let path = dir.join("streamed.mp4");
     let file = std::fs::File::create(&path).expect("create");

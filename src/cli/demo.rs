@@ -168,7 +168,8 @@ pub(super) fn run(args: DemoArgs) -> Result<(), String> {
     let images: Vec<Image> = picks
         .iter()
         .map(|p| raster::render(p, &drawing, &view, args.size))
-        .collect();
+        .collect::<Result<_, _>>()
+        .map_err(|e| e.to_string())?;
     let strip = raster::strip(&images, images.len());
     files.push((
         out.join("frames.png"),

@@ -83,7 +83,8 @@ pub(super) fn run(args: GeodesicArgs) -> Result<(), String> {
             let pictures: Vec<Image> = fields
                 .iter()
                 .map(|f| surface::render_field(&mesh.positions, &mesh.faces, f, args.size))
-                .collect();
+                .collect::<Result<_, _>>()
+                .map_err(|e| e.to_string())?;
             match kind {
                 Output::Png => {
                     let sheet = raster::strip(&pictures, pictures.len().min(4));

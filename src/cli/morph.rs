@@ -173,15 +173,8 @@ pub(super) fn read_depth(
 ) -> Result<Vec<i8>, String> {
     use bdmorph::render::depth::{parse_depth, MAX_DEPTH_FILE_BYTES};
     let shown = path.display();
-    let size = std::fs::metadata(path)
-        .map_err(|e| format!("{shown}: cannot read: {e}"))?
-        .len();
-    if size > MAX_DEPTH_FILE_BYTES {
-        return Err(format!(
-            "{shown}: {size} bytes: a depth file holds at most {MAX_DEPTH_FILE_BYTES}"
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| format!("{shown}: cannot read: {e}"))?;
+    let bytes = bdmorph::io::read_input(path, MAX_DEPTH_FILE_BYTES)
+        .map_err(|e| format!("{shown}: cannot read: {e}"))?;
     parse_depth(&String::from_utf8_lossy(&bytes), vertices, faces)
         .map_err(|e| format!("{shown}: {e}"))
 }

@@ -306,18 +306,18 @@ pub fn render(
                     Background::Transparent,
                 )
             };
-            let under = textured(first);
+            let under = textured(first)?;
             let over = if weight > 0.0 {
-                textured(second)
+                textured(second)?
             } else {
                 under.clone()
             };
-            raster::crossfade(&under, &over, weight, look.background)
+            Ok(raster::crossfade(&under, &over, weight, look.background))
         }
         _ => raster::render_on(&f.positions, &drawing(i), &view, look.size, look.background),
     };
     let picture = |i: usize, f: &Frame| {
-        let img = draw(i, f);
+        let img = draw(i, f).map_err(err);
         progress();
         img
     };
@@ -373,7 +373,7 @@ pub fn render(
         }
         Format::Png => {
             files = each(&|i, f| {
-                let img = draw(i, f);
+                let img = draw(i, f).map_err(err)?;
                 Ok((name(f.index), raster::encode_png(&img).map_err(err)?))
             })?;
         }
@@ -493,11 +493,11 @@ pub fn render(
 /// current one: an animation holds two batches of pictures, never every frame.
 fn in_batches(
     frames: &[Frame],
-    picture: &(dyn Fn(usize, &Frame) -> Image + Sync),
+    picture: &(dyn Fn(usize, &Frame) -> Result<Image, String> + Sync),
     push: &mut (dyn FnMut(&[Image]) -> Result<(), String> + Send),
 ) -> Result<(), String> {
     let batch = 2 * rayon::current_num_threads();
-    let draw = |start: usize| -> Vec<Image> {
+    let draw = |start: usize| -> Result<Vec<Image>, String> {
         let end = frames.len().min(start.saturating_add(batch));
         frames
             .get(start..end)
@@ -508,12 +508,12 @@ fn in_batches(
             .collect()
     };
     let mut start = 0;
-    let mut current = draw(start);
+    let mut current = draw(start)?;
     while !current.is_empty() {
         start += batch;
         let (pushed, next) = rayon::join(|| push(&current), || draw(start));
         pushed?;
-        current = next;
+        current = next?;
     }
     Ok(())
 }

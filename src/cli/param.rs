@@ -176,7 +176,8 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
     };
     let uv = &uv;
     let bytes = if ext.as_deref() == Some("png") {
-        let img = picture(&mesh.positions, uv, &mesh.faces, args.size);
+        let img =
+            picture(&mesh.positions, uv, &mesh.faces, args.size).map_err(|e| e.to_string())?;
         raster::encode_png(&img).map_err(|e| e.to_string())?
     } else {
         let mut text = String::with_capacity(64 * mesh.positions.len());
@@ -327,7 +328,7 @@ fn picture(
     uv: &[[f64; 2]],
     faces: &[[u32; 3]],
     size: bdmorph::render::ImageSize,
-) -> Image {
+) -> Result<Image, raster::RenderError> {
     let side = 512u32;
     let cell = side / 16;
     let mut rgba = Vec::with_capacity((side * side * 4) as usize);
@@ -372,9 +373,9 @@ fn picture(
         depth: None,
     };
     let view = Viewport::fit([uv]);
-    let flat = raster::render(uv, &drawing, &view, size);
-    let checker = surface::render_checker(positions, faces, uv, size);
-    raster::strip(&[flat, checker], 2)
+    let flat = raster::render(uv, &drawing, &view, size)?;
+    let checker = surface::render_checker(positions, faces, uv, size)?;
+    Ok(raster::strip(&[flat, checker], 2))
 }
 
 /// The handles: --pin's vertices, then --drag's and --fix's places turned into their

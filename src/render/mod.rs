@@ -154,6 +154,16 @@ pub struct Image {
     pub rgba: Vec<u8>,
 }
 
+/// The most pixels of one picture, decoded or drawn: 64 Mpx (8192 x 8192, 256 MiB of RGBA).
+/// Pictures read (PNG, JPEG, the layers of ORA files) whose headers claim more are refused
+/// before their pixels are allocated; pictures asked of [`raster::render`] (and every
+/// function drawing a picture of a caller's [`ImageSize`]) larger than this are refused; a
+/// side is at most [`MAX_SIDE`] either way.
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// The longest side of one picture, decoded or drawn, in pixels.
+pub const MAX_SIDE: u32 = 16384;
+
 /// Pixel size of a picture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImageSize {
@@ -174,7 +184,8 @@ impl Default for ImageSize {
 
 impl std::str::FromStr for ImageSize {
     type Err = String;
-    /// Parses `WxH`, for example `640x480` (each between 1 and 16384).
+    /// Parses `WxH`, for example `640x480` (each between 1 and 16384, at most [`MAX_PIXELS`]
+    /// in all).
     fn from_str(s: &str) -> Result<ImageSize, String> {
         let (w, h) = s
             .split_once(['x', 'X'])
@@ -187,10 +198,12 @@ impl std::str::FromStr for ImageSize {
                 )),
             }
         };
-        Ok(ImageSize {
+        let size = ImageSize {
             width: parse(w)?,
             height: parse(h)?,
-        })
+        };
+        size.check().map_err(|e| format!("size '{s}': {e}"))?;
+        Ok(size)
     }
 }
 
@@ -204,6 +217,21 @@ pub struct Viewport {
 }
 
 impl ImageSize {
+    /// Checks that a picture of this size may be drawn: each side between 1 and [`MAX_SIDE`],
+    /// at most [`MAX_PIXELS`] in all.
+    ///
+    /// # Errors
+    /// [`raster::RenderError::Empty`] for no pixels, [`raster::RenderError::OverBudget`] for
+    /// too many.
+    pub fn check(self) -> Result<(), raster::RenderError> {
+        if self.width == 0 || self.height == 0 {
+            return Err(raster::RenderError::Empty {
+                what: "a picture needs at least one pixel a side",
+            });
+        }
+        raster::check_budget(self.width, self.height)
+    }
+
     /// The size whose longer side is `long_side` pixels and whose aspect is the viewport's
     /// (each side at least 2 pixels and even, as H.264 needs), for pictures framed on the
     /// subject rather than on a square.

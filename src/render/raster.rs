@@ -41,7 +41,7 @@ pub(super) const EDGE: [u8; 3] = [0x3a, 0x5a, 0x80];
 pub(super) const FLIPPED: [u8; 3] = [0xe0, 0x50, 0x50];
 
 /// Largest width or height of a decoded image.
-const MAX_DECODED_SIDE: u32 = 16384;
+const MAX_DECODED_SIDE: u32 = super::MAX_SIDE;
 /// White space between the frames of a [`strip`], in pixels.
 const STRIP_GAP: u32 = 4;
 
@@ -99,6 +99,17 @@ pub enum RenderError {
         height: u32,
         /// The file's size.
         bytes: usize,
+    },
+    /// A picture of more pixels than [`super::MAX_PIXELS`] (or wider or taller than
+    /// [`super::MAX_SIDE`]), read or asked for: refused before its pixels are allocated.
+    #[error("{}a {width}x{height} picture is {} pixels, over the budget of {} pixels ({} Mpx) and {} a side", FilePrefix(.path), u64::from(*.width) * u64::from(*.height), super::MAX_PIXELS, super::MAX_PIXELS >> 20, super::MAX_SIDE)]
+    OverBudget {
+        /// The file, when the picture came from one.
+        path: Option<PathBuf>,
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
     },
     /// The encoder failed.
     #[error("cannot encode {format}: {source}")]
@@ -181,7 +192,8 @@ impl RenderError {
             RenderError::UnknownFormat { path }
             | RenderError::Decode { path, .. }
             | RenderError::TooLarge { path, .. }
-            | RenderError::Unbacked { path, .. } => *path = Some(file.to_path_buf()),
+            | RenderError::Unbacked { path, .. }
+            | RenderError::OverBudget { path, .. } => *path = Some(file.to_path_buf()),
             _ => {}
         }
         self
@@ -477,12 +489,16 @@ fn fill_textured<'t>(
 /// number of faces is ignored.
 ///
 /// The result is opaque. An image with zero width or height has no pixels.
+///
+/// # Errors
+/// [`RenderError::OverBudget`] for a size over [`super::MAX_PIXELS`] or [`super::MAX_SIDE`]
+/// a side, before anything is allocated.
 pub fn render(
     positions: &[[f64; 2]],
     drawing: &Drawing,
     view: &Viewport,
     size: ImageSize,
-) -> Image {
+) -> Result<Image, RenderError> {
     render_on(positions, drawing, view, size, Background::WHITE)
 }
 
@@ -493,13 +509,17 @@ pub fn render(
 /// where the mesh overlaps itself the higher level is in front.
 ///
 /// The image is not premultiplied.
+///
+/// # Errors
+/// As [`render`].
 pub fn render_on(
     positions: &[[f64; 2]],
     drawing: &Drawing,
     view: &Viewport,
     size: ImageSize,
     background: Background,
-) -> Image {
+) -> Result<Image, RenderError> {
+    check_budget(size.width, size.height)?;
     let (fill, under) = match background {
         Background::Transparent => (Color::TRANSPARENT, None),
         Background::Colour(rgb) => (colour(rgb), Some(rgb)),
@@ -516,7 +536,7 @@ pub fn render_on(
         }
     };
     let Some(mut pixmap) = Pixmap::new(size.width, size.height) else {
-        return blank();
+        return Ok(blank());
     };
     pixmap.fill(fill);
     let triangles: Vec<PixelTriangle> =
@@ -559,11 +579,11 @@ pub fn render_on(
             }
         }
     }
-    Image {
+    Ok(Image {
         width: size.width,
         height: size.height,
         rgba: pixmap.take_demultiplied(),
-    }
+    })
 }
 
 fn check_buffer(img: &Image) -> Result<(), RenderError> {
@@ -630,6 +650,26 @@ fn too_large(width: u32, height: u32, data: usize) -> Result<(), RenderError> {
             width,
             height,
             bytes: data,
+        });
+    }
+    check_budget(width, height)
+}
+
+/// Refuses a picture of `width` x `height` over [`super::MAX_PIXELS`] or wider or taller
+/// than [`super::MAX_SIDE`] ([`RenderError::OverBudget`]): checked before any picture is
+/// decoded or drawn.
+///
+/// # Errors
+/// [`RenderError::OverBudget`].
+pub fn check_budget(width: u32, height: u32) -> Result<(), RenderError> {
+    if u64::from(width) * u64::from(height) > super::MAX_PIXELS
+        || width > super::MAX_SIDE
+        || height > super::MAX_SIDE
+    {
+        return Err(RenderError::OverBudget {
+            path: None,
+            width,
+            height,
         });
     }
     Ok(())
@@ -1270,7 +1310,7 @@ mod tests {
     #[test]
     fn square_is_filled_inside_white_outside_with_darker_edges() {
         let (pos, faces) = square();
-        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE).unwrap();
         assert_eq!(
             (img.width, img.height, img.rgba.len()),
             (64, 64, 64 * 64 * 4)
@@ -1303,7 +1343,7 @@ mod tests {
         let (pos, _) = square();
         // Clockwise in world coordinates, and a degenerate one.
         let faces = [[0, 2, 1], [0, 0, 3]];
-        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE).unwrap();
         let (x, y) = pixel_of(&VIEW, SIZE, [0.7, 0.3]);
         assert!(near(px(&img, x, y), FLIPPED, 2), "{:?}", px(&img, x, y));
         // The other half of the square is empty.
@@ -1319,7 +1359,7 @@ mod tests {
             min: [-1.0, -1.0],
             max: [1.0, 1.0],
         };
-        let img = render(&pos, &plain(&faces), &view, SIZE);
+        let img = render(&pos, &plain(&faces), &view, SIZE).unwrap();
         let inked = |rows: std::ops::Range<u32>| {
             rows.flat_map(|y| (0..64).map(move |x| (x, y)))
                 .filter(|&(x, y)| px(&img, x, y) != [255; 4])
@@ -1351,7 +1391,7 @@ mod tests {
                 width: w,
                 height: h,
             };
-            let img = render(&pos, &plain(&faces), &view, size);
+            let img = render(&pos, &plain(&faces), &view, size).unwrap();
             let (ew, eh) = ink_extent(&img);
             assert!(ew.abs_diff(eh) <= 1, "{w}x{h}: square drawn {ew}x{eh}");
             assert!(ew >= w.min(h) * 8 / 10, "{w}x{h}: square drawn {ew}x{eh}");
@@ -1383,7 +1423,7 @@ mod tests {
             face_colours: None,
             depth: None,
         };
-        let img = render(&pos, &drawing, &VIEW, SIZE);
+        let img = render(&pos, &drawing, &VIEW, SIZE).unwrap();
         for (p, rgb) in [
             ([0.25, 0.75], [255, 0, 0]),
             ([0.75, 0.75], [0, 255, 0]),
@@ -1413,7 +1453,7 @@ mod tests {
             face_colours: None,
             depth: None,
         };
-        let img = render(&pos, &drawing, &VIEW, SIZE);
+        let img = render(&pos, &drawing, &VIEW, SIZE).unwrap();
         // Every pixel with its centre inside the square, the diagonal included, is the
         // texture's colour exactly.
         let (s, ox, oy) = VIEW.transform(SIZE);
@@ -1432,7 +1472,7 @@ mod tests {
     fn bad_faces_and_empty_sizes_do_not_panic() {
         let pos = [[0.0, 0.0], [1.0, 0.0], [f64::NAN, 1.0]];
         let faces = [[0, 1, 2], [0, 1, 7]];
-        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE).unwrap();
         assert!(img.rgba.iter().all(|&b| b == 255));
         let empty = render(
             &pos,
@@ -1442,7 +1482,8 @@ mod tests {
                 width: 0,
                 height: 5,
             },
-        );
+        )
+        .unwrap();
         assert!(empty.rgba.is_empty());
         assert!(matches!(encode_png(&empty), Err(RenderError::Empty { .. })));
     }
@@ -1467,7 +1508,7 @@ mod tests {
     #[test]
     fn png_round_trips_exactly() {
         let (pos, faces) = square();
-        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE).unwrap();
         let bytes = encode_png(&img).unwrap();
         assert!(bytes.starts_with(b"\x89PNG"));
         assert_eq!(decode_image(&bytes).unwrap(), img);
@@ -1600,7 +1641,7 @@ mod tests {
     #[test]
     fn gif_keeps_few_colours_exact() {
         let (pos, faces) = square();
-        let img = render(&pos, &plain(&faces), &VIEW, SIZE);
+        let img = render(&pos, &plain(&faces), &VIEW, SIZE).unwrap();
         let bytes = encode_gif(std::slice::from_ref(&img), 10).unwrap();
         let mut options = gif::DecodeOptions::new();
         options.set_color_output(gif::ColorOutput::RGBA);
@@ -1672,7 +1713,7 @@ mod tests {
                         min: [-0.25 - 0.05 * f64::from(i), -0.25],
                         max: [1.25, 1.25 + 0.05 * f64::from(i)],
                     };
-                    render(&pos, &plain(&faces), &view, size)
+                    render(&pos, &plain(&faces), &view, size).unwrap()
                 }
                 _ => {
                     let mut img = noise(width, height, 100 + i);
@@ -1862,5 +1903,68 @@ mod tests {
         );
         assert_eq!(strip(&frames, 9).width, 5 * 10 + 4 * 4);
         assert_eq!(strip(&[], 3).rgba.len(), 0);
+    }
+
+    /// A PNG whose header claims `width` x `height` pixels, with `padding` bytes of a private
+    /// ancillary chunk (which decoders skip) and a little image data: as large on disk as a
+    /// real picture of that size may be.
+    fn png_claiming(width: u32, height: u32, padding: usize) -> Vec<u8> {
+        let mut out = Vec::new();
+        {
+            let mut encoder = png::Encoder::new(&mut out, width, height);
+            encoder.set_color(png::ColorType::Rgba);
+            encoder.set_depth(png::BitDepth::Eight);
+            let mut writer = encoder.write_header().unwrap();
+            writer
+                .write_chunk(png::chunk::ChunkType(*b"prIv"), &vec![0; padding])
+                .unwrap();
+            // A stored zlib block of 16 zero bytes.
+            let mut idat = vec![0x78, 0x01, 1, 16, 0, !16, 0xff];
+            idat.extend_from_slice(&[0; 16]);
+            idat.extend_from_slice(&[0, 16, 0, 1]);
+            writer.write_chunk(png::chunk::IDAT, &idat).unwrap();
+        }
+        out
+    }
+
+    #[test]
+    fn a_picture_over_the_pixel_budget_is_refused_before_it_is_decoded() {
+        // 16000 x 16000 in a megabyte: a real file of that size could hold it (no "claims").
+        let bytes = png_claiming(16_000, 16_000, 1 << 20);
+        let err = decode_image(&bytes).unwrap_err();
+        assert!(matches!(err, RenderError::OverBudget { width: 16_000, .. }), "{err:?}");
+        let message = err.to_string();
+        assert!(message.contains("16000x16000"), "{message}");
+        assert!(message.contains(&super::super::MAX_PIXELS.to_string()), "{message}");
+        // Just over the budget, in a square of 8193: refused; the budget's own square is not
+        // refused for its size (it fails later, on its missing pixels).
+        let over = decode_image(&png_claiming(8193, 8193, 1 << 19)).unwrap_err();
+        assert!(matches!(over, RenderError::OverBudget { .. }), "{over:?}");
+        let at = decode_image(&png_claiming(8192, 8192, 1 << 19)).unwrap_err();
+        assert!(matches!(at, RenderError::Decode { .. }), "{at:?}");
+    }
+
+    #[test]
+    fn render_refuses_a_size_over_the_budget_without_allocating_it() {
+        let pos = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let faces = [[0, 1, 2]];
+        for (width, height) in [(100_000, 100_000), (16384, 16384), (16385, 1), (8193, 8192)] {
+            let size = ImageSize { width, height };
+            let err = render(&pos, &plain(&faces), &VIEW, size).unwrap_err();
+            assert!(
+                matches!(err, RenderError::OverBudget { width: w, height: h, path: None } if (w, h) == (width, height)),
+                "{err:?}"
+            );
+            let err = render_on(&pos, &plain(&faces), &VIEW, size, Background::Transparent);
+            assert!(err.is_err());
+            assert!(size.check().is_err());
+        }
+        let size = ImageSize {
+            width: 8192,
+            height: 16,
+        };
+        assert_eq!(render(&pos, &plain(&faces), &VIEW, size).unwrap().width, 8192);
+        assert!("16384x16384".parse::<ImageSize>().is_err());
+        assert!("16384x4096".parse::<ImageSize>().is_ok());
     }
 }

@@ -19,6 +19,7 @@
 use tiny_skia::{Color, FillRule, LineCap, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 use super::colour::shade_colour;
+use super::raster::{check_budget, RenderError};
 use super::{Image, ImageSize};
 use crate::vec3::{cross, dot};
 
@@ -96,12 +97,17 @@ fn view_frame(positions: &[[f64; 3]]) -> ([[f64; 3]; 3], [f64; 3]) {
 /// Draws the field `values` (one per vertex) on the mesh as an image of `size` on white: see
 /// [the module](self). Faces naming missing vertices are skipped; triangles with a
 /// non-finite value are grey.
+///
+/// # Errors
+/// [`RenderError::OverBudget`] for a size over [`super::MAX_PIXELS`] pixels, before anything
+/// is allocated.
 pub fn render_field(
     positions: &[[f64; 3]],
     faces: &[[u32; 3]],
     values: &[f64],
     size: ImageSize,
-) -> Image {
+) -> Result<Image, RenderError> {
+    check_budget(size.width, size.height)?;
     let n = positions.len().min(values.len());
     let max = values[..n]
         .iter()
@@ -121,26 +127,31 @@ pub fn render_field(
             UNREACHED
         }
     };
-    draw(
+    Ok(draw(
         positions,
         faces,
         n,
         &colour,
         Some((values, isoline_spacing(max))),
         size,
-    )
+    ))
 }
 
 /// The mesh textured with a checkerboard through the map `uv` (one 2D point per vertex):
 /// 16 squares across the map's longer side, each triangle coloured by the square its
 /// centroid maps into. Squares that stay square on the surface mean a map without
 /// distortion; triangles the map inverts are red.
+///
+/// # Errors
+/// [`RenderError::OverBudget`] for a size over [`super::MAX_PIXELS`] pixels, before anything
+/// is allocated.
 pub fn render_checker(
     positions: &[[f64; 3]],
     faces: &[[u32; 3]],
     uv: &[[f64; 2]],
     size: ImageSize,
-) -> Image {
+) -> Result<Image, RenderError> {
+    check_budget(size.width, size.height)?;
     let n = positions.len().min(uv.len());
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in &uv[..n] {
@@ -164,7 +175,7 @@ pub fn render_checker(
             [235, 238, 245]
         }
     };
-    draw(positions, faces, n, &colour, None, size)
+    Ok(draw(positions, faces, n, &colour, None, size))
 }
 
 /// Draws the faces (those whose vertices are all below `n`) in `colour`, lit, back to front,
@@ -337,7 +348,7 @@ mod tests {
             width: 200,
             height: 200,
         };
-        let img = render_field(&sphere.positions, &sphere.faces, &d, size);
+        let img = render_field(&sphere.positions, &sphere.faces, &d, size).unwrap();
         let pixels: Vec<[u8; 3]> = img.rgba.chunks(4).map(|p| [p[0], p[1], p[2]]).collect();
         let pixels: Vec<[u16; 3]> = pixels.iter().map(|p| p.map(u16::from)).collect();
         let white = pixels.iter().filter(|p| **p == [255, 255, 255]).count();

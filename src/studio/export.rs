@@ -418,7 +418,7 @@ impl<'a> Looks<'a> {
         view: &Viewport,
         size: ImageSize,
         background: Background,
-    ) -> Image {
+    ) -> Result<Image, raster::RenderError> {
         let (first, second, weight) = blend;
         if first == second && first == 0 {
             return raster::render_on(positions, drawing, view, size, background);
@@ -437,13 +437,13 @@ impl<'a> Looks<'a> {
             };
             raster::render_on(positions, &with, view, size, Background::Transparent)
         };
-        let under = textured(first);
+        let under = textured(first)?;
         let over = if weight > 0.0 && second != first {
-            textured(second)
+            textured(second)?
         } else {
             under.clone()
         };
-        raster::crossfade(&under, &over, weight, background)
+        Ok(raster::crossfade(&under, &over, weight, background))
     }
 }
 
@@ -600,24 +600,26 @@ pub fn export_with_drawings(
             progress.cancelled()?;
             let time = animation.frame(i, &mut frame)?;
             let picture = || {
-                looks.render(
-                    &frame,
-                    &drawing,
-                    blend_at(project, &looks.has_drawing, time),
-                    &view,
-                    size,
-                    background,
-                )
+                looks
+                    .render(
+                        &frame,
+                        &drawing,
+                        blend_at(project, &looks.has_drawing, time),
+                        &view,
+                        size,
+                        background,
+                    )
+                    .map_err(|e| failed(&e))
             };
             match &mut sink {
-                Sink::Gif(encoder, _) => encoder.push(&picture()).map_err(|e| failed(&e))?,
+                Sink::Gif(encoder, _) => encoder.push(&picture()?).map_err(|e| failed(&e))?,
                 #[cfg(feature = "video")]
-                Sink::Mp4(encoder, _) => encoder.push(&picture()).map_err(|e| failed(&e))?,
-                Sink::Apng(encoder, _) => encoder.push(&picture()).map_err(|e| failed(&e))?,
-                Sink::Webp(encoder) => encoder.push(&picture()).map_err(|e| failed(&e))?,
-                Sink::Sheet(layout, sheet) => layout.place(sheet, k as u32, &picture()),
+                Sink::Mp4(encoder, _) => encoder.push(&picture()?).map_err(|e| failed(&e))?,
+                Sink::Apng(encoder, _) => encoder.push(&picture()?).map_err(|e| failed(&e))?,
+                Sink::Webp(encoder) => encoder.push(&picture()?).map_err(|e| failed(&e))?,
+                Sink::Sheet(layout, sheet) => layout.place(sheet, k as u32, &picture()?),
                 Sink::Frames(dir) => {
-                    let bytes = raster::encode_png(&picture()).map_err(|e| failed(&e))?;
+                    let bytes = raster::encode_png(&picture()?).map_err(|e| failed(&e))?;
                     let file = dir.join(format!("frame_{k:04}.png"));
                     std::fs::write(&file, bytes).map_err(|e| format!("{}: {e}", file.display()))?;
                 }
@@ -710,9 +712,10 @@ pub fn export_with_drawings(
                     depth: project.depth.as_deref(),
                     ..Drawing::default()
                 };
-                images.push(raster::render_on(
-                    positions, &drawing, &view, size, background,
-                ));
+                images.push(
+                    raster::render_on(positions, &drawing, &view, size, background)
+                        .map_err(|e| failed(&e))?,
+                );
             }
             let bytes = raster::encode_png(&raster::strip(&images, images.len()))
                 .map_err(|e| failed(&e))?;

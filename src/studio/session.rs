@@ -1357,7 +1357,9 @@ impl Session {
             Some(t) => super::export::blend_at(&self.doc, &looks.has_drawing, t),
             None => super::export::keyframe_look(&looks.has_drawing, self.view.current),
         };
-        let image = looks.render(&positions, &drawing, blend, &view, size, background);
+        let image = looks
+            .render(&positions, &drawing, blend, &view, size, background)
+            .map_err(|e| format!("export: {e}"))?;
         let bytes = raster::encode_png(&image).map_err(|e| format!("export: {e}"))?;
         crate::io::write_bytes_atomic(path, &bytes).map_err(|e| format!("export: {e}"))
     }

@@ -113,6 +113,14 @@ pub(super) fn shape_of(
     let traced = picture_outline(image, &options.picture, None)
         .map_err(|source| InbetweenError::Meshing { which, source })?;
     let (shape, pinholes) = Shape::of(&traced.outline).without_pinholes(options.pinhole);
+    let pieces = shape.pieces.len();
+    if pieces > super::MAX_PIECES || shape.loops.len() > super::MAX_LOOPS {
+        return Err(InbetweenError::TooComplex {
+            which,
+            pieces,
+            holes: shape.loops.len() - pieces,
+        });
+    }
     let loops: Vec<Vec<[f64; 2]>> = shape.loops.iter().map(|l| l.points.clone()).collect();
     let fitted = fit_loops_to_vertices(&loops, (options.vertices / 2).max(3));
     let tolerance = traced.tolerance + fitted.tolerance.unwrap_or(0.0);

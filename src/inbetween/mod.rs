@@ -210,6 +210,13 @@ impl InbetweenOptions {
     }
 }
 
+/// The most pieces (separate regions) a drawing may have: more is noise or a pattern, whose
+/// pairing and meshing would take time and memory without bound.
+pub const MAX_PIECES: usize = 64;
+
+/// The most loops (pieces' outlines and holes over the pinhole size) a drawing may have.
+pub const MAX_LOOPS: usize = 256;
+
 /// Why in-betweens could not be made.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -225,6 +232,18 @@ pub enum InbetweenError {
     /// The drawings' pieces and holes differ (the message names what differs).
     #[error("{0}")]
     Topology(String),
+    /// A drawing's outline has more pieces than [`MAX_PIECES`] or more loops (pieces and
+    /// holes over the pinhole size) than [`MAX_LOOPS`]: noise or a pattern, not a subject;
+    /// refused as soon as it is traced, before any other work.
+    #[error("{which}: {pieces} pieces and {holes} holes; in-betweens are for drawings of at most {} pieces and {} loops: raise the threshold (the opacity, or with a paper colour the difference, above which a pixel is the subject), clean the picture's background, or fill its holes", MAX_PIECES, MAX_LOOPS)]
+    TooComplex {
+        /// Which picture.
+        which: Drawing,
+        /// Its pieces (outer loops).
+        pieces: usize,
+        /// Its holes (inner loops over the pinhole size).
+        holes: usize,
+    },
     /// A point pair cannot be used.
     #[error("pair {pair}: {reason}")]
     Match {

@@ -126,6 +126,17 @@ pub enum MeshingError {
     /// A picture could not be decoded (read from a file, the message names it).
     #[error(transparent)]
     Picture(#[from] RenderError),
+    /// A picture's subject traces to so many loops, so long, that simplifying them would take
+    /// time without bound (a noisy or half-transparent picture): refused right after tracing.
+    #[error("{place}the subject traces to {loops} loops, the longest of {longest} points: over the {} (loops times points) an outline may have; noise, not a drawing: raise --threshold, or clean the picture's background", super::MAX_TRACE_WORK)]
+    TooComplex {
+        /// The file.
+        place: Place,
+        /// Loops traced.
+        loops: usize,
+        /// Points of the longest loop.
+        longest: usize,
+    },
     /// The picture is opaque everywhere and nothing says which pixels are the subject.
     #[error("{place}the picture has no transparent pixels: give --background COLOR (the colour around the subject: #rrggbb, a name, or auto for the colour of the picture's border) or --threshold L (the subject is the pixels darker than L, in [0, 1])")]
     NoTransparency {
@@ -297,6 +308,7 @@ impl MeshingError {
             | MeshingError::NothingInside { place, .. }
             | MeshingError::OutOfRange { place, .. }
             | MeshingError::TooManyPoints { place, .. }
+            | MeshingError::TooComplex { place, .. }
             | MeshingError::Degenerate { place, .. }
             | MeshingError::Internal { place, .. } => {
                 if place.path.is_none() {

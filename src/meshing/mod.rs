@@ -98,6 +98,14 @@ pub const MIN_COORDINATE: f64 = 1e-30;
 /// flattening stops at the limit.
 pub const MAX_OUTLINE_POINTS: usize = 4_000_000;
 
+/// The most work a traced picture may ask of simplification: its loops times the points of
+/// its longest loop, 50 million (a drawing's outline of 50,000 points with 1,000 specks and
+/// holes; a 300 x 300 picture of random transparency traces to about 3,900 loops, the longest
+/// of 28,600 points, 110 million). Beyond it the picture is refused right after tracing
+/// ([`MeshingError::TooComplex`]): simplifying tests each loop's points against the loops
+/// around it.
+pub const MAX_TRACE_WORK: u64 = 50_000_000;
+
 /// The most outline vertices meshed: 100,000. The refinement to a minimum angle around many
 /// short boundary segments grows faster than their count (about 3 s for 100,000 on one core,
 /// 17 s for 300,000), so longer outlines are refused before triangulating, with the count.
@@ -378,6 +386,15 @@ struct Traced {
 fn trace_picture(image: &Image, picture: &PictureOptions) -> Result<Traced, MeshingError> {
     let coverage = picture::coverage(image, picture)?;
     let loops = trace::trace(&coverage);
+    // Simplifying tests each loop against the loops around it: bounded by loops x points.
+    let longest = loops.iter().map(Vec::len).max().unwrap_or(0);
+    if (loops.len() as u64).saturating_mul(longest as u64) > MAX_TRACE_WORK {
+        return Err(MeshingError::TooComplex {
+            place: Place::default(),
+            loops: loops.len(),
+            longest,
+        });
+    }
     let speck = if picture.keep_specks {
         vec![None; loops.len()]
     } else {

@@ -1932,10 +1932,16 @@ mod tests {
         // 16000 x 16000 in a megabyte: a real file of that size could hold it (no "claims").
         let bytes = png_claiming(16_000, 16_000, 1 << 20);
         let err = decode_image(&bytes).unwrap_err();
-        assert!(matches!(err, RenderError::OverBudget { width: 16_000, .. }), "{err:?}");
+        assert!(
+            matches!(err, RenderError::OverBudget { width: 16_000, .. }),
+            "{err:?}"
+        );
         let message = err.to_string();
         assert!(message.contains("16000x16000"), "{message}");
-        assert!(message.contains(&super::super::MAX_PIXELS.to_string()), "{message}");
+        assert!(
+            message.contains(&super::super::MAX_PIXELS.to_string()),
+            "{message}"
+        );
         // Just over the budget, in a square of 8193: refused; the budget's own square is not
         // refused for its size (it fails later, on its missing pixels).
         let over = decode_image(&png_claiming(8193, 8193, 1 << 19)).unwrap_err();
@@ -1963,7 +1969,10 @@ mod tests {
             width: 8192,
             height: 16,
         };
-        assert_eq!(render(&pos, &plain(&faces), &VIEW, size).unwrap().width, 8192);
+        assert_eq!(
+            render(&pos, &plain(&faces), &VIEW, size).unwrap().width,
+            8192
+        );
         assert!("16384x16384".parse::<ImageSize>().is_err());
         assert!("16384x4096".parse::<ImageSize>().is_ok());
     }

@@ -59,6 +59,10 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
         Some(f) => f.parse()?,
         None => format_of(&args.output, args.sheet)?,
     };
+    // As `morph --frames`: an animation of fewer than two frames is refused, not widened.
+    if let Some(n) = args.frames.filter(|&n| n < 2) {
+        return Err(format!("--frames {n}: at least 2 frames are needed"));
+    }
     if args.sheet && format != ExportFormat::Sheet {
         return Err(
             "--sheet makes a sprite sheet: leave out --format, or give --format sheet".into(),

@@ -368,7 +368,7 @@ struct ExportArgs {
     #[arg(long)]
     sheet: bool,
     /// Picture size, WxH (default: the subject's aspect, 640 pixels on the longer side).
-    #[arg(long, value_name = "WxH")]
+    #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
     size: Option<ImageSize>,
     /// The animation sampled at N frames (default: duration x fps + 1).
     #[arg(long, value_name = "N")]
@@ -397,7 +397,7 @@ struct MorphArgs {
         long = "t",
         value_name = "T",
         conflicts_with = "frames",
-        allow_negative_numbers = true
+        allow_hyphen_values = true
     )]
     t: Option<f64>,
     /// N frames at t = i / (N - 1).
@@ -429,7 +429,12 @@ struct InbetweenArgs {
     #[arg(long = "match", value_name = "AX,AY:BX,BY", value_parser = parse_match)]
     matches: Vec<bdmorph::inbetween::Match>,
     /// One frame at this time in [0, 1].
-    #[arg(long = "t", value_name = "T", conflicts_with = "frames")]
+    #[arg(
+        long = "t",
+        value_name = "T",
+        conflicts_with = "frames",
+        allow_hyphen_values = true
+    )]
     t: Option<f64>,
     /// N frames at t = i / (N - 1).
     #[arg(long, value_name = "N")]
@@ -522,7 +527,12 @@ struct OutputArgs {
     #[arg(long, value_enum, value_name = "FORMAT")]
     format: Option<Format>,
     /// Picture size for PNG, GIF, MP4 and SVG output, as WxH (MP4 pads odd sides to even).
-    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "800x800",
+        allow_hyphen_values = true
+    )]
     size: ImageSize,
     /// An image (PNG or JPEG) to map onto the triangles in PNG, GIF, MP4 and HTML output.
     #[arg(long, value_name = "IMAGE")]
@@ -690,7 +700,12 @@ struct GeodesicArgs {
     #[arg(long, value_name = "FRACTION", default_value_t = 0.5)]
     refine_budget: f64,
     /// Picture size for PNG and HTML output, as WxH (per field).
-    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "800x800",
+        allow_hyphen_values = true
+    )]
     size: ImageSize,
     /// Print set-up and query times and counts as one JSON object on stdout.
     #[arg(long)]
@@ -761,7 +776,12 @@ struct ParamArgs {
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
     /// Size of each of the two pictures of PNG output, as WxH.
-    #[arg(long, value_name = "WxH", default_value = "600x600")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "600x600",
+        allow_hyphen_values = true
+    )]
     size: ImageSize,
     /// Print one JSON line per iteration and a summary line on stdout.
     #[arg(long)]
@@ -914,7 +934,12 @@ struct DeformArgs {
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
     /// Picture size for SVG and PNG output, as WxH.
-    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "800x800",
+        allow_hyphen_values = true
+    )]
     size: ImageSize,
     /// Print one JSON object of statistics on stdout.
     #[arg(long)]
@@ -960,7 +985,12 @@ struct MeshArgs {
     #[arg(long)]
     keep_specks: bool,
     /// Picture size for SVG and PNG output, as WxH.
-    #[arg(long, value_name = "WxH", default_value = "800x800")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "800x800",
+        allow_hyphen_values = true
+    )]
     size: ImageSize,
     /// Print one JSON object of statistics on stdout.
     #[arg(long)]
@@ -1006,7 +1036,12 @@ struct DemoArgs {
     #[arg(long, value_name = "N", default_value_t = 40)]
     frames: usize,
     /// Picture size of the GIF, the MP4 and each picture of the strip, as WxH.
-    #[arg(long, value_name = "WxH", default_value = "360x360")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "360x360",
+        allow_hyphen_values = true
+    )]
     size: ImageSize,
     /// Print nothing but errors.
     #[arg(short, long)]

@@ -297,13 +297,13 @@ pub enum MorphError {
     #[error(transparent)]
     Mesh(#[from] MeshError),
     /// `t` is not a finite number.
-    #[error("t = {t} is not a finite number")]
+    #[error("t = {} is not a finite number", Readable(*.t))]
     TimeNotFinite {
         /// The time asked for.
         t: f64,
     },
     /// `t` is outside a path's [0, 1].
-    #[error("t = {t} is outside the path's [0, 1]")]
+    #[error("t = {} is outside the path's [0, 1]", Readable(*.t))]
     TimeOutOfRange {
         /// The time asked for.
         t: f64,

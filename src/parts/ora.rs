@@ -22,30 +22,38 @@ fn damaged(why: impl Into<String>) -> LayersError {
 }
 
 /// Reads an entry of at most `limit` bytes (its declared size checked first, then what is
-/// inflated, so a lying header cannot make it larger).
+/// inflated, so a lying header cannot make it larger). A layer's PNG over `limit` is over the
+/// file's pixel budget ([`LayersError::TooLarge`]); another entry (`mimetype`, `stack.xml`)
+/// over its own size limit is damage, said with its name.
 fn entry(
     archive: &mut zip::ZipArchive<Cursor<&[u8]>>,
     name: &str,
     limit: u64,
 ) -> Result<Vec<u8>, LayersError> {
+    let over = |size: u64| {
+        if name == "mimetype" || name == "stack.xml" {
+            damaged(format!(
+                "{name} is {size} bytes, more than the {limit} bytes it may have"
+            ))
+        } else {
+            LayersError::TooLarge {
+                needed: size,
+                budget: limit,
+            }
+        }
+    };
     let file = archive
         .by_name(name)
         .map_err(|e| damaged(format!("{name}: {e}")))?;
     if file.size() > limit {
-        return Err(LayersError::TooLarge {
-            needed: file.size(),
-            budget: limit,
-        });
+        return Err(over(file.size()));
     }
     let mut out = Vec::with_capacity(file.size() as usize);
     file.take(limit + 1)
         .read_to_end(&mut out)
         .map_err(|e| damaged(format!("{name}: {e}")))?;
     if out.len() as u64 > limit {
-        return Err(LayersError::TooLarge {
-            needed: out.len() as u64,
-            budget: limit,
-        });
+        return Err(over(out.len() as u64));
     }
     Ok(out)
 }

@@ -210,7 +210,7 @@ pub struct Exported {
 /// The animation's frame count at its frame rate: `duration * fps + 1`.
 pub fn default_frames(project: &Project) -> usize {
     let duration = project.keyframes.last().map_or(0.0, |k| k.time);
-    (duration * project.fps).round() as usize + 1
+    ((duration * project.fps).round() as usize).saturating_add(1)
 }
 
 /// The frames `settings` keeps of the animation (indices into its `count` frames) and

@@ -66,9 +66,8 @@ pub(super) fn run(args: InbetweenArgs) -> Result<(), String> {
         check_format(plan)?;
     }
     check_size(plan.as_ref(), &args.out)?;
-    let read = |path: &std::path::Path| {
-        raster::read_image(path).map_err(|e| format!("{}: {e}", path.display()))
-    };
+    // The errors of `read_image` name the file.
+    let read = |path: &std::path::Path| raster::read_image(path).map_err(|e| e.to_string());
     let pictures: Vec<Image> = args
         .drawings
         .iter()

@@ -587,3 +587,65 @@ fn local_global_iterations_stop_by_themselves() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Outputs onto a character device or a FIFO are refused, never renamed over: as root (CI
+/// runs as root; `mknod` needs it), a device like `/dev/null` (1, 3) and a FIFO are made in
+/// a fresh folder, `morph -o` and `compile -o` are pointed at each, and afterwards they are
+/// still a device and a FIFO and nothing else is in the folder.
+#[test]
+fn outputs_onto_a_device_or_a_fifo_leave_them_as_they_are() {
+    use std::os::unix::fs::FileTypeExt;
+    let uid = Command::new("id").arg("-u").output().expect("id -u");
+    if String::from_utf8_lossy(&uid.stdout).trim() != "0" {
+        println!("skipped: not root, so no device node can be made (CI runs this as root)");
+        return;
+    }
+    let dir = scratch("devices");
+    std::fs::write(dir.join("a.obj"), SQUARE).expect("written");
+    std::fs::write(dir.join("b.obj"), SQUARE_MOVED).expect("written");
+    for name in ["dev.obj", "dev.bdm"] {
+        let made = Command::new("mknod")
+            .arg(dir.join(name))
+            .args(["c", "1", "3"])
+            .status();
+        assert!(made.is_ok_and(|s| s.success()), "mknod {name}");
+    }
+    for name in ["fifo.obj", "fifo.bdm"] {
+        let made = Command::new("mkfifo").arg(dir.join(name)).status();
+        assert!(made.is_ok_and(|s| s.success()), "mkfifo {name}");
+    }
+    let before = entries(&dir);
+    for (args, out) in [
+        ("morph a.obj b.obj --t 0.5 -o dev.obj", "dev.obj"),
+        ("morph a.obj b.obj --t 0.5 -o fifo.obj", "fifo.obj"),
+        ("compile a.obj -o dev.bdm", "dev.bdm"),
+        ("compile a.obj -o fifo.bdm", "fifo.bdm"),
+    ] {
+        let run = run_limited(&dir, &words(args)).expect("does not hang");
+        println!(
+            "| {args} | {} | {} |",
+            run.code.map_or("signal".into(), |c| c.to_string()),
+            run.stderr.trim()
+        );
+        assert_eq!(run.code, Some(1), "{args}: {}", run.stderr);
+        assert_eq!(run.stderr.lines().count(), 1, "{args}: {}", run.stderr);
+        assert!(
+            run.stderr.contains(out) && run.stderr.contains("not a regular file"),
+            "{args}: {}",
+            run.stderr
+        );
+    }
+    for name in ["dev.obj", "dev.bdm"] {
+        let kind = std::fs::symlink_metadata(dir.join(name)).expect("still there");
+        assert!(
+            kind.file_type().is_char_device(),
+            "{name} is no longer a device"
+        );
+    }
+    for name in ["fifo.obj", "fifo.bdm"] {
+        let kind = std::fs::symlink_metadata(dir.join(name)).expect("still there");
+        assert!(kind.file_type().is_fifo(), "{name} is no longer a FIFO");
+    }
+    assert_eq!(entries(&dir), before, "files appeared or went");
+    let _ = std::fs::remove_dir_all(&dir);
+}

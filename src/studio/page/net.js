@@ -79,6 +79,7 @@ function onText(msg) {
     case "pins": S.pins = msg.pins.slice(); S.pinsKeyframe = msg.keyframe; emit("pins", msg); break;
     case "outline": S.outline = msg.loops; emit("outline", msg); break;
     case "files": emit("files", msg); break;
+    case "exists": emit("exists", msg); break;
     case "correspondence": emit("correspondence", msg); break;
     case "ack": settle(msg.seq); break;
     case "error":

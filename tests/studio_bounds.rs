@@ -228,6 +228,32 @@ fn cancel_stops_opening_a_many_layer_psd_within_a_second() {
     assert!(seconds < 3.0, "{seconds} s");
 }
 
+#[test]
+#[ignore = "needs InbetweenOptions::with_budget to hear Cancel inside the drawing fit"]
+fn cancel_stops_a_drawing_fit_within_a_second() {
+    use bdmorph::generate;
+    use bdmorph::render::raster;
+    let dir = scratch("bounds-cancel-fit");
+    for (name, arm, bend) in [("a.png", 0.0, 0.0), ("b.png", 2.0, 0.2)] {
+        let png = raster::encode_png(&generate::figure_picture(1024, arm, bend)).expect("png");
+        std::fs::write(dir.join(name), png).expect("write");
+    }
+    let studio = Studio::start(&dir, Some("a.png"));
+    let mut c = studio.client();
+    // A fine mesh, so that the fit takes long.
+    assert_eq!(
+        c.request(r#"{"op":"mesh_outline","vertices":100000}"#),
+        None
+    );
+    c.wait_for(600, "the mesh", |c| c.state["job"].is_null());
+    assert_eq!(
+        c.request(r#"{"op":"drawing_keyframe","name":"b.png","time":2}"#),
+        None
+    );
+    let seconds = cancel_latency(&mut c, "laying a 100,000-vertex mesh over a drawing");
+    assert!(seconds < 3.0, "{seconds} s");
+}
+
 /// Names of the entries of `dir`, sorted.
 fn names(dir: &Path) -> Vec<String> {
     let mut n: Vec<String> = std::fs::read_dir(dir)

@@ -976,6 +976,7 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
             size: Some([200, 200]),
             range: None,
             background: Some("transparent".into()),
+            overwrite: false,
         };
         assert_eq!(ask(s, request), None);
         let image = raster::decode_image(&std::fs::read(dir.join(name)).unwrap()).unwrap();
@@ -1063,6 +1064,7 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         size: Some([64, 64]),
         range: None,
         background: None,
+        overwrite: false,
     };
     assert_eq!(ask(&mut third, export), None);
     let said = serde_json::from_str::<serde_json::Value>(&third.state_json()).unwrap()["notes"]

@@ -6,7 +6,7 @@
 import { S, KIND_MESH, KIND_POSE, KIND_FRAME, KIND_GHOST, KIND_PAINT, KIND_UPLOAD, redraw } from "./view.js";
 
 const token = new URLSearchParams(location.search).get("token") || "";
-const handlers = { state: [], pins: [], outline: [], files: [], correspondence: [], error: [], mesh: [], paint: [], frame: [], open: [], close: [] };
+const handlers = { state: [], pins: [], outline: [], files: [], correspondence: [], exists: [], error: [], mesh: [], paint: [], frame: [], open: [], close: [] };
 export const on = (type, f) => handlers[type].push(f);
 const emit = (type, ...args) => { for (const f of handlers[type]) f(...args); };
 

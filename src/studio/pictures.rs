@@ -56,9 +56,9 @@ pub fn check_picture_size(bytes: &[u8]) -> Result<(), String> {
     match declared_size(bytes) {
         Some((w, h)) if u64::from(w) * u64::from(h) > MAX_PICTURE_PIXELS => Err(format!(
             "{w} x {h} pixels ({} MiB decoded): the studio reads pictures of at most {} pixels (8192 x 8192, {} MiB); scale it down first",
-            u64::from(w) * u64::from(h) * 4 >> 20,
+            (u64::from(w) * u64::from(h) * 4) >> 20,
             MAX_PICTURE_PIXELS,
-            MAX_PICTURE_PIXELS * 4 >> 20,
+            (MAX_PICTURE_PIXELS * 4) >> 20,
         )),
         _ => Ok(()),
     }

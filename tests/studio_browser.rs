@@ -1103,6 +1103,39 @@ fn defect_8_exports_run_in_the_background() {
         "!document.getElementById('notes').textContent.includes('exported')",
         10,
     );
+    // The same export again: the page asks, showing the path; No keeps the file, Replace
+    // replaces it.
+    let first = std::fs::read(dir.join("short.gif")).expect("gif");
+    let modified = || {
+        std::fs::metadata(dir.join("short.gif"))
+            .and_then(|m| m.modified())
+            .expect("modified")
+    };
+    let when = modified();
+    page.click_on("#export-open");
+    page.click_on("#export");
+    page.wait("document.getElementById('confirm-dialog').open", 10);
+    let asked = page.eval("document.getElementById('confirm-dialog').textContent");
+    let asked = asked.as_str().unwrap_or_default().to_owned();
+    assert!(
+        asked.contains("short.gif") && asked.contains("exists"),
+        "{asked}"
+    );
+    page.shot("8-replace.png");
+    page.click_on("#confirm-cancel");
+    page.wait("!document.getElementById('confirm-dialog').open", 5);
+    page.settle();
+    assert_eq!(std::fs::read(dir.join("short.gif")).expect("gif"), first);
+    assert_eq!(modified(), when, "not written");
+    page.click_on("#export-open");
+    page.click_on("#export");
+    page.wait("document.getElementById('confirm-dialog').open", 10);
+    page.click_on("#confirm-ok");
+    page.wait(
+        "document.getElementById('notes').textContent.includes('exported')",
+        120,
+    );
+    assert_ne!(modified(), when, "replaced when asked");
 }
 
 /// Defect 9: the smaller ones: the time field follows the keyframe shown; a click on a frame

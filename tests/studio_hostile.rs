@@ -69,17 +69,26 @@ fn links_out_of_the_workspace_are_refused_for_exports_saves_and_opens() {
     assert!(c.request(r#"{"op":"open","name":"secret.json"}"#).is_some());
     let listed = c.files["files"].to_string();
     assert!(!listed.contains("secret.json"), "{listed}");
-    // A folder of the user's own is not replaced by frames.
+    // A folder of the user's own is not replaced by frames: the page is asked first, and
+    // asked to replace it, it is refused.
+    assert_eq!(
+        c.request(r#"{"op":"export","format":"obj","name":"keep","frames":3}"#),
+        None
+    );
+    assert_eq!(
+        c.exists.as_ref().map(|e| e["name"].clone()),
+        Some("keep".into())
+    );
     let said = c
-        .request(r#"{"op":"export","format":"obj","name":"keep","frames":3}"#)
+        .request(r#"{"op":"export","format":"obj","name":"keep","frames":3,"overwrite":true}"#)
         .expect("refused");
     assert!(said.contains("notes.txt"), "{said}");
-    // A new folder is filled, and filled again.
-    for _ in 0..2 {
-        assert_eq!(
-            c.request(r#"{"op":"export","format":"obj","name":"made","frames":3}"#),
-            None
+    // A new folder is filled, and filled again when asked to replace it.
+    for overwrite in [false, true] {
+        let request = format!(
+            r#"{{"op":"export","format":"obj","name":"made","frames":3,"overwrite":{overwrite}}}"#
         );
+        assert_eq!(c.request(&request), None);
         c.wait_for(60, "the OBJ export", |c| c.state["job"].is_null());
     }
     assert!(

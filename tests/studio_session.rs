@@ -205,6 +205,7 @@ fn random_request(rng: &mut Rng, s: &Session) -> Request {
                 seq: 1,
                 pins,
                 targets,
+                moving: None,
             }
         }
         10 => Request::DragEnd,
@@ -446,6 +447,7 @@ fn a_mesh_of_several_pieces_poses_with_pins_on_any_piece() {
             seq: 1,
             pins: vec![0, rim],
             targets: vec![start[0], target],
+            moving: None,
         },
     );
     assert_eq!(why, None);
@@ -474,7 +476,8 @@ fn a_mesh_of_several_pieces_poses_with_pins_on_any_piece() {
             Request::Drag {
                 seq: 2,
                 pins,
-                targets
+                targets,
+                moving: None,
             }
         ),
         None
@@ -555,6 +558,7 @@ fn poses_that_are_not_finite_are_never_kept() {
                     seq: 1,
                     pins: vec![0, n - 1],
                     targets: vec![a, b],
+                    moving: None,
                 },
             );
             assert!(finite(s.project()), "{method}: {a:?} {b:?}");
@@ -565,6 +569,7 @@ fn poses_that_are_not_finite_are_never_kept() {
                 seq: 1,
                 pins: vec![0, n - 1],
                 targets: vec![[-1e6, 0.0], [1e6, 0.0]],
+                moving: None,
             },
         )
         .expect("too far is refused");
@@ -681,6 +686,7 @@ fn the_history_stays_within_its_budget() {
                 seq: 1,
                 pins: vec![0, n - 1],
                 targets: vec![[0.0, 0.0], [far[0] + t, far[1]]],
+                moving: None,
             },
         );
         assert_eq!(why, None);
@@ -838,6 +844,7 @@ fn keyframe_poses_are_sent_with_revisions_that_follow_their_edits() {
                 seq: 1,
                 pins: vec![0],
                 targets: vec![[p[0] + 0.05, p[1]]],
+                moving: None,
             }
         ),
         None
@@ -969,6 +976,7 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
             size: Some([200, 200]),
             range: None,
             background: Some("transparent".into()),
+            overwrite: false,
         };
         assert_eq!(ask(s, request), None);
         let image = raster::decode_image(&std::fs::read(dir.join(name)).unwrap()).unwrap();
@@ -1056,6 +1064,7 @@ fn a_drawing_becomes_a_keyframe_in_one_undoable_step() {
         size: Some([64, 64]),
         range: None,
         background: None,
+        overwrite: false,
     };
     assert_eq!(ask(&mut third, export), None);
     let said = serde_json::from_str::<serde_json::Value>(&third.state_json()).unwrap()["notes"]

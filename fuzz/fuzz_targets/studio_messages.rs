@@ -7,7 +7,7 @@
 
 use bdmorph::generate;
 use bdmorph::studio::project::{Keyframe, Project};
-use bdmorph::studio::protocol::Request;
+use bdmorph::studio::messages::parse_request;
 use bdmorph::studio::session::Session;
 use libfuzzer_sys::fuzz_target;
 
@@ -38,9 +38,10 @@ fuzz_target!(|data: &[u8]| {
             }
             continue;
         } else {
-            match serde_json::from_slice::<Request>(line) {
-                Ok(request) => request,
-                Err(_) => continue,
+            // As the server reads a text message: within its kind's bound.
+            match std::str::from_utf8(line).map(parse_request) {
+                Ok(Ok(request)) => request,
+                _ => continue,
             }
         };
         let reply = session.handle(request);

@@ -103,6 +103,16 @@ impl ExportFormat {
         }
     }
 
+    /// The ending of each frame file of a folder export (`.png`, `.obj`; empty for the
+    /// others).
+    pub fn frame_ending(self) -> &'static str {
+        match self {
+            ExportFormat::Frames => ".png",
+            ExportFormat::Obj => ".obj",
+            _ => "",
+        }
+    }
+
     /// Whether it writes a folder.
     pub fn is_folder(self) -> bool {
         self.endings().is_empty()
@@ -297,15 +307,61 @@ fn fresh_folder(path: &Path) -> Result<PathBuf, String> {
     Ok(dir)
 }
 
-/// A finished temporary file synced and renamed over `path`.
-fn finish_file(file: std::fs::File, temp: &Path, path: &Path) -> Result<(), String> {
-    file.sync_all().map_err(|e| failed(&e))?;
-    std::fs::rename(temp, path).map_err(|e| failed(&e))
+/// What an export found at its path when it was done: refused without `overwrite`.
+fn exists(path: &Path) -> String {
+    format!(
+        "export: {} exists (it was made while the export ran): nothing was replaced",
+        path.display()
+    )
 }
 
-/// A filled temporary folder moved to `path`, replacing what was there whole (a link is
-/// moved aside, not followed).
-fn finish_folder(dir: &Path, path: &Path) -> Result<(), String> {
+/// A finished temporary file synced and renamed over `path`; without `overwrite`, linked to
+/// `path` only if nothing is there (no window in which another file could be replaced).
+fn finish_file(
+    file: std::fs::File,
+    temp: &Path,
+    path: &Path,
+    overwrite: bool,
+) -> Result<(), String> {
+    file.sync_all().map_err(|e| failed(&e))?;
+    if overwrite {
+        return std::fs::rename(temp, path).map_err(|e| failed(&e));
+    }
+    let linked = std::fs::hard_link(temp, path);
+    let _ = std::fs::remove_file(temp);
+    match linked {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(exists(path)),
+        Err(e) => Err(failed(&e)),
+    }
+}
+
+/// `bytes` written to `path` whole: replacing a regular file with `overwrite`, else only
+/// where nothing is.
+fn write_whole(path: &Path, bytes: &[u8], overwrite: bool) -> Result<(), String> {
+    if overwrite {
+        return crate::io::write_bytes_atomic(path, bytes).map_err(|e| failed(&e));
+    }
+    let (mut file, temp) = fresh_file(path)?;
+    let written = std::io::Write::write_all(&mut file, bytes).map_err(|e| failed(&e));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&temp);
+        return Err(e);
+    }
+    finish_file(file, &temp, path, false)
+}
+
+/// A filled temporary folder moved to `path`, replacing what was there whole with
+/// `overwrite` (a link is moved aside, not followed); without it, only onto a path where
+/// nothing is.
+fn finish_folder(dir: &Path, path: &Path, overwrite: bool) -> Result<(), String> {
+    if !overwrite {
+        if std::fs::symlink_metadata(path).is_ok() {
+            return Err(exists(path));
+        }
+        // Renaming onto a folder made meanwhile fails unless it is empty.
+        return std::fs::rename(dir, path).map_err(|e| failed(&e));
+    }
     if std::fs::symlink_metadata(path).is_ok() {
         let old = temporary(path).with_extension("old");
         let _ = std::fs::remove_dir_all(&old);
@@ -499,6 +555,23 @@ pub fn export_with_drawings(
     path: &Path,
     progress: &Progress,
 ) -> Result<Exported, String> {
+    export_with_drawings_to(project, texture, drawings, settings, path, progress, true)
+}
+
+/// [`export_with_drawings`], replacing what is at `path` only with `overwrite`: without it,
+/// the export is written beside and moved to `path` only if nothing is there when it is done
+/// (else it is refused and what it wrote removed). A folder export never removes a file it
+/// did not write unless it replaces the folder with `overwrite`.
+#[allow(clippy::too_many_arguments)]
+pub fn export_with_drawings_to(
+    project: &Project,
+    texture: Option<&Image>,
+    drawings: &[Option<&Image>],
+    settings: &ExportSettings,
+    path: &Path,
+    progress: &Progress,
+    overwrite: bool,
+) -> Result<Exported, String> {
     settings.check()?;
     let (picks, count) = frames_kept(project, settings)?;
     let mut animation = Animation::new(project, count)?;
@@ -650,7 +723,7 @@ pub fn export_with_drawings(
                 .finish()
                 .map_err(|e| failed(&e))
                 .and_then(|out| out.into_inner().map_err(|e| failed(e.error())))
-                .and_then(|file| finish_file(file, &temp, path));
+                .and_then(|file| finish_file(file, &temp, path, overwrite));
             if finished.is_err() {
                 let _ = std::fs::remove_file(&temp);
             }
@@ -662,7 +735,7 @@ pub fn export_with_drawings(
                 .finish()
                 .map_err(|e| failed(&e))
                 .and_then(|out| out.into_inner().map_err(|e| failed(e.error())))
-                .and_then(|file| finish_file(file, &temp, path));
+                .and_then(|file| finish_file(file, &temp, path, overwrite));
             if finished.is_err() {
                 let _ = std::fs::remove_file(&temp);
             }
@@ -673,7 +746,7 @@ pub fn export_with_drawings(
                 .finish()
                 .map_err(|e| failed(&e))
                 .and_then(|()| std::fs::File::open(&temp).map_err(|e| failed(&e)))
-                .and_then(|file| finish_file(file, &temp, path));
+                .and_then(|file| finish_file(file, &temp, path, overwrite));
             if finished.is_err() {
                 let _ = std::fs::remove_file(&temp);
             }
@@ -681,7 +754,7 @@ pub fn export_with_drawings(
         }
         Sink::Webp(encoder) => {
             let bytes = encoder.finish().map_err(|e| failed(&e))?;
-            crate::io::write_bytes_atomic(path, &bytes).map_err(|e| failed(&e))?;
+            write_whole(path, &bytes, overwrite)?;
         }
         Sink::Sheet(layout, sheet) => {
             let json_path = path.with_extension("json");
@@ -689,13 +762,16 @@ pub fn export_with_drawings(
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
             let png = raster::encode_png(&sheet).map_err(|e| failed(&e))?;
-            crate::io::write_bytes_atomic(path, &png).map_err(|e| failed(&e))?;
-            crate::io::write_bytes_atomic(&json_path, layout.json(&image_name, fps).as_bytes())
-                .map_err(|e| failed(&e))?;
+            write_whole(path, &png, overwrite)?;
+            write_whole(
+                &json_path,
+                layout.json(&image_name, fps).as_bytes(),
+                overwrite,
+            )?;
             also.push(json_path);
         }
         Sink::Frames(dir) | Sink::Obj(dir) => {
-            let moved = finish_folder(&dir, path);
+            let moved = finish_folder(&dir, path, overwrite);
             if moved.is_err() {
                 let _ = std::fs::remove_dir_all(&dir);
             }
@@ -719,7 +795,7 @@ pub fn export_with_drawings(
             }
             let bytes = raster::encode_png(&raster::strip(&images, images.len()))
                 .map_err(|e| failed(&e))?;
-            crate::io::write_bytes_atomic(path, &bytes).map_err(|e| failed(&e))?;
+            write_whole(path, &bytes, overwrite)?;
         }
         Sink::Html(frames) => {
             let png = match texture {
@@ -747,7 +823,7 @@ pub fn export_with_drawings(
                 png.as_deref(),
                 &view,
             );
-            crate::io::write_bytes_atomic(path, page.as_bytes()).map_err(|e| failed(&e))?;
+            write_whole(path, page.as_bytes(), overwrite)?;
         }
     }
     Ok(Exported {

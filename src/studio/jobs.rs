@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
-use super::export::{export_with_drawings, ExportSettings};
+use super::export::{export_with_drawings_to, ExportSettings};
 use super::open::{open, OpenOptions, Opened};
 use super::project::Project;
 use crate::mesh::PlanarMesh;
@@ -26,11 +26,21 @@ pub struct Progress {
     pub done: AtomicU64,
     /// Units in all (0: unknown).
     pub total: AtomicU64,
-    /// Set to stop the job early.
-    pub cancel: AtomicBool,
+    /// Set to stop the job early (shared with the budget handed to the library's loops).
+    pub cancel: Arc<AtomicBool>,
 }
 
 impl Progress {
+    /// A budget stopped when this job is cancelled, for the library's long loops.
+    pub fn budget(&self) -> crate::Budget {
+        crate::Budget::unlimited().with_cancel(self.cancel.clone())
+    }
+
+    /// Asks the job to stop (it stops at its next check).
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
     /// `Err("cancelled")` once the job is asked to stop.
     pub fn cancelled(&self) -> Result<(), String> {
         if self.cancel.load(Ordering::Relaxed) {
@@ -63,6 +73,8 @@ pub enum Outcome {
         path: PathBuf,
         /// Frames in it.
         frames: usize,
+        /// The bytes written (every file of it: a folder's frames, a sheet's JSON).
+        bytes: u64,
     },
     /// A new mesh (to carry the animation over to).
     Meshed {
@@ -133,6 +145,9 @@ pub struct ExportWork {
     pub settings: ExportSettings,
     /// The file (or folder) to write.
     pub path: PathBuf,
+    /// Whether what is at `path` may be replaced (else the export is refused if something is
+    /// there when it is done).
+    pub overwrite: bool,
     /// The document (its keyframes, times, easings, mesh, depth).
     pub project: Project,
     /// The picture drawn on the mesh.
@@ -144,18 +159,40 @@ pub struct ExportWork {
 impl ExportWork {
     fn run(self, progress: &Progress) -> Result<Outcome, String> {
         let drawings: Vec<Option<&Image>> = self.drawings.iter().map(|d| d.as_deref()).collect();
-        let done = export_with_drawings(
+        let done = export_with_drawings_to(
             &self.project,
             self.texture.as_deref(),
             &drawings,
             &self.settings,
             &self.path,
             progress,
+            self.overwrite,
         )?;
+        let bytes = std::iter::once(&done.path)
+            .chain(&done.also)
+            .map(|p| size_written(p))
+            .sum();
         Ok(Outcome::Exported {
             path: done.path,
             frames: done.frames,
+            bytes,
         })
+    }
+}
+
+/// The bytes of the file at `path`, or of the regular files in the folder at `path`.
+pub fn size_written(path: &std::path::Path) -> u64 {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => std::fs::read_dir(path).map_or(0, |entries| {
+            entries
+                .filter_map(Result::ok)
+                .filter_map(|e| e.metadata().ok())
+                .filter(std::fs::Metadata::is_file)
+                .map(|m| m.len())
+                .sum()
+        }),
+        Ok(m) => m.len(),
+        Err(_) => 0,
     }
 }
 
@@ -188,6 +225,9 @@ impl MeshWork {
         if let Some([w, h]) = self.picture {
             outline.texture_frame = Some([0.0, 0.0, f64::from(w), f64::from(h)]);
         }
+        // TODO(lead): pass `progress.budget()` to the mesher (`MeshOptions::with_budget`)
+        // once the library's budgets land, so that Cancel stops it inside its refinement;
+        // until then it is heard between the stages here.
         let options = crate::meshing::MeshOptions::default().with_vertices(self.vertices);
         progress.cancelled()?;
         let meshed = crate::meshing::mesh_outline(&outline, &options).map_err(|e| e.to_string())?;
@@ -218,6 +258,9 @@ pub struct OpenWork {
 impl OpenWork {
     fn run(self, progress: &Progress) -> Result<Outcome, String> {
         progress.cancelled()?;
+        // TODO(lead): once layered reading takes a `&Budget`, `OpenOptions` carries
+        // `progress.budget()` to it, so that Cancel stops a many-layer file inside its
+        // layers; until then it is heard before and after the file is read.
         let opened = open(&self.path, &self.workspace, &self.options)?;
         progress.cancelled()?;
         Ok(Outcome::Opened {
@@ -257,6 +300,9 @@ impl DrawingWork {
         progress.total.store(0, Ordering::Relaxed);
         progress.cancelled()?;
         let matches: Vec<Match> = self.pairs.iter().map(|&[a, b]| Match { a, b }).collect();
+        // TODO(lead): pass `progress.budget()` (`InbetweenOptions::with_budget`) once the
+        // library's budgets land, so that Cancel stops the fit inside its solves; until then
+        // it is heard before and after the fit.
         let options = InbetweenOptions::default().with_picture(self.picture);
         let fit = fit_drawing(
             &self.mesh,

@@ -22,6 +22,7 @@
 //! last answer ([`listen`]).
 
 pub mod carry;
+pub mod cleanup;
 pub mod edit;
 pub mod engine;
 pub mod export;
@@ -29,7 +30,9 @@ pub mod guard;
 pub mod history;
 pub mod jobs;
 pub mod listen;
+pub mod messages;
 pub mod open;
+pub mod pictures;
 /// The project file (the crate's [`crate::project`], with the feature `project`).
 pub use crate::project;
 pub mod protocol;
@@ -119,7 +122,25 @@ pub fn session_for(options: &StudioOptions) -> Result<Session, StudioError> {
 
 /// Runs the studio until Ctrl-C: prints the URL (one line on stdout), logs on stderr.
 pub fn run(options: StudioOptions) -> Result<(), StudioError> {
+    let started = std::time::SystemTime::now();
     let mut session = session_for(&options)?;
+    // Temporary files of saves and exports a killed studio left.
+    let mut cleaned = cleanup::Cleaned::default();
+    for dir in [
+        session.workspace().root().to_path_buf(),
+        session.workspace().state_folder(),
+    ] {
+        let c = cleanup::remove_stale_temporaries(&dir, started);
+        cleaned.files += c.files;
+        cleaned.bytes += c.bytes;
+    }
+    if cleaned.files > 0 {
+        eprintln!(
+            "studio: removed {} temporary files ({:.1} MB) left by interrupted saves and exports",
+            cleaned.files,
+            cleaned.bytes as f64 / 1e6
+        );
+    }
     session.offer_recoveries();
     for r in session.recovered() {
         eprintln!(

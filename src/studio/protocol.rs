@@ -75,6 +75,11 @@ pub enum Request {
         pins: Vec<u32>,
         /// One target per pin.
         targets: Vec<[f64; 2]>,
+        /// The pins this page moves (vertex numbers, among `pins`): the others keep where
+        /// the keyframe has them now, so that two pages dragging different pins at once both
+        /// move theirs. Absent: every pin goes to its target.
+        #[serde(default)]
+        moving: Option<Vec<u32>>,
     },
     /// The mouse was released: the next drag starts a new undo step.
     DragEnd,
@@ -294,6 +299,11 @@ pub enum Request {
         /// `transparent` or a colour (`#rrggbb`, `white`, ...); default white.
         #[serde(default)]
         background: Option<String>,
+        /// Whether an existing file or folder of that name may be replaced (without it, an
+        /// existing one is answered with `{"type": "exists", "op": "export", "name", "path"}`
+        /// and nothing is written).
+        #[serde(default)]
+        overwrite: bool,
     },
     /// Cancel the work running in the background.
     Cancel,

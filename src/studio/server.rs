@@ -399,12 +399,17 @@ async fn serve_socket(app: Arc<App>, mut socket: WebSocket) {
                 let mut refusals = Vec::new();
                 for message in batch {
                     match message {
-                        Message::Text(text) => match serde_json::from_str::<Request>(text.as_str()) {
-                            Ok(request) => items.push(Item::Request(request)),
-                            Err(e) => refusals.push(Answer::Text(
-                                serde_json::json!({"type": "error", "message": format!("bad request: {e}")}).to_string(),
-                            )),
-                        },
+                        Message::Text(text) => {
+                            let parsed = super::messages::parse_request(text.as_str());
+                            // The text goes before the refusal is sent.
+                            drop(text);
+                            match parsed {
+                                Ok(request) => items.push(Item::Request(request)),
+                                Err(e) => refusals.push(Answer::Text(
+                                    serde_json::json!({"type": "error", "message": e.to_string()}).to_string(),
+                                )),
+                            }
+                        }
                         Message::Binary(bytes) => items.push(Item::Upload(bytes.to_vec())),
                         // Everything before the Close is carried out.
                         Message::Close(_) => {
@@ -525,6 +530,7 @@ mod tests {
                 seq,
                 pins: vec![],
                 targets: vec![],
+                moving: None,
             })
         };
         let scrub = |seq| Item::Request(Request::Scrub { seq, time: 0.0 });

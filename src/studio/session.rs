@@ -123,6 +123,10 @@ pub struct Reply {
     pub work: Option<(Work, Arc<Progress>)>,
 }
 
+/// The most pixels of an exported frame in the studio: 3840 x 2160 (an MP4's largest), so
+/// that one frame is drawn and encoded within about a second and Cancel is heard between
+/// frames (`bdmorph export` makes larger ones).
+pub const MAX_EXPORT_PIXELS: u64 = 3840 * 2160;
 /// The fewest vertices the studio meshes an outline with.
 pub const MIN_MESH_VERTICES: usize = 50;
 /// The most vertices the studio meshes an outline with (`bdmorph mesh` makes larger meshes,
@@ -145,8 +149,9 @@ pub struct Session {
     project_file: Option<PathBuf>,
     source: Option<String>,
     texture: Option<Arc<Texture>>,
-    /// Pictures read before, by name (undo and redo of a new picture do not read it again).
-    textures: Vec<Arc<Texture>>,
+    /// Pictures read before, by name (undo and redo of a new picture do not read it again),
+    /// within [`super::pictures::PICTURE_CACHE_BYTES`].
+    textures: super::pictures::PictureCache,
     /// The picture the session started with (perhaps given on the command line, from outside
     /// the workspace): kept, never read again.
     given_texture: Option<Arc<Texture>>,
@@ -173,6 +178,17 @@ impl std::fmt::Debug for Session {
             .field("keyframes", &self.doc.keyframes.len())
             .field("workspace", &self.workspace.root())
             .finish_non_exhaustive()
+    }
+}
+
+/// A size in bytes for people: `812 bytes`, `41.3 kB`, `7.9 MB`.
+pub fn human_bytes(bytes: u64) -> String {
+    if bytes < 1000 {
+        format!("{bytes} bytes")
+    } else if bytes < 1_000_000 {
+        format!("{:.1} kB", bytes as f64 / 1e3)
+    } else {
+        format!("{:.1} MB", bytes as f64 / 1e6)
     }
 }
 
@@ -255,7 +271,13 @@ impl Session {
             workspace: Workspace::new(workspace),
             project_file,
             source: None,
-            textures: texture.iter().cloned().collect(),
+            textures: {
+                let mut cache = super::pictures::PictureCache::default();
+                if let Some(t) = &texture {
+                    cache.insert(t.clone());
+                }
+                cache
+            },
             given_texture: texture.clone(),
             texture,
             revs: Revs::default(),
@@ -490,9 +512,8 @@ impl Session {
             None => None,
             Some(name) => match self
                 .textures
-                .iter()
-                .chain(&self.given_texture)
-                .find(|t| t.name == name)
+                .get(&name)
+                .or_else(|| self.given_texture.clone().filter(|t| t.name == name))
             {
                 Some(t) => Some(t.clone()),
                 // Named by the document: read only inside the workspace.
@@ -504,10 +525,7 @@ impl Session {
                 ) {
                     Ok(t) => {
                         let t = Arc::new(t);
-                        self.textures.push(t.clone());
-                        if self.textures.len() > 4 {
-                            self.textures.remove(0);
-                        }
+                        self.textures.insert(t.clone());
                         Some(t)
                     }
                     Err(e) => {
@@ -774,7 +792,7 @@ impl Session {
         Ok(())
     }
 
-    fn drag(&mut self, pins: &[u32], targets: &[[f64; 2]]) -> Done {
+    fn drag(&mut self, pins: &[u32], targets: &[[f64; 2]], moving: Option<&[u32]>) -> Done {
         if self.view.shown != Shown::Keyframe {
             return Err("a frame between keyframes is shown: pin it to make it a keyframe".into());
         }
@@ -788,6 +806,29 @@ impl Session {
         if targets.len() != pins.len() {
             return Err(format!("{} targets for {} pins", targets.len(), pins.len()));
         }
+        // The pins another page moves stay where the keyframe has them now.
+        let kept: Vec<[f64; 2]>;
+        let targets = match moving {
+            Some(moving) => {
+                if let Some(v) = moving.iter().find(|v| !pins.contains(v)) {
+                    return Err(format!("vertex {v} is not pinned: drag again"));
+                }
+                let now = &self.current_key().positions;
+                kept = pins
+                    .iter()
+                    .zip(targets)
+                    .map(|(v, t)| {
+                        if moving.contains(v) {
+                            *t
+                        } else {
+                            now.get(*v as usize).copied().unwrap_or(*t)
+                        }
+                    })
+                    .collect();
+                &kept[..]
+            }
+            None => targets,
+        };
         let (centre, size) = self.reach;
         if let Some(far) = targets.iter().position(|t| {
             !(t[0].is_finite() && t[1].is_finite())
@@ -1228,6 +1269,7 @@ impl Session {
         size: Option<[u32; 2]>,
         range: Option<[u32; 2]>,
         background: Option<&str>,
+        overwrite: bool,
     ) -> Result<Option<Work>, String> {
         let background: Background = match background {
             Some(b) => b.parse()?,
@@ -1253,10 +1295,19 @@ impl Session {
         };
         settings.check()?;
         let path = if format.is_folder() {
-            self.workspace.frame_folder(name)?
+            self.workspace.frame_folder(name, format.frame_ending())?
         } else {
             self.workspace.file(name, format.endings())?
         };
+        if let Some(size) = settings.size {
+            let pixels = u64::from(size.width) * u64::from(size.height);
+            if pixels > MAX_EXPORT_PIXELS {
+                return Err(format!(
+                    "frames of {} x {} pixels: the studio exports frames of at most {MAX_EXPORT_PIXELS} pixels (3840 x 2160); the command line's bdmorph export makes larger ones",
+                    size.width, size.height
+                ));
+            }
+        }
         if self.doc.keyframes.len() < 2 {
             return Err("add a second keyframe to export an animation".into());
         }
@@ -1288,10 +1339,29 @@ impl Session {
         Ok(Some(Work::Export(Box::new(ExportWork {
             settings,
             path,
+            overwrite,
             project: self.doc.clone(),
             texture: self.texture.as_ref().map(|t| Arc::new(t.image.clone())),
             drawings,
         }))))
+    }
+
+    /// The path an export of `format` named `name` writes, if something is already there
+    /// (for a sprite sheet: its picture or its JSON file).
+    fn export_exists(&self, format: &str, name: &str) -> Result<Option<PathBuf>, String> {
+        let endings: &[&str] = if format == "still" {
+            &[".png"]
+        } else {
+            format.parse::<ExportFormat>()?.endings()
+        };
+        let path = self.workspace.file(name, endings)?;
+        let mut taken = vec![path.clone()];
+        if format == "sheet" {
+            taken.push(path.with_extension("json"));
+        }
+        Ok(taken
+            .into_iter()
+            .find(|p| std::fs::symlink_metadata(p).is_ok()))
     }
 
     /// One frame as a PNG picture (of `size`, or the subject's aspect 800 pixels on its longer
@@ -1391,8 +1461,7 @@ impl Session {
 
     fn opened(&mut self, opened: super::open::Opened, name: String) -> Done {
         if let Some(t) = &opened.texture {
-            self.textures.retain(|old| old.name != t.name);
-            self.textures.push(t.clone());
+            self.textures.insert(t.clone());
         }
         self.commit(
             format!("open {name}"),
@@ -1424,8 +1493,7 @@ impl Session {
             None => fitted_uv(&self.doc.mesh.positions, &texture.image).0,
         };
         let texture = Arc::new(texture);
-        self.textures.retain(|old| old.name != name);
-        self.textures.push(texture);
+        self.textures.insert(texture);
         self.commit(
             format!("picture {name}"),
             Edit::Texture {
@@ -1437,12 +1505,12 @@ impl Session {
 
     /// A picture of the workspace, read once and kept.
     fn picture(&mut self, name: &str) -> Result<Arc<Texture>, String> {
-        if let Some(t) = self.textures.iter().find(|t| t.name == name) {
-            return Ok(t.clone());
+        if let Some(t) = self.textures.get(name) {
+            return Ok(t);
         }
         let path = self.workspace.file(name, &[".png", ".jpg", ".jpeg"])?;
         let texture = Arc::new(read_texture(&path, name).map_err(|e| format!("{name}: {e}"))?);
-        self.textures.push(texture.clone());
+        self.textures.insert(texture.clone());
         Ok(texture)
     }
 
@@ -1788,17 +1856,16 @@ impl Session {
                 return;
             }
             Err(e) => Err(e),
-            Ok(Outcome::Exported { path, frames }) => {
-                let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+            Ok(Outcome::Exported {
+                path,
+                frames,
+                bytes,
+            }) => {
                 self.note(
                     format!(
-                        "exported {} ({frames} frames{})",
+                        "exported {} ({frames} frames, {} written)",
                         path.display(),
-                        if size > 0 {
-                            format!(", {:.1} MB", size as f64 / 1e6)
-                        } else {
-                            String::new()
-                        }
+                        human_bytes(bytes)
                     ),
                     false,
                 );
@@ -1948,7 +2015,12 @@ impl Session {
                     },
                 )?;
             }
-            Request::Drag { pins, targets, .. } => self.drag(&pins, &targets)?,
+            Request::Drag {
+                pins,
+                targets,
+                moving,
+                ..
+            } => self.drag(&pins, &targets, moving.as_deref())?,
             Request::DragEnd => {
                 self.dragging = false;
                 // The pages learn the dragged keyframe's new pose revision.
@@ -2118,7 +2190,22 @@ impl Session {
                 size,
                 range,
                 background,
+                overwrite,
             } => {
+                if !overwrite {
+                    if let Some(path) = self.export_exists(&format, &name)? {
+                        reply.answers.push(Answer::Text(
+                            serde_json::json!({
+                                "type": "exists",
+                                "op": "export",
+                                "name": name,
+                                "path": path.display().to_string(),
+                            })
+                            .to_string(),
+                        ));
+                        return Ok(reply);
+                    }
+                }
                 let work = self.export(
                     &format,
                     &name,
@@ -2127,13 +2214,14 @@ impl Session {
                     size,
                     range,
                     background.as_deref(),
+                    overwrite,
                 )?;
                 if let Some(work) = work {
                     reply.work = Some(self.start(work)?);
                 }
             }
             Request::Cancel => match &self.job {
-                Some(job) => job.progress.cancel.store(true, Ordering::Relaxed),
+                Some(job) => job.progress.cancel(),
                 None => return Err("nothing is running".into()),
             },
             Request::ListFiles => {

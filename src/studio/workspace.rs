@@ -215,9 +215,9 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
 }
 
 /// Whether `name` is the name of a frame an OBJ export writes (`frame_0000.obj`, ...).
-fn is_frame_name(name: &str) -> bool {
+fn is_frame_name(name: &str, ending: &str) -> bool {
     name.strip_prefix("frame_")
-        .and_then(|r| r.strip_suffix(".obj").or_else(|| r.strip_suffix(".png")))
+        .and_then(|r| r.strip_suffix(ending))
         .is_some_and(|d| d.len() >= 4 && d.bytes().all(|b| b.is_ascii_digit()))
 }
 
@@ -352,6 +352,11 @@ impl Workspace {
         self.root.join(".bdmorph-studio")
     }
 
+    /// The folder where the studio keeps its token, port and autosaves.
+    pub fn state_folder(&self) -> PathBuf {
+        self.state_dir()
+    }
+
     /// A file of the workspace by a plain name with one of `endings` (any when empty).
     /// A name that is a link is taken only when it resolves inside the workspace.
     pub fn file(&self, name: &str, endings: &[&str]) -> Result<PathBuf, PathError> {
@@ -384,9 +389,10 @@ impl Workspace {
         Ok(path)
     }
 
-    /// A folder of the workspace for an export's frames (OBJ or PNG), by a plain name: not a link,
-    /// and new or holding only the frames of an earlier export (the export replaces it whole).
-    pub fn frame_folder(&self, name: &str) -> Result<PathBuf, PathError> {
+    /// A folder of the workspace for an export's frames (`ending`: `.png` or `.obj`), by a
+    /// plain name: not a link, and new or holding only frames of that kind from an earlier
+    /// export (replacing it, when the user asks, loses no other file).
+    pub fn frame_folder(&self, name: &str, ending: &str) -> Result<PathBuf, PathError> {
         let path = self.file(name, &[])?;
         let Ok(meta) = std::fs::symlink_metadata(&path) else {
             return Ok(path);
@@ -406,7 +412,9 @@ impl Workspace {
             .filter_map(Result::ok)
             .find(|e| {
                 let frame = e.file_type().is_ok_and(|t| t.is_file())
-                    && e.file_name().to_str().is_some_and(is_frame_name);
+                    && e.file_name()
+                        .to_str()
+                        .is_some_and(|n| is_frame_name(n, ending));
                 !frame
             });
         match other {

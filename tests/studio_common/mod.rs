@@ -112,10 +112,17 @@ impl Studio {
             frame: Vec::new(),
             errors: Vec::new(),
             files: serde_json::Value::Null,
+            exists: None,
             seq: 0,
         };
         client.request(r#"{"op":"hello"}"#);
         client
+    }
+
+    /// `GET PATH` with the token; the status code of the answer.
+    pub fn get_with_token(&self, path: &str) -> u16 {
+        let sep = if path.contains('?') { '&' } else { '?' };
+        self.get(&format!("{path}{sep}token={}", self.token), "")
     }
 
     /// The studio's resident memory in bytes (Linux).
@@ -150,6 +157,8 @@ pub struct Client {
     pub frame: Vec<u8>,
     pub errors: Vec<String>,
     pub files: serde_json::Value,
+    /// The last `{"type": "exists"}` answer (an export onto something that is there).
+    pub exists: Option<serde_json::Value>,
     pub seq: u32,
 }
 
@@ -177,6 +186,7 @@ impl Client {
                         .errors
                         .push(v["message"].as_str().unwrap_or("").to_owned()),
                     Some("files") => self.files = v,
+                    Some("exists") => self.exists = Some(v),
                     _ => {}
                 }
                 true
@@ -245,6 +255,31 @@ impl Client {
         self.seq += 1;
         let request = serde_json::json!({"op": "drag", "seq": self.seq, "pins": self.pins, "targets": targets});
         self.request(&request.to_string())
+    }
+
+    /// A drag of the shown keyframe's pins to `targets`, moving only the pins `moving` (the
+    /// others stay where the keyframe has them, whatever `targets` says); the error, if any.
+    pub fn drag_moving(&mut self, targets: &[[f64; 2]], moving: &[u32]) -> Option<String> {
+        self.seq += 1;
+        let request = serde_json::json!({"op": "drag", "seq": self.seq, "pins": self.pins, "targets": targets, "moving": moving});
+        self.request(&request.to_string())
+    }
+
+    /// Sends a binary upload of `bytes` as `name`, then what it does (`open`, `attach`,
+    /// `store`), and reads until it is carried out; the error it caused, if any.
+    pub fn upload(&mut self, name: &str, then: &str, bytes: &[u8]) -> Option<String> {
+        let header = serde_json::json!({"name": name, "then": then}).to_string();
+        let mut message = Vec::new();
+        message.extend_from_slice(&10u32.to_le_bytes());
+        message.extend_from_slice(&(header.len() as u32).to_le_bytes());
+        message.extend_from_slice(header.as_bytes());
+        message.extend_from_slice(bytes);
+        let before = self.errors.len();
+        self.ws
+            .send(Message::Binary(message.into()))
+            .expect("sends");
+        self.sync();
+        self.errors.get(before).cloned()
     }
 
     /// The positions of the last frame.

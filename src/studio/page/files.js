@@ -133,7 +133,8 @@ function syncExport() {
 $("export-format").addEventListener("change", () => {
   const f = $("export-format").value;
   const ext = { gif: ".gif", mp4: ".mp4", apng: ".apng", webp: ".webp", sheet: ".png", png: ".png", html: ".html", obj: "", frames: "", still: ".png" }[f];
-  $("export-name").value = f === "still" ? "frame.png" : f === "sheet" ? "sheet.png" : "animation" + (f === "obj" || f === "frames" ? "-frames" : ext);
+  // Each format its own default name: one export never takes another's place.
+  $("export-name").value = { still: "frame.png", sheet: "sheet.png", png: "strip.png", frames: "animation-png", obj: "animation-obj" }[f] ?? "animation" + ext;
   syncExport();
 });
 $("export-background").addEventListener("change", syncExport);
@@ -167,6 +168,14 @@ $("export").onclick = () => {
   if (first !== null || last !== null) request.range = [first ?? 0, last ?? total - 1];
   const bg = $("export-background").value;
   request.background = bg === "colour" ? $("export-colour").value : bg;
+  S.pendingExport = request;
   send(request);
   $("export-dialog").close();
 };
+// An export onto a file or folder that exists asks first; nothing is replaced without a yes.
+on("exists", async (msg) => {
+  const asked = S.pendingExport;
+  if (!asked || asked.name !== msg.name) return;
+  S.pendingExport = null;
+  if (await confirmDialog(`${msg.path} exists. Replace it with this export?`, "Replace")) send({ ...asked, overwrite: true });
+});

@@ -6,7 +6,7 @@
 import { S, KIND_MESH, KIND_POSE, KIND_FRAME, KIND_GHOST, KIND_PAINT, KIND_UPLOAD, redraw } from "./view.js";
 
 const token = new URLSearchParams(location.search).get("token") || "";
-const handlers = { state: [], pins: [], outline: [], files: [], correspondence: [], error: [], mesh: [], paint: [], frame: [], open: [], close: [] };
+const handlers = { state: [], pins: [], outline: [], files: [], correspondence: [], exists: [], error: [], mesh: [], paint: [], frame: [], open: [], close: [] };
 export const on = (type, f) => handlers[type].push(f);
 const emit = (type, ...args) => { for (const f of handlers[type]) f(...args); };
 
@@ -79,6 +79,7 @@ function onText(msg) {
     case "pins": S.pins = msg.pins.slice(); S.pinsKeyframe = msg.keyframe; emit("pins", msg); break;
     case "outline": S.outline = msg.loops; emit("outline", msg); break;
     case "files": emit("files", msg); break;
+    case "exists": emit("exists", msg); break;
     case "correspondence": emit("correspondence", msg); break;
     case "ack": settle(msg.seq); break;
     case "error":

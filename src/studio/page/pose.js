@@ -185,7 +185,8 @@ window.addEventListener("mousemove", (e) => {
       for (const i of d.moving) d.targets[i] = [c[0] + k * (d.base[i][0] - c[0]), c[1] + k * (d.base[i][1] - c[1])];
     }
     d.targets = d.targets.map((t) => withinReach(t));
-    request({ op: "drag", pins: d.pins, targets: d.targets.map((t) => t.slice()) });
+    // Only the pins moved here are ours: another tab may be dragging the others.
+    request({ op: "drag", pins: d.pins, targets: d.targets.map((t) => t.slice()), moving: d.moving.map((i) => d.pins[i]) });
     return;
   }
   if ($("highlight").checked && e.target === canvas && S.pose && posing()) {

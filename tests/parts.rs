@@ -180,7 +180,7 @@ fn damaged_unsupported_and_empty_files_are_one_clear_line_each() {
         ("cmyk", write_psd_with(&figure(), 4, 8), |e| {
             matches!(e, LayersError::Unsupported { .. })
         }),
-        ("16-bit", write_psd_with(&figure(), 3, 16), |e| {
+        ("1-bit RGB", write_psd_with(&figure(), 3, 1), |e| {
             matches!(e, LayersError::Unsupported { .. })
         }),
         ("not layered", b"hello".to_vec(), |e| {

@@ -590,6 +590,14 @@ fn files_of_many_layers_finish_within_bounds() {
                 ((i % 13) as i32 * 5, (i % 17) as i32 * 5)
             }),
         ),
+        (
+            "256 20 x 20 layers in one place",
+            many(MAX_PARTS, 20, 200, 200, |_| (90, 90)),
+        ),
+        (
+            "500 20 x 20 layers in one place",
+            many(500, 20, 200, 200, |_| (90, 90)),
+        ),
     ];
     let dir = std::env::var_os("BDMORPH_PSD_DIR").map(std::path::PathBuf::from);
     for (i, (what, bytes)) in cases.into_iter().enumerate() {

@@ -667,7 +667,12 @@ fn a_large_layered_file_reads_in_one_pass() {
                     .collect();
                 layered::encode_channel(&raw, w, 8, &spec)
             };
-            let chans = [(-1i16, plane(9)), (0, plane(0)), (1, plane(1)), (2, plane(2))];
+            let chans = [
+                (-1i16, plane(9)),
+                (0, plane(0)),
+                (1, plane(1)),
+                (2, plane(2)),
+            ];
             let refs: Vec<(i16, &[u8])> = chans.iter().map(|(id, d)| (*id, &d[..])).collect();
             let (x, y) = ((i % 4) as i32 * 500, (i / 4) as i32 * 1500);
             records.extend(psd_record(

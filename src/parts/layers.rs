@@ -241,11 +241,13 @@ pub fn layered_format(bytes: &[u8]) -> Option<&'static str> {
     }
 }
 
-/// Whether `path` names a layered picture by its extension (`.psd`, `.ora`).
+/// Whether `path` names a layered picture by its extension (`.psd`, `.psb`, `.ora`).
 pub fn is_layered_path(path: &std::path::Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("psd") || e.eq_ignore_ascii_case("ora"))
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        ["psd", "psb", "ora"]
+            .iter()
+            .any(|known| e.eq_ignore_ascii_case(known))
+    })
 }
 
 /// Reads a PSD or ORA file's bytes (told by their first bytes).

@@ -427,6 +427,24 @@ fn hostile_cases() -> Vec<(&'static str, Vec<u8>)> {
         cases.push(("groups nested 20000 deep", doc(64, 64, &[], 20000, &r, &[])));
     }
     {
+        // 64 groups nested, each named with 255 bytes, around 20000 hidden layers: names and
+        // notes stay proportional to the file.
+        let long = "g".repeat(255);
+        let mut r = Vec::new();
+        for _ in 0..20000 {
+            let mut l = record([0; 4], &[], &[]);
+            l[28] = 0x0a; // hidden
+            r.extend_from_slice(&l);
+        }
+        for _ in 0..64 {
+            r.extend_from_slice(&psd_record([0; 4], &[], 0x08, &long, Some(1), false));
+        }
+        cases.push((
+            "20000 hidden layers under 64 groups of long names",
+            doc(64, 64, &[], 20064, &r, &[]),
+        ));
+    }
+    {
         // More layers with pixels than a character has parts.
         let mut r = Vec::new();
         let mut d = Vec::new();

@@ -34,6 +34,23 @@ const FORMAT: &str = "PSD";
 
 /// The deepest nesting of groups followed.
 const MAX_DEPTH: usize = 64;
+/// The longest group path kept in a layer's name, in bytes (longer ones keep their end), so
+/// that names stay proportional to the file.
+const MAX_PATH: usize = 256;
+/// The most notes kept; the rest are counted in one.
+const MAX_NOTES: usize = 200;
+
+/// `path` cut to its last [`MAX_PATH`] bytes (at a character boundary), marked `…`.
+fn bounded_path(path: String) -> String {
+    if path.len() <= MAX_PATH {
+        return path;
+    }
+    let mut start = path.len() - MAX_PATH;
+    while !path.is_char_boundary(start) {
+        start += 1;
+    }
+    format!("…{}", &path[start..])
+}
 
 fn damaged(why: impl Into<String>) -> LayersError {
     LayersError::Damaged {
@@ -49,11 +66,30 @@ fn unsupported(why: impl Into<String>) -> LayersError {
     }
 }
 
-/// Where each record sits among the groups: its path of group names, and the outermost
-/// hidden group around it, if any.
-fn groups(records: &[records::Record]) -> Result<Vec<(String, Option<String>)>, LayersError> {
-    let mut out = vec![(String::new(), None); records.len()];
-    let mut stack: Vec<(&str, bool)> = Vec::new();
+/// Keeps `text` among the first [`MAX_NOTES`] notes, or counts it in `left_out`.
+fn note(notes: &mut Vec<String>, left_out: &mut usize, text: String) {
+    if notes.len() < MAX_NOTES {
+        notes.push(text);
+    } else {
+        *left_out += 1;
+    }
+}
+
+/// A group as a layer sees it: its path of names (bounded), and the outermost hidden group
+/// around it (itself included), if any.
+#[derive(Clone, Debug, Default)]
+struct Place {
+    path: String,
+    hidden: Option<String>,
+}
+
+/// Where each record sits among the groups: an index into the groups' places (`None` outside
+/// every group).
+fn groups(records: &[records::Record]) -> Result<(Vec<Option<usize>>, Vec<Place>), LayersError> {
+    let mut out = vec![None; records.len()];
+    let mut places: Vec<Place> = Vec::new();
+    // The open groups: each one's place.
+    let mut stack: Vec<usize> = Vec::new();
     // The file stores the bottom record first; a group's own record is above its layers and
     // its bounding divider below them.
     for (i, r) in records.iter().enumerate().rev() {
@@ -64,19 +100,24 @@ fn groups(records: &[records::Record]) -> Result<Vec<(String, Option<String>)>, 
                         "groups nested more than {MAX_DEPTH} deep"
                     )));
                 }
-                stack.push((&r.name, r.hidden));
+                let parent = stack.last().map(|&p| &places[p]);
+                let path = match parent {
+                    Some(p) => bounded_path(format!("{}/{}", p.path, r.name)),
+                    None => bounded_path(r.name.clone()),
+                };
+                let hidden = parent
+                    .and_then(|p| p.hidden.clone())
+                    .or_else(|| r.hidden.then(|| bounded_path(r.name.clone())));
+                places.push(Place { path, hidden });
+                stack.push(places.len() - 1);
             }
             Some(_) => {
                 stack.pop();
             }
-            None => {
-                let path: Vec<&str> = stack.iter().map(|g| g.0).collect();
-                let hidden = stack.iter().find(|g| g.1).map(|g| g.0.to_owned());
-                out[i] = (path.join("/"), hidden);
-            }
+            None => out[i] = stack.last().copied(),
         }
     }
-    Ok(out)
+    Ok((out, places))
 }
 
 /// Reads a PSD or PSB file's bytes.
@@ -98,7 +139,8 @@ pub fn read_psd_with(bytes: &[u8], budget: &Budget) -> Result<Layered, LayersErr
     let mut file = Bytes::new(bytes);
     let (header, section) = header::read(&mut file)?;
     let (records, mut data) = records::read(section, header.large)?;
-    let places = groups(&records)?;
+    let (place_of, places) = groups(&records)?;
+    let no_place = Place::default();
     let (cw, ch) = (i64::from(header.width), i64::from(header.height));
     let colour_ids: &[i16] = match header.mode {
         Mode::Grey => &[0],
@@ -108,11 +150,17 @@ pub fn read_psd_with(bytes: &[u8], budget: &Budget) -> Result<Layered, LayersErr
     let mut spend = Spend::new(bytes.len());
     let mut layers = Vec::new();
     let mut notes = Vec::new();
-    let mut hidden_groups: Vec<String> = Vec::new();
+    // Notes beyond MAX_NOTES, counted.
+    let mut left_out = 0usize;
+    let mut hidden_groups: std::collections::HashSet<&str> = std::collections::HashSet::new();
     let mut colour: Vec<Vec<u8>> = vec![Vec::new(); colour_ids.len()];
     let mut alpha: Vec<u8> = Vec::new();
-    for (r, (path, hidden_group)) in records.iter().zip(&places) {
+    for (r, place) in records.iter().zip(&place_of) {
         budget.check()?;
+        let Place {
+            path,
+            hidden: hidden_group,
+        } = place.map_or(&no_place, |p| &places[p]);
         // The channels' data follow one another, layer by layer, in the records' order.
         let mut slices = Vec::with_capacity(r.channels.len());
         for &(id, len) in &r.channels {
@@ -127,15 +175,26 @@ pub fn read_psd_with(bytes: &[u8], budget: &Budget) -> Result<Layered, LayersErr
             format!("{path}/{}", r.name)
         };
         if let Some(g) = hidden_group {
-            if !hidden_groups.contains(g) {
-                notes.push(format!("group '{g}' is hidden: its layers are left out"));
-                hidden_groups.push(g.clone());
+            if hidden_groups.insert(g.as_str()) {
+                note(
+                    &mut notes,
+                    &mut left_out,
+                    format!("group '{g}' is hidden: its layers are left out"),
+                );
             }
-            notes.push(format!("layer '{name}' is hidden: left out"));
+            note(
+                &mut notes,
+                &mut left_out,
+                format!("layer '{name}' is hidden: left out"),
+            );
             continue;
         }
         if r.hidden {
-            notes.push(format!("layer '{name}' is hidden: left out"));
+            note(
+                &mut notes,
+                &mut left_out,
+                format!("layer '{name}' is hidden: left out"),
+            );
             continue;
         }
         let (w, h) = r.size();
@@ -153,18 +212,30 @@ pub fn read_psd_with(bytes: &[u8], budget: &Budget) -> Result<Layered, LayersErr
             )));
         }
         if w == 0 || h == 0 {
-            notes.push(format!("layer '{name}' has no pixels: left out"));
+            note(
+                &mut notes,
+                &mut left_out,
+                format!("layer '{name}' has no pixels: left out"),
+            );
             continue;
         }
         if clip[0] >= clip[2] || clip[1] >= clip[3] {
-            notes.push(format!("layer '{name}' lies outside the canvas: left out"));
+            note(
+                &mut notes,
+                &mut left_out,
+                format!("layer '{name}' lies outside the canvas: left out"),
+            );
             continue;
         }
         if !matches!(&r.blend, b"norm" | b"pass") {
-            notes.push(format!(
-                "layer '{name}' blends by '{}': drawn over the layers below as normal",
-                String::from_utf8_lossy(&r.blend).trim()
-            ));
+            note(
+                &mut notes,
+                &mut left_out,
+                format!(
+                    "layer '{name}' blends by '{}': drawn over the layers below as normal",
+                    String::from_utf8_lossy(&r.blend).trim()
+                ),
+            );
         }
         // Decoding holds the colour planes, transparency, one inflated channel and the
         // clipped RGBA at once.
@@ -217,8 +288,15 @@ pub fn read_psd_with(bytes: &[u8], budget: &Budget) -> Result<Layered, LayersErr
                     return Err(LayersError::TooManyLayers { max: MAX_PARTS });
                 }
             }
-            None => notes.push(format!("layer '{name}' has no visible pixel: left out")),
+            None => note(
+                &mut notes,
+                &mut left_out,
+                format!("layer '{name}' has no visible pixel: left out"),
+            ),
         }
+    }
+    if left_out > 0 {
+        notes.push(format!("... and {left_out} more notes (layers left out)"));
     }
     Ok(Layered {
         width: header.width,

@@ -378,6 +378,37 @@ static FIGURE: std::sync::LazyLock<Vec<layered::TestLayer>> =
 /// A small valid PSD and OpenRaster file (the test figure's six layers), to corrupt.
 static VALID_PSD: std::sync::LazyLock<Vec<u8>> =
     std::sync::LazyLock::new(|| layered::write_psd(&layered::figure()));
+/// The PSD reader's other paths, to corrupt: a PSB of 16 bits with ZIP-predicted channels
+/// and a group; a greyscale document of 16 bits with its layers in a tagged block (`Lr16`) and
+/// RLE channels; 32-bit floats with ZIP channels and no transparency.
+static VALID_PSD_VARIANTS: std::sync::LazyLock<Vec<Vec<u8>>> = std::sync::LazyLock::new(|| {
+    use layered::PsdSpec;
+    [
+        PsdSpec {
+            depth: 16,
+            compression: 3,
+            psb: true,
+            group: Some((2, false)),
+            ..PsdSpec::default()
+        },
+        PsdSpec {
+            mode: 1,
+            depth: 16,
+            compression: 1,
+            tagged: true,
+            ..PsdSpec::default()
+        },
+        PsdSpec {
+            depth: 32,
+            compression: 2,
+            alpha: false,
+            ..PsdSpec::default()
+        },
+    ]
+    .iter()
+    .map(|spec| layered::write_psd_spec(&FIGURE, spec))
+    .collect()
+});
 static VALID_ORA: std::sync::LazyLock<Vec<u8>> =
     std::sync::LazyLock::new(|| layered::write_ora(&layered::figure(), 2));
 
@@ -576,7 +607,7 @@ proptest! {
         header_edits in byte_edits(),
         cut in proptest::option::weighted(0.25, any::<usize>()),
     ) {
-        for valid in [&*VALID_PSD, &*VALID_ORA] {
+        for valid in [&*VALID_PSD, &*VALID_ORA].into_iter().chain(VALID_PSD_VARIANTS.iter()) {
             // Edits anywhere, and edits within the first kilobyte (headers, records, the zip's
             // first entries), where they change the structure rather than pixels.
             let mut bytes = corrupt_bytes(valid, &edits);
@@ -601,6 +632,13 @@ proptest! {
             psd[at % 700] = b;
         }
         layered(&psd);
+        for valid in VALID_PSD_VARIANTS.iter() {
+            let mut psd = valid.clone();
+            for &(at, b) in &record_edits {
+                psd[at % 900] = b;
+            }
+            layered(&psd);
+        }
     }
 
     #[test]

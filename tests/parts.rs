@@ -180,7 +180,7 @@ fn damaged_unsupported_and_empty_files_are_one_clear_line_each() {
         ("cmyk", write_psd_with(&figure(), 4, 8), |e| {
             matches!(e, LayersError::Unsupported { .. })
         }),
-        ("16-bit", write_psd_with(&figure(), 3, 16), |e| {
+        ("1-bit RGB", write_psd_with(&figure(), 3, 1), |e| {
             matches!(e, LayersError::Unsupported { .. })
         }),
         ("not layered", b"hello".to_vec(), |e| {
@@ -394,8 +394,9 @@ fn imagemagick() -> Option<std::path::PathBuf> {
     None
 }
 
-/// A PSD written by another program (ImageMagick, as `.ci/run` installs it): Photoshop's RLE
-/// channels, the layers' names and places as written, and a character made from it.
+/// A PSD written by another program (ImageMagick, as `.ci/run` installs it): RLE channels,
+/// and its default for layers read from PNG files (ZIP channels), the layers' names and places
+/// as written, and a character made from it.
 #[test]
 fn a_psd_written_by_imagemagick_reads_as_written() {
     let Some(im) = imagemagick() else {
@@ -465,31 +466,43 @@ fn a_psd_written_by_imagemagick_reads_as_written() {
         format!("{w}x{h}"),
         ")".into(),
     ]);
-    args.extend(["-insert", "0", "-compress", "RLE"].map(String::from));
-    let out = dir.join("im.psd");
-    args.push(out.display().to_string());
-    let run = std::process::Command::new(&im)
-        .args(&args)
-        .output()
-        .expect("ImageMagick runs");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let layered = read_layered(&std::fs::read(&out).expect("psd")).expect("reads");
-    let names: Vec<&str> = layered.layers.iter().map(|l| l.name.as_str()).collect();
-    assert_eq!(names, COLOURS.map(|c| c.0));
-    assert_eq!((layered.layers[0].left, layered.layers[0].top), (125, 60));
-    let mine = read_layered(&write_psd(&figure())).expect("mine");
-    for (a, b) in layered.layers.iter().zip(&mine.layers) {
-        assert_eq!(
-            (a.left, a.top, &a.image),
-            (b.left, b.top, &b.image),
+    args.extend(["-insert", "0"].map(String::from));
+    // RLE as asked, and ImageMagick's default for layers read from PNG files: their ZIP
+    // compression carried over to the PSD's channels (as `-compress Zip` asks too).
+    let mut layered = None;
+    for compress in [Some("RLE"), None, Some("Zip")] {
+        let mut args = args.clone();
+        if let Some(c) = compress {
+            args.extend(["-compress".into(), c.into()]);
+        }
+        let out = dir.join(format!("im-{}.psd", compress.unwrap_or("default")));
+        args.push(out.display().to_string());
+        let run = std::process::Command::new(&im)
+            .args(&args)
+            .output()
+            .expect("ImageMagick runs");
+        assert!(
+            run.status.success(),
             "{}",
-            a.name
+            String::from_utf8_lossy(&run.stderr)
         );
+        let read = read_layered(&std::fs::read(&out).expect("psd"))
+            .unwrap_or_else(|e| panic!("{compress:?}: {e}"));
+        let names: Vec<&str> = read.layers.iter().map(|l| l.name.as_str()).collect();
+        assert_eq!(names, COLOURS.map(|c| c.0), "{compress:?}");
+        assert_eq!((read.layers[0].left, read.layers[0].top), (125, 60));
+        let mine = read_layered(&write_psd(&figure())).expect("mine");
+        for (a, b) in read.layers.iter().zip(&mine.layers) {
+            assert_eq!(
+                (a.left, a.top, &a.image),
+                (b.left, b.top, &b.image),
+                "{compress:?}: {}",
+                a.name
+            );
+        }
+        layered = Some(read);
     }
+    let layered = layered.expect("read");
     let c = character(&layered, &CharacterOptions::default()).expect("character");
     assert_eq!((c.parts.len(), c.joints.len()), (6, 5));
 }

@@ -93,7 +93,7 @@ fn unreadable_layered_pictures_are_one_line_and_write_nothing() {
     hidden.iter_mut().for_each(|l| l.hidden = true);
     let cases: [(&str, Vec<u8>, &str); 4] = [
         ("cmyk.psd", write_psd_with(&figure(), 4, 8), "CMYK"),
-        ("deep.psd", write_psd_with(&figure(), 3, 16), "16 bits"),
+        ("lab.psd", write_psd_with(&figure(), 9, 8), "Lab colour"),
         ("hidden.ora", write_ora(&hidden, 0), "no visible layer"),
         ("cut.psd", write_psd(&figure())[..400].to_vec(), "damaged"),
     ];

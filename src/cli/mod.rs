@@ -212,8 +212,8 @@ enum Command {
     /// width and height), else the outline's bounding box as a square. .svg or .png draw the
     /// mesh (a picture's mesh textured by it).
     ///
-    /// A layered picture (.psd: 8-bit RGB; .ora: OpenRaster, as Krita, GIMP and MyPaint
-    /// write it) makes a character in parts: every visible layer a part (groups flattened,
+    /// A layered picture (.psd or .psb: RGB or greyscale, 8, 16 or 32 bits; .ora: OpenRaster,
+    /// as Krita, GIMP and MyPaint write it; at most 256 layers with pixels) makes a character in parts: every visible layer a part (groups flattened,
     /// hidden layers skipped with a note) meshed from its own transparency, the vertices shared
     /// out by area, stacked in the file's order, with a joint wherever two layers overlap.
     /// -o OUT.json writes a studio project (its picture: the layered file); -o OUT.obj writes

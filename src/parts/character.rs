@@ -126,6 +126,17 @@ pub enum CharacterError {
         /// Height needed.
         height: u32,
     },
+    /// More layers than a character is made of.
+    #[error("{count} layers, more than a character's {max} parts: merge or hide some")]
+    TooManyParts {
+        /// Layers given.
+        count: usize,
+        /// The most parts ([`crate::parts::MAX_PARTS`]).
+        max: usize,
+    },
+    /// Making the character was cancelled or ran out of time (see [`crate::Budget`]).
+    #[error("making the character stopped: {0}")]
+    Stopped(#[from] crate::Stopped),
 }
 
 /// Where each layer's padded crop lies in the atlas: `[left, top, width, height]` in pixels,
@@ -368,6 +379,28 @@ pub fn character(
     layered: &Layered,
     options: &CharacterOptions,
 ) -> Result<Character, CharacterError> {
+    character_with(layered, options, &crate::Budget::unlimited())
+}
+
+/// [`character()`], checking `budget` between layers (meshing each, and finding each one's
+/// joints), so that a caller can cancel the making of a large character or give it a
+/// deadline. Layers beyond [`crate::parts::MAX_PARTS`] are refused.
+///
+/// # Errors
+/// Those of [`character()`]; [`CharacterError::TooManyParts`];
+/// [`CharacterError::Stopped`] when the budget is cancelled or runs out.
+pub fn character_with(
+    layered: &Layered,
+    options: &CharacterOptions,
+    budget: &crate::Budget,
+) -> Result<Character, CharacterError> {
+    let max = crate::parts::MAX_PARTS;
+    if layered.layers.len() > max {
+        return Err(CharacterError::TooManyParts {
+            count: layered.layers.len(),
+            max,
+        });
+    }
     let mut notes = layered.notes.clone();
     let (atlas_image, places) = atlas(&layered.layers)?;
     let areas: Vec<f64> = layered.layers.iter().map(opaque_area).collect();
@@ -376,6 +409,7 @@ pub fn character(
     let mut meshes: Vec<PartMesh> = Vec::new();
     let mut first_error = None;
     for (index, layer) in layered.layers.iter().enumerate() {
+        budget.check()?;
         let share = (options.vertices as f64 * areas[index] / total).round() as usize;
         let mesh_options = MeshOptions::default()
             .with_vertices(share.max(options.min_part_vertices))
@@ -429,6 +463,7 @@ pub fn character(
     let mut local_joints: Vec<(usize, u32, usize, u32)> = Vec::new();
     if options.joints {
         for i in 0..meshes.len() {
+            budget.check()?;
             for j in i + 1..meshes.len() {
                 let (la, lb) = (
                     &layered.layers[meshes[i].layer],

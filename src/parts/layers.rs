@@ -79,7 +79,20 @@ pub enum LayersError {
     /// The file could not be read.
     #[error("{0}")]
     Read(String),
+    /// More layers with pixels than a character is made of.
+    #[error("the layered picture has more than {max} visible layers with pixels, more than a character's {max} parts: merge or hide some")]
+    TooManyLayers {
+        /// The most layers read ([`MAX_PARTS`]).
+        max: usize,
+    },
+    /// The reading was cancelled or ran out of time (see [`crate::Budget`]).
+    #[error("reading the layered picture stopped: {0}")]
+    Stopped(#[from] crate::Stopped),
 }
+
+/// The most layers with pixels a layered picture may give (each becomes a part of a
+/// character; more are refused in one line).
+pub const MAX_PARTS: usize = 256;
 
 /// The decoded bytes a reader may hold for a file of a given size: `PER_INPUT_BYTE` per byte
 /// of the file plus `FIXED` (a blank layer of a large canvas compresses to almost nothing),
@@ -228,11 +241,13 @@ pub fn layered_format(bytes: &[u8]) -> Option<&'static str> {
     }
 }
 
-/// Whether `path` names a layered picture by its extension (`.psd`, `.ora`).
+/// Whether `path` names a layered picture by its extension (`.psd`, `.psb`, `.ora`).
 pub fn is_layered_path(path: &std::path::Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("psd") || e.eq_ignore_ascii_case("ora"))
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        ["psd", "psb", "ora"]
+            .iter()
+            .any(|known| e.eq_ignore_ascii_case(known))
+    })
 }
 
 /// Reads a PSD or ORA file's bytes (told by their first bytes).
@@ -242,9 +257,20 @@ pub fn is_layered_path(path: &std::path::Path) -> bool {
 /// [`LayersError::Empty`] when nothing visible is left.
 #[cfg(feature = "layers")]
 pub fn read_layered(bytes: &[u8]) -> Result<Layered, LayersError> {
+    read_layered_with(bytes, &crate::Budget::unlimited())
+}
+
+/// [`read_layered`], checking `budget` between layers (and between a layer's channels), so
+/// that a caller can cancel the reading of a large file or give it a deadline.
+///
+/// # Errors
+/// Those of [`read_layered`]; [`LayersError::Stopped`] when the budget is cancelled or runs
+/// out.
+#[cfg(feature = "layers")]
+pub fn read_layered_with(bytes: &[u8], budget: &crate::Budget) -> Result<Layered, LayersError> {
     let layered = match layered_format(bytes) {
-        Some("PSD") => super::psd::read_psd(bytes)?,
-        Some(_) => super::ora::read_ora(bytes)?,
+        Some("PSD") => super::psd::read_psd_with(bytes, budget)?,
+        Some(_) => super::ora::read_ora_with(bytes, budget)?,
         None => return Err(LayersError::UnknownFormat),
     };
     let mut layered = layered;

@@ -48,14 +48,16 @@ mod ora;
 mod psd;
 
 pub use character::{
-    atlas, character, AtlasPlaces, Character, CharacterError, CharacterOptions, Joint, Part,
-    MAX_ATLAS_SIDE,
+    atlas, character, character_with, AtlasPlaces, Character, CharacterError, CharacterOptions,
+    Joint, Part, MAX_ATLAS_SIDE,
 };
 pub use joints::{pieces_of, JointedDeformer, Placement, PlacementReport, Weld};
-pub use layers::{is_layered_path, layered_format, Layer, LayerBudget, Layered, LayersError};
+pub use layers::{
+    is_layered_path, layered_format, Layer, LayerBudget, Layered, LayersError, MAX_PARTS,
+};
 #[cfg(feature = "layers")]
-pub use layers::{read_layered, read_layered_file};
+pub use layers::{read_layered, read_layered_file, read_layered_with};
 #[cfg(feature = "layers")]
-pub use ora::read_ora;
+pub use ora::{read_ora, read_ora_with};
 #[cfg(feature = "layers")]
-pub use psd::read_psd;
+pub use psd::{read_psd, read_psd_with};

@@ -4,8 +4,9 @@
 
 use std::io::{Cursor, Read};
 
-use super::layers::{apply_opacity, crop, one_line, Layer, Layered, LayersError, Spend};
+use super::layers::{apply_opacity, crop, one_line, Layer, Layered, LayersError, Spend, MAX_PARTS};
 use crate::render::raster;
+use crate::Budget;
 
 const FORMAT: &str = "ORA";
 
@@ -159,8 +160,17 @@ fn png_size(bytes: &[u8]) -> Option<(u32, u32)> {
 ///
 /// # Errors
 /// [`LayersError::Damaged`] for a zip or `stack.xml` that does not read or a layer's PNG that
-/// does not decode, [`LayersError::TooLarge`] beyond the file's [`super::LayerBudget`].
+/// does not decode, [`LayersError::TooLarge`] beyond the file's [`super::LayerBudget`],
+/// [`LayersError::TooManyLayers`] beyond [`MAX_PARTS`] layers with pixels.
 pub fn read_ora(bytes: &[u8]) -> Result<Layered, LayersError> {
+    read_ora_with(bytes, &Budget::unlimited())
+}
+
+/// [`read_ora`], checking `budget` between layers.
+///
+/// # Errors
+/// Those of [`read_ora`]; [`LayersError::Stopped`] when the budget runs out or is cancelled.
+pub fn read_ora_with(bytes: &[u8], budget: &Budget) -> Result<Layered, LayersError> {
     let mut spend = Spend::new(bytes.len());
     let mut archive =
         zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| damaged(e.to_string()))?;
@@ -197,6 +207,7 @@ pub fn read_ora(bytes: &[u8]) -> Result<Layered, LayersError> {
     let mut layers = Vec::new();
     // stack.xml lists the topmost first; parts are kept bottom first.
     for e in entries.iter().rev() {
+        budget.check()?;
         if !e.visible {
             notes.push(format!("layer '{}' is hidden: left out", e.name));
             continue;
@@ -217,6 +228,9 @@ pub fn read_ora(bytes: &[u8]) -> Result<Layered, LayersError> {
                     left,
                     top,
                 });
+                if layers.len() > MAX_PARTS {
+                    return Err(LayersError::TooManyLayers { max: MAX_PARTS });
+                }
             }
             None => notes.push(format!("layer '{}' has no visible pixel: left out", e.name)),
         }

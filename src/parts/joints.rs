@@ -4,11 +4,38 @@
 //! exactly (both vertices are one unknown). Morphing moves each piece by its own BDMORPH frame
 //! and then places the pieces so that the joints stay together ([`Placement`]).
 
-use crate::mesh::PlanarMesh;
+use crate::mesh::{MeshError, PlanarMesh};
 
 /// Each vertex's piece (triangles connected through shared vertices), numbered in the order of
 /// their first triangle; `u32::MAX` for a vertex no triangle uses. Also how many pieces.
-pub fn pieces_of(faces: &[[u32; 3]], n: usize) -> (Vec<u32>, usize) {
+///
+/// # Errors
+/// [`MeshError::IndexOutOfRange`] for the first face that names a vertex `>= n`.
+///
+/// ```
+/// use bdmorph::parts::pieces_of;
+/// let (piece, count) = pieces_of(&[[0, 1, 2], [3, 4, 5]], 7)?;
+/// assert_eq!((piece[4], piece[6], count), (1, u32::MAX, 2));
+/// assert!(pieces_of(&[[0, 1, 9]], 3).is_err());
+/// # Ok::<(), bdmorph::MeshError>(())
+/// ```
+pub fn pieces_of(faces: &[[u32; 3]], n: usize) -> Result<(Vec<u32>, usize), MeshError> {
+    if let Some((face, &vertex)) = faces
+        .iter()
+        .enumerate()
+        .find_map(|(i, f)| f.iter().find(|&&v| v as usize >= n).map(|v| (i, v)))
+    {
+        return Err(MeshError::IndexOutOfRange {
+            face,
+            vertex,
+            n_vertices: n,
+        });
+    }
+    Ok(pieces_in_range(faces, n))
+}
+
+/// [`pieces_of`] for faces whose indices are all below `n` (checked by the caller).
+fn pieces_in_range(faces: &[[u32; 3]], n: usize) -> (Vec<u32>, usize) {
     let mut parent: Vec<u32> = (0..n as u32).collect();
     fn find(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
@@ -154,7 +181,14 @@ impl Placement {
     /// Prepares the placement of `rest`'s pieces tied by `joints`.
     pub fn new(rest: &PlanarMesh, joints: &[[u32; 2]]) -> Placement {
         let n = rest.positions.len();
-        let (piece_of, pieces) = pieces_of(&rest.faces, n);
+        // Faces naming a vertex out of range (an invalid mesh) tie nothing.
+        let faces: Vec<[u32; 3]> = rest
+            .faces
+            .iter()
+            .copied()
+            .filter(|f| f.iter().all(|&v| (v as usize) < n))
+            .collect();
+        let (piece_of, pieces) = pieces_in_range(&faces, n);
         let joints: Vec<[u32; 2]> = joints
             .iter()
             .copied()
@@ -167,7 +201,7 @@ impl Placement {
             })
             .collect();
         let mut area = vec![0.0; pieces];
-        for f in &rest.faces {
+        for f in &faces {
             let p = piece_of[f[0] as usize];
             if p != u32::MAX {
                 area[p as usize] += rest.signed_area(f).abs();
@@ -422,7 +456,7 @@ mod tests {
         let weld = Weld::new(&rest, &joints);
         assert_eq!(weld.mesh.positions.len(), 10);
         assert_eq!(weld.of[1], weld.of[4]);
-        assert_eq!(pieces_of(&weld.mesh.faces, 10).1, 1);
+        assert_eq!(pieces_of(&weld.mesh.faces, 10).unwrap().1, 1);
         let mut out = vec![[0.0; 2]; 12];
         let mut w = Vec::new();
         weld.gather(&rest.positions, &mut w);

@@ -20,7 +20,9 @@ use bdmorph::inbetween::{
 };
 use bdmorph::param::bounded::{flatten, BoundedDistortion, BoundedOptions};
 use bdmorph::param::{energies, ParamError, ParamMethod, ParamOptions, Parameterization};
-use bdmorph::parts::{pieces_of, Placement, Weld};
+use bdmorph::parts::{
+    character, pieces_of, CharacterOptions, JointedDeformer, Layer, Layered, Placement, Weld,
+};
 use bdmorph::render::{raster, Background, Drawing, Image, ImageSize, Viewport};
 use bdmorph::{
     generate, Budget, KeyframePath, MeshError, Morph, MorphError, MorphOptions, PlanarMesh,
@@ -64,14 +66,14 @@ fn no_panic<T>(what: &str, f: impl FnOnce() -> T) -> T {
 #[test]
 fn bounded_distortion_on_an_empty_mesh_is_an_error() {
     for mesh in [
-        SurfaceMesh {
+        SurfaceMesh::from(&PlanarMesh {
             positions: vec![],
             faces: vec![],
-        },
-        SurfaceMesh {
-            positions: vec![[0.0; 3]; 4],
+        }),
+        SurfaceMesh::from(&PlanarMesh {
+            positions: vec![[0.0; 2]; 4],
             faces: vec![],
-        },
+        }),
     ] {
         for pins in [&[][..], &[(0u32, [0.0, 0.0])][..]] {
             let r = no_panic("BoundedDistortion::new", || {
@@ -130,13 +132,16 @@ fn energies_of_a_too_short_map_are_an_error() {
 #[test]
 fn pieces_of_an_index_out_of_range_is_an_error() {
     let r = no_panic("pieces_of", || pieces_of(&[[0, 1, 2], [2, 3, 7]], 4));
-    assert_eq!(
-        r,
-        Err(MeshError::IndexOutOfRange {
-            face: 1,
-            vertex: 7,
-            n_vertices: 4
-        })
+    assert!(
+        matches!(
+            r,
+            Err(MeshError::IndexOutOfRange {
+                face: 1,
+                vertex: 7,
+                n_vertices: 4
+            })
+        ),
+        "{r:?}"
     );
     assert!(pieces_of(&[[0, 1, u32::MAX]], 3).is_err());
     let (of, count) = pieces_of(&[[0, 1, 2], [3, 4, 5], [2, 1, 6]], 8).unwrap();
@@ -362,10 +367,10 @@ fn param_options_out_of_range_are_refused_by_name() {
             ..
         })
     ));
-    let empty = SurfaceMesh {
+    let empty = SurfaceMesh::from(&PlanarMesh {
         positions: vec![],
         faces: vec![],
-    };
+    });
     assert!(Parameterization::new(&empty, ParamMethod::Tutte, ParamOptions::default()).is_err());
 }
 
@@ -631,6 +636,54 @@ proptest! {
         let mut out = positions.clone();
         no_panic("Placement::apply", || placement.apply(&mut out));
         no_panic("Weld::new", || Weld::new(&rest, &joints));
+        if let Ok(mut jointed) = no_panic("JointedDeformer::new", || {
+            JointedDeformer::new(&rest, &joints, PoseMethod::arap())
+        }) {
+            let pins: Vec<u32> = joints.iter().map(|j| j[0]).collect();
+            if no_panic("JointedDeformer::set_pins", || jointed.set_pins(&pins)).is_ok() {
+                let targets = vec![[1.0, 2.0]; pins.len()];
+                no_panic("JointedDeformer::drag", || jointed.drag(&targets)).ok();
+            }
+            no_panic("JointedDeformer::set_positions", || jointed.set_positions(&positions)).ok();
+        }
+    }
+
+    #[test]
+    fn a_character_takes_any_layers(
+        layers in proptest::collection::vec(
+            (0u32..24, 0u32..24, -30i64..60, -30i64..60, 0usize..3000, any::<u8>()),
+            0..4,
+        ),
+        width in 0u32..64,
+        height in 0u32..64,
+        vertices in prop_oneof![Just(0usize), 3usize..300],
+    ) {
+        let layered = Layered {
+            width,
+            height,
+            layers: layers
+                .iter()
+                .enumerate()
+                .map(|(i, &(w, h, left, top, len, alpha))| Layer {
+                    name: format!("layer {i}"),
+                    // The pixels' length is sometimes not width x height x 4.
+                    image: Image {
+                        width: w,
+                        height: h,
+                        rgba: if len % 2 == 0 {
+                            vec![alpha; (w * h * 4) as usize]
+                        } else {
+                            vec![alpha; len]
+                        },
+                    },
+                    left,
+                    top,
+                })
+                .collect(),
+            notes: vec![],
+        };
+        let options = CharacterOptions::default().with_vertices(vertices);
+        no_panic("character", || character(&layered, &options)).ok();
     }
 
     #[test]
@@ -670,7 +723,14 @@ proptest! {
         faces in faces(10),
         width in 0u32..48,
         height in 0u32..48,
-        corner_uv in proptest::option::of(proptest::collection::vec([[coordinate(), coordinate()]; 3], 0..12)),
+        corner_uv in proptest::option::of(proptest::collection::vec(
+            [
+                [coordinate(), coordinate()],
+                [coordinate(), coordinate()],
+                [coordinate(), coordinate()],
+            ],
+            0..12,
+        )),
         depth in proptest::option::of(proptest::collection::vec(any::<i8>(), 0..12)),
         view in [coordinate(), coordinate(), coordinate(), coordinate()],
         transparent in any::<bool>(),

@@ -80,7 +80,9 @@ pub struct Weld {
 }
 
 impl Weld {
-    /// Welds `joints` (pairs of vertices of `rest`) into single vertices.
+    /// Welds `joints` (pairs of vertices of `rest`) into single vertices. Joints naming a
+    /// vertex out of range are ignored; a face naming one keeps an index out of range
+    /// (`u32::MAX`), which whatever uses the welded mesh refuses.
     pub fn new(rest: &PlanarMesh, joints: &[[u32; 2]]) -> Weld {
         let n = rest.positions.len();
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -114,7 +116,7 @@ impl Weld {
             faces: rest
                 .faces
                 .iter()
-                .map(|f| f.map(|v| of[v as usize]))
+                .map(|f| f.map(|v| of.get(v as usize).copied().unwrap_or(u32::MAX)))
                 .collect(),
         };
         Weld { of, mesh, first }
@@ -126,16 +128,23 @@ impl Weld {
     }
 
     /// `positions` of the whole mesh gathered onto the welded one (each welded vertex from its
-    /// first vertex).
+    /// first vertex; NaN for a vertex `positions` is too short to hold).
     pub fn gather(&self, positions: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
         out.clear();
-        out.extend(self.first.iter().map(|&v| positions[v as usize]));
+        out.extend(
+            self.first
+                .iter()
+                .map(|&v| positions.get(v as usize).copied().unwrap_or([f64::NAN; 2])),
+        );
     }
 
-    /// The welded mesh's positions spread back onto the whole mesh.
+    /// The welded mesh's positions spread back onto the whole mesh (a vertex `welded` is too
+    /// short to hold is left as it is).
     pub fn scatter(&self, welded: &[[f64; 2]], out: &mut [[f64; 2]]) {
         for (o, &w) in out.iter_mut().zip(&self.of) {
-            *o = welded[w as usize];
+            if let Some(&p) = welded.get(w as usize) {
+                *o = p;
+            }
         }
     }
 }
@@ -295,8 +304,16 @@ impl Placement {
         &self.joints
     }
 
-    /// Places the pieces of `positions` (a frame of the rest mesh's vertices).
+    /// Places the pieces of `positions` (a frame of the rest mesh's vertices). Positions of
+    /// another length than the rest mesh's vertices are left as they are, and the report's
+    /// `largest_gap` is infinite.
     pub fn apply(&mut self, positions: &mut [[f64; 2]]) -> PlacementReport {
+        if positions.len() != self.piece_of.len() {
+            return PlacementReport {
+                largest_gap: f64::INFINITY,
+                ..PlacementReport::default()
+            };
+        }
         if self.joints.is_empty() {
             return PlacementReport::default();
         }

@@ -172,6 +172,8 @@ pub(super) type InteriorPins = [(usize, u32, [f64; 2])];
 /// [`lay_over`] with `pins` (the boundary's and the interior pairs' `interior`); when
 /// triangles stay flipped, the interior pairs next to them are let go (and their reports say
 /// so) if that leaves fewer flips. Returns the layout and the pins it holds.
+// (The stages' inputs, and the budget bounding them.)
+#[allow(clippy::too_many_arguments)]
 pub(super) fn lay_out_with_pairs(
     mesh: &PlanarMesh,
     pins: Pins,

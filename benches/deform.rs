@@ -86,7 +86,7 @@ fn bench(c: &mut Criterion) {
         let mut drag = c.benchmark_group(format!("deform_drag/{label}"));
         for (name, mesh) in &meshes {
             let pins = handles(mesh);
-            let mut pose = Deformer::new(mesh, method).expect("set up");
+            let mut pose = Deformer::new(mesh, method.clone()).expect("set up");
             pose.set_pins(&pins).expect("pins");
             let mut targets: Vec<[f64; 2]> =
                 pins.iter().map(|&v| mesh.positions[v as usize]).collect();
@@ -106,7 +106,7 @@ fn bench(c: &mut Criterion) {
         let mut repin = c.benchmark_group(format!("deform_set_pins/{label}"));
         for (name, mesh) in &meshes {
             let pins = handles(mesh);
-            let mut pose = Deformer::new(mesh, method).expect("set up");
+            let mut pose = Deformer::new(mesh, method.clone()).expect("set up");
             repin.bench_function(BenchmarkId::from_parameter(name), |b| {
                 b.iter(|| pose.set_pins(&pins).expect("pins"))
             });

@@ -420,7 +420,8 @@ fn bench_warm_frame(c: &mut Criterion, cases: &mut [Case]) {
             group.bench_function(BenchmarkId::from_parameter(case.n), |b| {
                 let (morph, out, at) = state.get_or_insert_with(|| {
                     let m = case.meshes();
-                    let mut morph = Morph::new(&m.source, &m.target, options).expect("morph");
+                    let mut morph =
+                        Morph::new(&m.source, &m.target, options.clone()).expect("morph");
                     let mut out = vec![[0.0; 2]; m.source.positions.len()];
                     morph.frame_into(0.0, &mut out).expect("frame");
                     (morph, out, 1)

@@ -156,7 +156,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if only.is_some_and(|o| o != i) {
             continue;
         }
-        let mut morph = Morph::with_program(program.clone(), &a, &b, options)?;
+        let mut morph = Morph::with_program(program.clone(), &a, &b, options.clone())?;
         let mut out = vec![[0.0; 2]; a.positions.len()];
         morph.frame_into(0.0, &mut out)?;
         let (mut its, mut facts, mut cgs, mut frames) = (0u64, 0u64, 0u64, 0u64);
@@ -169,7 +169,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for round in 0..rounds {
             if one_way && round > 0 {
                 let before = cpu_seconds(origin);
-                morph = Morph::with_program(program.clone(), &a, &b, options)?;
+                morph = Morph::with_program(program.clone(), &a, &b, options.clone())?;
                 morph.frame_into(0.0, &mut out)?;
                 cpu_setup += cpu_seconds(origin) - before;
             }

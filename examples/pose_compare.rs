@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         PoseMethod::arap(),
         PoseMethod::bounded(4.0),
     ] {
-        let mut pose = Deformer::new(&rest, method)?;
+        let mut pose = Deformer::new(&rest, method.clone())?;
         pose.set_pins(&pins)?;
         let mut targets = start.clone();
         let shoulder = [0.6, 1.35];

@@ -62,7 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         PoseMethod::arap(),
         PoseMethod::bounded(BOUND),
     ] {
-        let mut pose = Deformer::new(&rest, method)?;
+        let mut pose = Deformer::new(&rest, method.clone())?;
         pose.set_pins(&pins)?;
         let mut targets = start.clone();
         let started = std::time::Instant::now();
@@ -99,7 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         PoseMethod::arap(),
         PoseMethod::bounded(3.0),
     ] {
-        let mut pose = Deformer::new(&rest, method)?;
+        let mut pose = Deformer::new(&rest, method.clone())?;
         pose.set_pins(&pins)?;
         let mut targets = start.clone();
         let (mut most_flipped, mut unmet) = (0, 0);

@@ -303,7 +303,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let defaults = InbetweenOptions::default();
-    let morph = defaults.morph.with_placement(placement);
+    let morph = defaults.morph.clone().with_placement(placement);
     let options = defaults.with_vertices(vertices).with_morph(morph);
     println!(
         "Walk cycles from {} (drawings scaled up {SCALE}× by nearest neighbour), about {vertices} vertices, BDMORPH's frames placed by {placement:?}.",

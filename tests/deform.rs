@@ -201,7 +201,7 @@ fn soft_handles_move_the_whole_mesh_rigidly_when_every_handle_moves_rigidly() {
         .into_iter()
         .flat_map(|a| [(a, kvf_converging()), (a, sd_converging())])
     {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let (s, c) = angle.sin_cos();
         let motion = |p: [f64; 2]| [c * p[0] - s * p[1] + 0.3, s * p[0] + c * p[1] - 1.2];
@@ -231,7 +231,7 @@ fn soft_handles_tighten_as_their_weight_grows() {
     targets[3] = [13.0, 4.0];
     targets[4] = [12.0, 4.3];
     for method in [kvf_converging(), sd_converging()] {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut residuals = Vec::new();
         for weight in [1.0, 10.0, 100.0, 1000.0, 10000.0] {
@@ -263,7 +263,7 @@ fn soft_handles_tighten_as_their_weight_grows() {
     }
     // ARAP and bounded pins are hard: met exactly.
     for method in [PoseMethod::arap(), PoseMethod::bounded(3.0)] {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let report = settle(&mut pose, &targets);
         assert_eq!(report.pin_residual, 0.0, "{}", method.name());
@@ -289,7 +289,7 @@ fn every_method_returns_the_rest_shape_when_the_hand_comes_back() {
         PoseMethod::bounded(2.0),
         PoseMethod::sd(),
     ] {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut targets = start.clone();
         let mut furthest: f64 = 0.0;
@@ -334,7 +334,7 @@ fn bounded_and_sd_flip_nothing_on_a_drag_that_folds_the_others() {
         PoseMethod::bounded(k),
         PoseMethod::sd(),
     ] {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut targets = start.clone();
         for step in 1..=20 {
@@ -407,7 +407,7 @@ fn pieces_and_holes_pose_with_every_method() {
         PoseMethod::Bounded(BoundedPoseOptions::new(2.0).with_arap_iterations(50)),
         sd_converging(),
     ] {
-        let mut pose = Deformer::new(&mesh, method).expect("set up");
+        let mut pose = Deformer::new(&mesh, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let report = settle(&mut pose, &targets);
         let err = max_distance(pose.positions(), &expected);

@@ -115,7 +115,7 @@ fn large_drags_are_finite_and_reported_as_they_are() {
     let start = places(&rest, &pins);
     for (name, method) in methods() {
         for distance in [2.0, 20.0, 50.0, 100.0] {
-            let mut pose = Deformer::new(&rest, method).expect("set up");
+            let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
             pose.set_pins(&pins).expect("pins");
             let mut t = start.clone();
             t[5] = [t[5][0] + distance * size, t[5][1] + 0.3 * distance * size];
@@ -161,10 +161,10 @@ fn one_large_drag_is_twenty_small_ones_for_every_method() {
             let what = format!("{name}, {drag}");
             let mut t = start.clone();
             t[5] = goal;
-            let mut one = Deformer::new(&rest, method).expect("set up");
+            let mut one = Deformer::new(&rest, method.clone()).expect("set up");
             one.set_pins(&pins).expect("pins");
             let r1 = settle(&mut one, &t, 3000);
-            let mut many = Deformer::new(&rest, method).expect("set up");
+            let mut many = Deformer::new(&rest, method.clone()).expect("set up");
             many.set_pins(&pins).expect("pins");
             for k in 1..=20 {
                 let s = f64::from(k) / 20.0;
@@ -182,7 +182,7 @@ fn one_large_drag_is_twenty_small_ones_for_every_method() {
             check_honest(&what, &rest, &many, &t, &r20);
             if apart > 1e-8 {
                 let bound = match method {
-                    PoseMethod::Bounded(o) => o.max_distortion * (1.0 + 1e-3),
+                    PoseMethod::Bounded(ref o) => o.max_distortion * (1.0 + 1e-3),
                     _ => 10.0 * (1.0 + 1e-9),
                 };
                 for r in [&r1, &r20] {
@@ -244,7 +244,7 @@ fn a_drag_that_cannot_be_followed_leaves_a_usable_deformer() {
     // Targets beyond floating point: the pose before the drag is kept, said so, and the
     // next drag works.
     for (name, method) in methods() {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut t = start.clone();
         t[0] = [-1e308, 0.0];
@@ -321,7 +321,7 @@ fn the_figures_drags_with_flip_free_kvf_and_sd() {
     let mut raised = Vec::new();
     let mut chest_flips = Vec::new();
     for method in [flip_free(), PoseMethod::arap(), PoseMethod::sd()] {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut t = start.clone();
         for k in 1..=20 {
@@ -335,7 +335,7 @@ fn the_figures_drags_with_flip_free_kvf_and_sd() {
         }
         eprintln!("raised, {}: {report:?}", method.name());
         raised.push(report.max_distortion);
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&pins).expect("pins");
         let mut t = start.clone();
         let mut most = 0;

@@ -167,7 +167,7 @@ fn methods() -> [PoseMethod; 4] {
 /// `None`: no weights at all), the pins moved in 20 steps, then dragged at the end until
 /// the pose settles. Returns the pose.
 fn pose(scene: &Scene, method: PoseMethod, weights: Option<&[f64]>) -> Vec<[f64; 2]> {
-    let mut pose = Deformer::new(&scene.rest, method).expect("set up");
+    let mut pose = Deformer::new(&scene.rest, method.clone()).expect("set up");
     pose.set_pins(&scene.pins).expect("pins");
     pose.set_stiffness(weights).expect("stiffness");
     for k in 1..=20 {
@@ -208,8 +208,8 @@ fn worst(scene: &Scene, method: PoseMethod, weight: f64) -> (f64, f64) {
 /// method, on one scene.
 fn stiff_region_stays_rigid(scene: &Scene) {
     for method in methods() {
-        let (unweighted, _) = worst(scene, method, 1.0);
-        let (painted, other) = worst(scene, method, STIFF);
+        let (unweighted, _) = worst(scene, method.clone(), 1.0);
+        let (painted, other) = worst(scene, method.clone(), STIFF);
         eprintln!(
             "{}: painted region {unweighted:.4} unweighted, {painted:.5} at weight {STIFF}; \
              the rest {other:.3}",
@@ -245,8 +245,8 @@ fn weights_of_one_change_no_bit() {
     let scene = strip();
     let ones = vec![1.0; scene.rest.faces.len()];
     for method in methods() {
-        let plain = pose(&scene, method, None);
-        let weighted = pose(&scene, method, Some(&ones));
+        let plain = pose(&scene, method.clone(), None);
+        let weighted = pose(&scene, method.clone(), Some(&ones));
         assert_eq!(plain, weighted, "{}", method.name());
     }
 }
@@ -264,7 +264,7 @@ fn measure_weights() {
                 continue;
             }
             for weight in [1.0, 10.0, 100.0, 1000.0, 10000.0] {
-                let (painted, other) = worst(&scene, method, weight);
+                let (painted, other) = worst(&scene, method.clone(), weight);
                 eprintln!(
                     "{name} {:8} weight {weight:>6}: painted {painted:.5}, rest {other:.4}",
                     method.name()
@@ -285,10 +285,10 @@ fn set_before_or_after_the_pins_is_the_same_and_errors_change_nothing() {
         .collect();
     for method in methods() {
         let end = (scene.targets)(0.5);
-        let mut after = Deformer::new(&scene.rest, method).expect("set up");
+        let mut after = Deformer::new(&scene.rest, method.clone()).expect("set up");
         after.set_pins(&scene.pins).expect("pins");
         after.set_stiffness(Some(&weights)).expect("stiffness");
-        let mut before = Deformer::new(&scene.rest, method)
+        let mut before = Deformer::new(&scene.rest, method.clone())
             .expect("set up")
             .with_stiffness(Some(&weights))
             .expect("stiffness");
@@ -324,7 +324,7 @@ fn set_before_or_after_the_pins_is_the_same_and_errors_change_nothing() {
         // And posing with them: the same drag from the rest shape, the same pose (the pins
         // set again, as the bounded method's drags depend on whether the last one met the
         // bound).
-        let mut again = Deformer::new(&scene.rest, method).expect("set up");
+        let mut again = Deformer::new(&scene.rest, method.clone()).expect("set up");
         again.set_pins(&scene.pins).expect("pins");
         again.set_stiffness(Some(&weights)).expect("stiffness");
         again.drag(&end).expect("drag");

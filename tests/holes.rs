@@ -348,7 +348,7 @@ fn a_folded_keyframe_is_reached_exactly_when_asked_and_frames_stay_continuous() 
     let options = MorphOptions::default()
         .with_allow_inverted(true)
         .with_reach_inverted(true);
-    let path_options = bdmorph::PathOptions::default().with_morph(options);
+    let path_options = bdmorph::PathOptions::default().with_morph(options.clone());
     let mut path =
         bdmorph::KeyframePath::with_options(&[a.clone(), b.clone(), c.clone()], path_options)
             .expect("path");

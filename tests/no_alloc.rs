@@ -6,8 +6,8 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use bdmorph::{
-    generate, Blend, Easing, FactorPrecision, KeyframePath, Morph, MorphOptions, NewtonOptions,
-    PathOptions, Vm,
+    generate, Blend, Budget, Easing, FactorPrecision, KeyframePath, Morph, MorphOptions,
+    NewtonOptions, PathOptions, Vm,
 };
 
 struct Counting;
@@ -160,7 +160,7 @@ fn drag_does_not_allocate() {
         PoseMethod::arap(),
         PoseMethod::bounded(1.2),
     ] {
-        let mut pose = Deformer::new(&rest, method).expect("set up");
+        let mut pose = Deformer::new(&rest, method.clone()).expect("set up");
         pose.set_pins(&[0, n - 1, n - 7]).expect("pins");
         let mut targets: Vec<[f64; 2]> = [0, n - 1, n - 7]
             .iter()
@@ -183,5 +183,74 @@ fn drag_does_not_allocate() {
             worked += report.iterations;
         }
         assert!(worked >= 5, "{}", method.name());
+    }
+}
+
+#[test]
+fn budgets_do_not_allocate() {
+    one_thread(budgets_and_their_options_do_not_allocate);
+}
+
+fn budgets_and_their_options_do_not_allocate() {
+    use bdmorph::deform::{ArapOptions, Deformer, KvfOptions, PoseMethod};
+    use bdmorph::param::bounded::BoundedOptions;
+    use bdmorph::param::ParamOptions;
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    use std::time::Duration;
+    let flag = Arc::new(AtomicBool::new(false));
+    let budget = Budget::unlimited()
+        .with_timeout(Duration::from_secs(3600))
+        .with_cancel(flag);
+    let unlimited = MorphOptions::default();
+    let kvf = KvfOptions::default();
+    let bounded = BoundedOptions::new(2.0);
+    let param = ParamOptions::default();
+    let before = allocations();
+    for _ in 0..100 {
+        assert!(budget.check().is_ok());
+        assert!(Budget::unlimited().check().is_ok());
+        // Cloning options with an unlimited budget (or a shared flag) allocates nothing.
+        std::hint::black_box(unlimited.clone());
+        std::hint::black_box(kvf.clone());
+        std::hint::black_box(bounded.clone());
+        std::hint::black_box(param.clone());
+        std::hint::black_box(budget.clone());
+    }
+    assert_eq!(
+        allocations(),
+        before,
+        "checking or cloning budgets allocated"
+    );
+
+    // Frames and drags with a deadline and a flag allocate nothing either.
+    let a = generate::disk(20, 0.25);
+    let b = generate::twist(&a, 1.0);
+    let mut morph =
+        Morph::new(&a, &b, MorphOptions::default().with_budget(budget.clone())).expect("a morph");
+    let mut out = vec![[0.0; 2]; a.positions.len()];
+    morph.frame_into(0.1, &mut out).expect("first frame");
+    let before = allocations();
+    for k in 2..8 {
+        morph
+            .frame_into(f64::from(k) / 10.0, &mut out)
+            .expect("a frame");
+    }
+    assert_eq!(allocations(), before, "frames with a budget allocated");
+    let n = a.positions.len() as u32;
+    for method in [
+        PoseMethod::Kvf(KvfOptions::default().with_budget(budget.clone())),
+        PoseMethod::Arap(ArapOptions::default().with_budget(budget.clone())),
+    ] {
+        let mut pose = Deformer::new(&a, method).expect("set up");
+        pose.set_pins(&[0, n - 1]).expect("pins");
+        let mut targets = [a.positions[0], a.positions[n as usize - 1]];
+        pose.drag(&targets).expect("first drag");
+        let before = allocations();
+        for _ in 0..3 {
+            targets[1][0] += 0.1;
+            pose.drag(&targets).expect("a drag");
+        }
+        assert_eq!(allocations(), before, "drags with a budget allocated");
     }
 }

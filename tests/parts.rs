@@ -250,7 +250,7 @@ fn posed(c: &Character, method: PoseMethod) -> Vec<[f64; 2]> {
             .expect("torso")
     };
     let pins = [corner(1.0), corner(-1.0), hand(c)];
-    let mut pose = Deformer::new(&weld.mesh, method).expect("deformer");
+    let mut pose = Deformer::new(&weld.mesh, method.clone()).expect("deformer");
     pose.set_pins(&pins.map(|v| weld.of[v as usize]))
         .expect("pins");
     let at = |v: u32| c.mesh.positions[v as usize];
@@ -275,7 +275,7 @@ fn posing_the_hand_moves_the_whole_arm_and_nothing_tears() {
         PoseMethod::kvf(),
         PoseMethod::bounded(4.0),
     ] {
-        let pose = posed(&c, method);
+        let pose = posed(&c, method.clone());
         for j in &c.joints {
             let [a, b] = j.vertices.map(|v| pose[v as usize]);
             let gap = (a[0] - b[0]).hypot(a[1] - b[1]);

@@ -451,7 +451,7 @@ fn bad_input_is_refused() {
     ));
     for k in [0.5, f64::NAN, f64::INFINITY] {
         assert!(matches!(
-            untangle(&rest, &pose, &[], &o.with_max_distortion(k)),
+            untangle(&rest, &pose, &[], &o.clone().with_max_distortion(k)),
             Err(DeformError::BadBound(_))
         ));
     }

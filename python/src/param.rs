@@ -43,7 +43,7 @@ pub fn parameterize<'py>(
     let name = method.name();
     let (uv, report, energies) = py
         .detach(|| {
-            let mut p = Parameterization::new(&mesh, method, options)?;
+            let mut p = Parameterization::new(&mesh, method, options.clone())?;
             let report = p.solve()?;
             Ok::<_, bdmorph::param::ParamError>((p.uv().to_vec(), report, p.energies()))
         })

@@ -322,7 +322,7 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
     let keys = &inputs.keyframes;
     let as_path = keys.len() > 2 || !args.easing.is_empty() || !args.durations.is_empty();
     let path_options = PathOptions::default()
-        .with_morph(options)
+        .with_morph(options.clone())
         .with_durations(args.durations.clone())
         .with_easings(args.easing.clone());
     let build = |program: Option<bdmorph::Program>| {
@@ -334,8 +334,8 @@ pub(super) fn run(args: MorphArgs) -> Result<(), String> {
             .map(Animation::Path)
         } else {
             match program {
-                Some(p) => Morph::with_program(p, &keys[0], &keys[1], options),
-                None => Morph::new(&keys[0], &keys[1], options),
+                Some(p) => Morph::with_program(p, &keys[0], &keys[1], options.clone()),
+                None => Morph::new(&keys[0], &keys[1], options.clone()),
             }
             .map(Animation::Morph)
         }

@@ -67,7 +67,7 @@ pub(super) fn run(args: ParamArgs) -> Result<(), String> {
                 options = options.with_collapse_barrier(w);
             }
             let name = method_name(method);
-            let mut p = Parameterization::new(&mesh, method, options).map_err(in_file)?;
+            let mut p = Parameterization::new(&mesh, method, options.clone()).map_err(in_file)?;
             let limit = args.iterations.unwrap_or(200) as usize;
             let iterative = !matches!(method, Method::Tutte | Method::Lscm);
             let bar = progress_bar(if iterative { limit } else { 0 }, args.quiet, name);

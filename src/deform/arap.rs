@@ -23,7 +23,7 @@ use crate::param::frames::Frames;
 use crate::param::local_global::{fit_each, free_laplacian, global_rhs, weighted_edges, Fit, NONE};
 
 /// Options of [`super::PoseMethod::Arap`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct ArapOptions {
     /// Local/global iterations per drag at most (default 10): each drag starts from the
@@ -32,6 +32,10 @@ pub struct ArapOptions {
     /// A drag stops early once no vertex moved by more than this times the mesh's size in
     /// an iteration (default `1e-12`).
     pub tolerance: f64,
+    /// Bounds each drag in time or by a cancellation flag, checked before every
+    /// local/global iteration (default unlimited): once spent, the drag ends with
+    /// [`DeformError::Stopped`] and the pose before it.
+    pub budget: crate::Budget,
 }
 
 impl Default for ArapOptions {
@@ -39,6 +43,7 @@ impl Default for ArapOptions {
         ArapOptions {
             iterations: 10,
             tolerance: 1e-12,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -53,6 +58,16 @@ impl ArapOptions {
     pub fn with_tolerance(mut self, tolerance: f64) -> Self {
         self.tolerance = tolerance;
         self
+    }
+    /// Bounds each drag by `budget` ([`ArapOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
+        self
+    }
+    /// Refuses a tolerance that is not a finite number above 0 and 0 iterations.
+    pub(crate) fn validate(&self) -> Result<(), DeformError> {
+        super::check_tolerance("arap", "tolerance", self.tolerance)?;
+        super::check_iterations("arap", "iterations", self.iterations)
     }
 }
 
@@ -74,13 +89,18 @@ pub(crate) struct Arap {
 }
 
 impl Arap {
-    pub(crate) fn options(&self) -> ArapOptions {
-        self.options
+    pub(crate) fn options(&self) -> &ArapOptions {
+        &self.options
     }
 
-    pub(crate) fn new(frames: &Frames, n: usize, options: ArapOptions) -> Arap {
+    pub(crate) fn new(
+        frames: &Frames,
+        n: usize,
+        options: ArapOptions,
+    ) -> Result<Arap, DeformError> {
+        options.validate()?;
         let wdx = weighted_edges(frames, None);
-        Arap {
+        Ok(Arap {
             options,
             index: vec![NONE; n],
             pins: Vec::new(),
@@ -89,7 +109,7 @@ impl Arap {
             l: vec![[[1.0, 0.0], [0.0, 1.0]]; frames.len()],
             wdx,
             stiffness: None,
-        }
+        })
     }
 
     /// Sets each triangle's factor in the energy (checked by the caller: one per triangle,
@@ -150,6 +170,7 @@ impl Arap {
         let mut last_change = 0.0;
         let mut status = DragStatus::Moving;
         while iterations < self.options.iterations.max(1) {
+            self.options.budget.check()?;
             iterations += 1;
             fit_each(frames, uv, Fit::Rotation, &mut self.l);
             let Some(chol) = self.chol.as_mut() else {

@@ -31,7 +31,7 @@ use crate::param::newton::Newton;
 const STALL: u32 = 8;
 
 /// Options of [`super::PoseMethod::Bounded`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct BoundedPoseOptions {
     /// The bound `K ≥ 1` on every triangle's conformal distortion.
@@ -43,6 +43,10 @@ pub struct BoundedPoseOptions {
     pub arap_iterations: u32,
     /// The bound counts as met at `K (1 + tolerance)` (default 1e-3).
     pub tolerance: f64,
+    /// Bounds each drag in time or by a cancellation flag, checked before every ARAP
+    /// iteration, projection and Newton step (default unlimited): once spent, the drag ends
+    /// with [`DeformError::Stopped`] and the pose before it.
+    pub budget: crate::Budget,
 }
 
 impl BoundedPoseOptions {
@@ -53,7 +57,13 @@ impl BoundedPoseOptions {
             iterations: 100,
             arap_iterations: 5,
             tolerance: 1e-3,
+            budget: crate::Budget::unlimited(),
         }
+    }
+    /// Bounds each drag by `budget` ([`BoundedPoseOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
+        self
     }
     /// Sets the ARAP iterations per drag.
     pub fn with_arap_iterations(mut self, iterations: u32) -> Self {
@@ -96,16 +106,22 @@ impl Bounded {
         if !(k >= 1.0 && k.is_finite()) {
             return Err(DeformError::BadBound(k));
         }
+        super::check_tolerance("bounded", "tolerance", options.tolerance)?;
+        super::check_iterations("bounded", "iterations", options.iterations)?;
+        // (No ARAP iterations is allowed: projections only.)
+        let arap = Arap::new(
+            frames,
+            n,
+            ArapOptions::default()
+                .with_iterations(options.arap_iterations.max(1))
+                .with_budget(options.budget.clone()),
+        )?;
         Ok(Bounded {
             options,
             solver: None,
             newton: None,
             behind: false,
-            arap: Arap::new(
-                frames,
-                n,
-                ArapOptions::default().with_iterations(options.arap_iterations),
-            ),
+            arap,
             previous: Vec::new(),
             face_bounds: None,
             stiff: false,
@@ -133,8 +149,8 @@ impl Bounded {
             .map_or(self.options.max_distortion, |b| b[f])
     }
 
-    pub(crate) fn options(&self) -> BoundedPoseOptions {
-        self.options
+    pub(crate) fn options(&self) -> &BoundedPoseOptions {
+        &self.options
     }
 
     pub(crate) fn set_pins(
@@ -145,7 +161,8 @@ impl Bounded {
     ) -> Result<(), DeformError> {
         let mut options = BoundedOptions::new(self.options.max_distortion)
             .with_iterations(self.options.iterations)
-            .with_newton_finish(false);
+            .with_newton_finish(false)
+            .with_budget(self.options.budget.clone());
         options.tolerance = self.options.tolerance;
         self.previous = vec![[0.0; 2]; n];
         self.behind = false;
@@ -206,6 +223,7 @@ impl Bounded {
                 };
                 break;
             }
+            self.options.budget.check()?;
             if worst < best * (1.0 - 1e-4) {
                 (best, since_best) = (worst, 0);
             } else {

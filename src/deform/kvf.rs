@@ -93,7 +93,7 @@ const MIN_STEP: f64 = 9.094947017729282e-13;
 const SHRINK: f64 = 0.2;
 
 /// Options of [`super::PoseMethod::Kvf`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct KvfOptions {
     /// The handles' weight, relative to the mesh's own stiffness (default 100): larger holds
@@ -123,6 +123,10 @@ pub struct KvfOptions {
     /// editor's way, and the default) the steps may fold and unfold on the way, never raising
     /// the energy; the studio repairs a drag that leaves a fold.
     pub flip_free: bool,
+    /// Bounds each drag in time or by a cancellation flag, checked before every step
+    /// (default unlimited): once spent, the drag ends with [`DeformError::Stopped`] and the
+    /// pose before it.
+    pub budget: crate::Budget,
 }
 
 impl Default for KvfOptions {
@@ -134,6 +138,7 @@ impl Default for KvfOptions {
             tolerance: 1e-12,
             max_distortion: 10.0,
             flip_free: false,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -168,6 +173,18 @@ impl KvfOptions {
     pub fn with_flip_free(mut self, flip_free: bool) -> Self {
         self.flip_free = flip_free;
         self
+    }
+    /// Bounds each drag by `budget` ([`KvfOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
+        self
+    }
+    /// Refuses a tolerance that is not a finite number above 0 and 0 steps or alternations
+    /// (the weight and the distortion cap are checked by `set_pins`, as documented).
+    pub(crate) fn validate(&self) -> Result<(), DeformError> {
+        super::check_tolerance("kvf", "tolerance", self.tolerance)?;
+        super::check_iterations("kvf", "iterations", self.iterations)?;
+        super::check_iterations("kvf", "alternations", self.alternations)
     }
 }
 
@@ -217,7 +234,8 @@ pub(crate) struct Kvf {
 }
 
 impl Kvf {
-    pub(crate) fn new(frames: &Frames, n: usize, options: KvfOptions) -> Kvf {
+    pub(crate) fn new(frames: &Frames, n: usize, options: KvfOptions) -> Result<Kvf, DeformError> {
+        options.validate()?;
         let mut count = vec![0.0; n];
         let mut diagonal = 0.0;
         for (f, face) in frames.faces.iter().enumerate() {
@@ -242,7 +260,8 @@ impl Kvf {
             }
         }
         let m = frames.len();
-        Kvf {
+        let cap = vec![options.max_distortion; m];
+        Ok(Kvf {
             options,
             strain_feedback: true,
             index: (0..n as u32).collect(),
@@ -262,14 +281,14 @@ impl Kvf {
             count,
             trial: vec![[0.0; 2]; n],
             det: vec![1.0; m],
-            cap: vec![options.max_distortion; m],
+            cap,
             straight: vec![0.0; 2 * n],
             stretches: Stretches::default(),
-        }
+        })
     }
 
-    pub(crate) fn options(&self) -> KvfOptions {
-        self.options
+    pub(crate) fn options(&self) -> &KvfOptions {
+        &self.options
     }
 
     /// Sets each triangle's factor in the field's energy (checked by the caller), its whole
@@ -353,6 +372,7 @@ impl Kvf {
         let mut last_change = 0.0;
         let mut status = DragStatus::Moving;
         while iterations < self.options.iterations.max(1) {
+            self.options.budget.check()?;
             iterations += 1;
             match self.step(frames, targets, uv, size)? {
                 Step::Moved { change, full } => {

@@ -63,7 +63,7 @@ pub use sd::SdOptions;
 pub use untangle::{untangle, UntangleOptions, UntangleReport, Untangled};
 
 /// How the mesh follows its handles.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum PoseMethod {
     /// As-Killing-as-possible vector fields with soft handles (the original editor's).
@@ -212,6 +212,68 @@ pub enum DeformError {
         /// Its weight.
         value: f64,
     },
+    /// An option of the method out of its range (named as in its options struct).
+    #[error("{method} option `{option}` is {value}: it must be {expected}")]
+    BadOption {
+        /// The method (`kvf`, `arap`, `bounded`, `sd`, `untangle`).
+        method: &'static str,
+        /// The option's field name.
+        option: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
+    /// The method's [`crate::Budget`] was spent (cancelled or past its deadline) during a
+    /// drag: the pose before the drag is kept.
+    #[error("stopped: {0}")]
+    Stopped(#[from] crate::Stopped),
+}
+
+impl DeformError {
+    /// The bounded-distortion solver's error, a spent budget as [`DeformError::Stopped`].
+    pub(crate) fn from_bounded(e: crate::param::ParamError) -> DeformError {
+        match e {
+            crate::param::ParamError::Stopped(s) => DeformError::Stopped(s),
+            other => DeformError::Bounded(other),
+        }
+    }
+}
+
+/// Refuses a tolerance that is not a finite number above 0 (naming the method and option).
+pub(crate) fn check_tolerance(
+    method: &'static str,
+    option: &'static str,
+    value: f64,
+) -> Result<(), DeformError> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(DeformError::BadOption {
+            method,
+            option,
+            value,
+            expected: "a finite number above 0",
+        })
+    }
+}
+
+/// Refuses an iteration count of 0 (naming the method and option).
+pub(crate) fn check_iterations(
+    method: &'static str,
+    option: &'static str,
+    value: u32,
+) -> Result<(), DeformError> {
+    if value >= 1 {
+        Ok(())
+    } else {
+        Err(DeformError::BadOption {
+            method,
+            option,
+            value: f64::from(value),
+            expected: "at least 1",
+        })
+    }
 }
 
 /// How a drag's iterations ended.
@@ -300,9 +362,9 @@ impl Deformer {
         let frames = planar_frames(mesh)?;
         let n = mesh.positions.len();
         let solver = match method {
-            PoseMethod::Kvf(options) => Solver::Kvf(Box::new(kvf::Kvf::new(&frames, n, options))),
+            PoseMethod::Kvf(options) => Solver::Kvf(Box::new(kvf::Kvf::new(&frames, n, options)?)),
             PoseMethod::Arap(options) => {
-                Solver::Arap(Box::new(arap::Arap::new(&frames, n, options)))
+                Solver::Arap(Box::new(arap::Arap::new(&frames, n, options)?))
             }
             PoseMethod::Bounded(options) => {
                 Solver::Bounded(Box::new(bounded::Bounded::new(&frames, n, options)?))
@@ -325,10 +387,10 @@ impl Deformer {
     /// The method and its options.
     pub fn method(&self) -> PoseMethod {
         match &self.solver {
-            Solver::Kvf(s) => PoseMethod::Kvf(s.options()),
-            Solver::Arap(s) => PoseMethod::Arap(s.options()),
-            Solver::Bounded(s) => PoseMethod::Bounded(s.options()),
-            Solver::Sd(s) => PoseMethod::Sd(s.options()),
+            Solver::Kvf(s) => PoseMethod::Kvf(s.options().clone()),
+            Solver::Arap(s) => PoseMethod::Arap(s.options().clone()),
+            Solver::Bounded(s) => PoseMethod::Bounded(s.options().clone()),
+            Solver::Sd(s) => PoseMethod::Sd(s.options().clone()),
         }
     }
 

@@ -46,7 +46,7 @@ use crate::param::ParamError;
 const REFACTOR: f64 = 0.8;
 
 /// Options of [`super::PoseMethod::Sd`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct SdOptions {
     /// The handles' weight, relative to the mesh's own stiffness (default 100, as KVF's):
@@ -60,6 +60,10 @@ pub struct SdOptions {
     /// A drag stops early once no vertex moved by more than this times the mesh's size in an
     /// iteration (default `1e-12`).
     pub tolerance: f64,
+    /// Bounds each drag in time or by a cancellation flag, checked before every Newton
+    /// iteration (default unlimited): once spent, the drag ends with
+    /// [`DeformError::Stopped`] and the pose before it.
+    pub budget: crate::Budget,
 }
 
 impl Default for SdOptions {
@@ -68,6 +72,7 @@ impl Default for SdOptions {
             weight: 100.0,
             iterations: 4,
             tolerance: 1e-12,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -86,6 +91,11 @@ impl SdOptions {
     /// Sets the early-stopping tolerance.
     pub fn with_tolerance(mut self, tolerance: f64) -> Self {
         self.tolerance = tolerance;
+        self
+    }
+    /// Bounds each drag by `budget` ([`SdOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
         self
     }
 }
@@ -117,6 +127,8 @@ fn solver_error(e: ParamError) -> DeformError {
 impl Sd {
     /// Analyses the Hessian's pattern (once per mesh: it does not depend on the pins).
     pub(crate) fn new(frames: &Frames, n: usize, options: SdOptions) -> Result<Sd, DeformError> {
+        super::check_tolerance("sd", "tolerance", options.tolerance)?;
+        super::check_iterations("sd", "iterations", options.iterations)?;
         let energy = Energy::SymmetricDirichlet;
         let mut newton = Newton::new(frames, n, energy).map_err(solver_error)?;
         newton.set_partial_projection(false);
@@ -133,8 +145,8 @@ impl Sd {
         })
     }
 
-    pub(crate) fn options(&self) -> SdOptions {
-        self.options
+    pub(crate) fn options(&self) -> &SdOptions {
+        &self.options
     }
 
     /// Sets each triangle's factor in the energy (checked by the caller); the handles' weight
@@ -210,12 +222,13 @@ impl Sd {
     ) -> Result<DragReport, DeformError> {
         self.newton.set_spring_targets(targets);
         let tolerance = self.options.tolerance * size;
-        let budget = self.options.iterations.max(1);
+        let limit = self.options.iterations.max(1);
         let (mut iterations, mut retried) = (0, false);
         let mut last_change = 0.0;
         let mut previous = f64::INFINITY;
         let mut status = DragStatus::Moving;
-        while iterations < budget {
+        while iterations < limit {
+            self.options.budget.check()?;
             iterations += 1;
             let fresh = self.stale;
             let step = self

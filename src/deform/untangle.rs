@@ -24,7 +24,7 @@ const ATTEMPT_ITERATIONS: u32 = 300;
 const INVERTED_BOUND: f64 = 2.0;
 
 /// Options of [`untangle`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct UntangleOptions {
     /// The bound `K ≥ 1` on the conformal distortion of the triangles the repair moves, for
@@ -55,6 +55,10 @@ pub struct UntangleOptions {
     /// wants (default `false`: the pose given comes back unchanged, and the report says
     /// what the best attempt reached).
     pub best_effort: bool,
+    /// Bounds the repair in time or by a cancellation flag, checked before every attempt
+    /// and every iteration within one (default unlimited): once spent,
+    /// [`DeformError::Stopped`].
+    pub budget: crate::Budget,
 }
 
 /// The least of the distortion limits [`untangle`] chooses by itself
@@ -70,6 +74,7 @@ impl Default for UntangleOptions {
             iterations: 1500,
             limit: None,
             best_effort: false,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -103,6 +108,11 @@ impl UntangleOptions {
     /// Sets whether a repair that cannot meet the limit returns its best attempt.
     pub fn with_best_effort(mut self, best_effort: bool) -> Self {
         self.best_effort = best_effort;
+        self
+    }
+    /// Bounds the repair by `budget` ([`UntangleOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
         self
     }
 }
@@ -256,6 +266,7 @@ pub fn untangle(
             return Err(DeformError::BadBound(k));
         }
     }
+    super::check_iterations("untangle", "iterations", options.iterations)?;
     let size = rest.diameter().max(f64::MIN_POSITIVE);
     let faces = &rest.faces;
     // Each face's distortion in the pose, `None` when flipped.
@@ -386,6 +397,7 @@ pub fn untangle(
     let mut kept = pose.to_vec();
     let mut uv = pose.to_vec();
     while budget > 0 {
+        options.budget.check()?;
         let region = Region::new(
             faces,
             &rings_from_flips,
@@ -408,7 +420,9 @@ pub fn untangle(
         let targets: Vec<[f64; 2]> = held.iter().map(|&i| local_uv[i as usize]).collect();
         let bounded = BoundedOptions::new(k)
             .with_iterations(budget.min(ATTEMPT_ITERATIONS))
-            .with_inverted_bound(INVERTED_BOUND);
+            .with_inverted_bound(INVERTED_BOUND)
+            .with_budget(options.budget.clone());
+        let tolerance = bounded.tolerance;
         let mut solver = BoundedDistortion::for_handles(
             frames.select(&region.faces, &region.local),
             region.vertices.len(),
@@ -416,11 +430,11 @@ pub fn untangle(
             bounded,
             None,
         )
-        .map_err(DeformError::Bounded)?;
+        .map_err(DeformError::from_bounded)?;
         solver.set_targets(&targets);
         let report = solver
             .solve_with(&mut local_uv, |_, _| {})
-            .map_err(DeformError::Bounded)?;
+            .map_err(DeformError::from_bounded)?;
         iterations += report.iterations;
         budget = budget.saturating_sub(report.iterations.max(1));
         let finite = local_uv
@@ -435,7 +449,7 @@ pub fn untangle(
         // The bound met on the region, and nothing flipped left that a move could mend.
         let after = distortions(&uv);
         let flipped = after.iter().filter(|d| d.is_none()).count();
-        let limit = k * (1.0 + bounded.tolerance);
+        let limit = k * (1.0 + tolerance);
         let bad = |f: usize| after[f].is_none_or(|d| d > limit);
         let met = finite
             && flipped == unmendable

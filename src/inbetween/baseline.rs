@@ -85,8 +85,10 @@ impl ArapInterpolation {
     /// triangles.
     ///
     /// # Errors
-    /// [`InbetweenError::Mesh`]-like failures as [`InbetweenError::Internal`]: a degenerate
-    /// triangle, a layout of the wrong length, a failed factorisation.
+    /// [`InbetweenError::Mesh`] for a mesh without triangles, a face naming a vertex out of
+    /// range, or a non-finite coordinate of `a` or `b` ([`crate::MeshError::NonFinite`]);
+    /// [`InbetweenError::Internal`] for a degenerate triangle, a layout of the wrong length,
+    /// a failed factorisation.
     pub fn new(a: &PlanarMesh, b: &[[f64; 2]]) -> Result<ArapInterpolation, InbetweenError> {
         let n = a.positions.len();
         if b.len() != n {
@@ -94,6 +96,27 @@ impl ArapInterpolation {
                 "{} positions for {n} vertices",
                 b.len()
             )));
+        }
+        if a.faces.is_empty() {
+            return Err(crate::MeshError::NoTriangles.into());
+        }
+        for (face, f) in a.faces.iter().enumerate() {
+            if let Some(&vertex) = f.iter().find(|&&v| v as usize >= n) {
+                return Err(crate::MeshError::IndexOutOfRange {
+                    face,
+                    vertex,
+                    n_vertices: n,
+                }
+                .into());
+            }
+        }
+        if let Some(vertex) = a
+            .positions
+            .iter()
+            .chain(b)
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(crate::MeshError::NonFinite { vertex: vertex % n }.into());
         }
         let frames = Frames::new(&SurfaceMesh::from(a)).map_err(|f| {
             InbetweenError::Internal(format!("triangle {f} of drawing A is degenerate"))
@@ -108,6 +131,11 @@ impl ArapInterpolation {
             let gb = frames.gradient(f, b);
             let map = mul(gb, inverse(ga));
             let theta = (map[1][0] - map[0][1]).atan2(map[0][0] + map[1][1]);
+            if !theta.is_finite() {
+                return Err(InbetweenError::Internal(format!(
+                    "triangle {f}: its map from A to B is not finite"
+                )));
+            }
             raw[f] = theta;
             stretch[f] = mul(rotation(-theta), map);
             gradient_a[f] = ga;
@@ -207,8 +235,14 @@ impl ArapInterpolation {
     /// The layout at `t` (0: A's, 1: B's up to the least-squares fit).
     ///
     /// # Errors
-    /// [`InbetweenError::Internal`] when the solve fails.
+    /// [`InbetweenError::BadOption`] for a `t` that is not finite; [`InbetweenError::Internal`]
+    /// when the solve fails.
     pub fn frame(&mut self, t: f64) -> Result<Vec<[f64; 2]>, InbetweenError> {
+        if !t.is_finite() {
+            return Err(InbetweenError::BadOption(format!(
+                "t = {t}: give a finite number"
+            )));
+        }
         let mut uv = linear_frame(&self.a, &self.b, t);
         let Some(chol) = self.chol.as_mut() else {
             return Ok(uv);

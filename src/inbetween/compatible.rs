@@ -417,6 +417,7 @@ pub fn compatible_path(
     let mut tolerances = Vec::with_capacity(drawings.len());
     let mut pinholes = Vec::with_capacity(drawings.len());
     for (d, image) in drawings.iter().enumerate() {
+        options.budget.check()?;
         let (shape, tolerance, filled) = shape_of(image, Drawing(d), options)?;
         shapes.push(shape);
         tolerances.push(tolerance);
@@ -690,18 +691,26 @@ fn build(input: &Input<'_>, all_transparent: bool) -> Result<CompatiblePath, Fai
     };
     let mut layouts = Vec::with_capacity(others);
     let mut path_reports = Vec::with_capacity(others);
+    let budget = &options.budget;
     for k in 0..others {
+        budget.check().map_err(InbetweenError::from)?;
         let mut pins: Vec<(u32, [f64; 2])> = boundary_targets[k].clone();
         if k == 0 {
             pins.extend(interior_pins.iter().map(|&(_, v, pb)| (v, pb)));
         }
         let start = match &coarse {
             Some((coarse_mesh, coarse_targets)) => {
-                let coarse_layout =
-                    lay_over(coarse_mesh, &coarse_targets[k], None, None, BUILD_STAGES)?;
+                let coarse_layout = lay_over(
+                    coarse_mesh,
+                    &coarse_targets[k],
+                    None,
+                    None,
+                    BUILD_STAGES,
+                    budget,
+                )?;
                 if coarse_layout.flipped == 0 {
                     let mut positions = coarse_layout.positions;
-                    polish(coarse_mesh, &coarse_targets[k], &mut positions)?;
+                    polish(coarse_mesh, &coarse_targets[k], &mut positions, budget)?;
                     Some(transfer(coarse_mesh, &positions, &mesh.positions))
                 } else {
                     None
@@ -719,16 +728,25 @@ fn build(input: &Input<'_>, all_transparent: bool) -> Result<CompatiblePath, Fai
                 start,
                 weights.as_deref(),
                 BUILD_STAGES,
+                budget,
             )?
         } else {
             (
-                lay_over(&mesh, &pins, start, weights.as_deref(), BUILD_STAGES)?,
+                lay_over(
+                    &mesh,
+                    &pins,
+                    start,
+                    weights.as_deref(),
+                    BUILD_STAGES,
+                    budget,
+                )?,
                 pins,
             )
         };
         let flipped_before_untangling = layout.flipped_before;
         let mut added_vertices = 0;
         if layout.flipped > 0 {
+            budget.check().map_err(InbetweenError::from)?;
             // The guarantee: re-embed what is left, refining A's mesh there.
             let embedded = guarantee(
                 &mesh,
@@ -794,7 +812,7 @@ fn build(input: &Input<'_>, all_transparent: bool) -> Result<CompatiblePath, Fai
                 smooth(&mesh, &fixed, Some(w), &mut positions, SHRINK_STEPS);
                 0
             }
-            None => polish(&mesh, &pins, &mut positions)?,
+            None => polish(&mesh, &pins, &mut positions, budget)?,
         };
         let mut pair_reports = Vec::new();
         if k == 0 {

@@ -106,7 +106,7 @@ fn setup(
     // B's outline simplified to about as many corners as the mesh has boundary vertices.
     let boundary = boundary_vertices(mesh).len();
     let (full_b, tolerance_b, pinholes) =
-        shape_of(b, Drawing(1), &options.with_vertices(2 * boundary))?;
+        shape_of(b, Drawing(1), &options.clone().with_vertices(2 * boundary))?;
     let pairing = pair_loops(&shape_a, &full_b, Drawing(1))?;
     if let Some(&hole) = pairing.a_only.first() {
         return Err(InbetweenError::Topology(format!(
@@ -318,8 +318,17 @@ pub fn fit_drawing(
             }
         }
     }
-    let (layout, pins) =
-        lay_out_with_pairs(mesh, pins, &interior, &mut reports, None, None, FIT_STAGES)?;
+    options.budget.check()?;
+    let (layout, pins) = lay_out_with_pairs(
+        mesh,
+        pins,
+        &interior,
+        &mut reports,
+        None,
+        None,
+        FIT_STAGES,
+        &options.budget,
+    )?;
     if layout.flipped > 0 {
         return Err(InbetweenError::Flipped {
             which: Drawing(1),
@@ -329,7 +338,7 @@ pub fn fit_drawing(
     }
     let flipped_before_untangling = layout.flipped_before;
     let mut positions = layout.positions;
-    let polish_rounds = polish(mesh, &pins, &mut positions)?;
+    let polish_rounds = polish(mesh, &pins, &mut positions, &options.budget)?;
     let (w, h) = (f64::from(b.width), f64::from(b.height));
     let texcoords = positions.iter().map(|p| [p[0] / w, p[1] / h]).collect();
     Ok(DrawingFit {

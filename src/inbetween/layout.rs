@@ -18,13 +18,15 @@ use super::embed::{embed, EmbedFailure, Embedded};
 use super::foldover;
 use super::refine::{collapse_added, flip_thin};
 use super::InbetweenError;
-use crate::deform::{untangle, Deformer, PoseMethod, UntangleOptions};
+use crate::deform::{untangle, ArapOptions, DeformError, Deformer, PoseMethod, UntangleOptions};
 use crate::io::SurfaceMesh;
 use crate::mesh::PlanarMesh;
 use crate::param::bounded::{BoundedDistortion, BoundedOptions};
 use crate::param::energy::Energy;
 use crate::param::frames::Frames;
 use crate::param::newton::Newton;
+use crate::param::ParamError;
+use crate::Budget;
 
 /// Rounds of ARAP iterations (10 each) for the first layout over B.
 const ARAP_ROUNDS: usize = 40;
@@ -113,23 +115,25 @@ pub(super) fn polish(
     mesh: &PlanarMesh,
     pins: &[(u32, [f64; 2])],
     positions: &mut [[f64; 2]],
+    budget: &Budget,
 ) -> Result<usize, InbetweenError> {
     let surface = SurfaceMesh::from(mesh);
     let mut kept = 0;
     for _ in 0..POLISH_ROUNDS {
+        budget.check()?;
         let current = max_distortion(mesh, positions);
         let k = (POLISH_SHARE * current).max(1.5);
         if k >= current {
             break;
         }
-        let options = BoundedOptions::new(k).with_iterations(POLISH_ITERATIONS);
-        let mut solver = BoundedDistortion::new(&surface, pins, options).map_err(|e| {
-            InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-        })?;
+        let options = BoundedOptions::new(k)
+            .with_iterations(POLISH_ITERATIONS)
+            .with_budget(budget.clone());
+        let mut solver = BoundedDistortion::new(&surface, pins, options).map_err(bounded_error)?;
         let mut trial = positions.to_vec();
-        let report = solver.solve_with(&mut trial, |_, _| {}).map_err(|e| {
-            InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-        })?;
+        let report = solver
+            .solve_with(&mut trial, |_, _| {})
+            .map_err(bounded_error)?;
         let better = report.inverted == 0
             && bad(&mesh.faces, &trial) == 0
             && max_distortion(mesh, &trial) < current;
@@ -145,12 +149,31 @@ pub(super) fn polish(
     Ok(kept)
 }
 
+/// A failure of the bounded-distortion mapping: a spent budget as
+/// [`InbetweenError::Stopped`], anything else a bug of the construction.
+pub(super) fn bounded_error(e: ParamError) -> InbetweenError {
+    match e {
+        ParamError::Stopped(s) => InbetweenError::Stopped(s),
+        e => InbetweenError::Internal(format!("the bounded-distortion mapping: {e}")),
+    }
+}
+
+/// A posing failure: a spent budget as [`InbetweenError::Stopped`].
+pub(super) fn deform_error(e: DeformError) -> InbetweenError {
+    match e {
+        DeformError::Stopped(s) => InbetweenError::Stopped(s),
+        e => InbetweenError::Deform(e),
+    }
+}
+
 /// Interior pins of the user's pairs: `(pair, vertex, target)`.
 pub(super) type InteriorPins = [(usize, u32, [f64; 2])];
 
 /// [`lay_over`] with `pins` (the boundary's and the interior pairs' `interior`); when
 /// triangles stay flipped, the interior pairs next to them are let go (and their reports say
 /// so) if that leaves fewer flips. Returns the layout and the pins it holds.
+// (The stages' inputs, and the budget bounding them.)
+#[allow(clippy::too_many_arguments)]
 pub(super) fn lay_out_with_pairs(
     mesh: &PlanarMesh,
     pins: Pins,
@@ -159,9 +182,10 @@ pub(super) fn lay_out_with_pairs(
     start: Option<Vec<[f64; 2]>>,
     weights: Option<&[f64]>,
     stages: &str,
+    budget: &Budget,
 ) -> Result<(Layout, Pins), InbetweenError> {
     let mut pins = pins;
-    let mut layout = lay_over(mesh, &pins, start, weights, stages)?;
+    let mut layout = lay_over(mesh, &pins, start, weights, stages, budget)?;
     if layout.flipped > 0 && !interior.is_empty() {
         // Let go of the interior pairs next to what stays flipped, and try again.
         let near = near_flips(mesh, &layout.positions, 3);
@@ -180,7 +204,14 @@ pub(super) fn lay_out_with_pairs(
                         .any(|&(k, w, _)| w == *v && dropped.contains(&k))
                 })
                 .collect();
-            let retry = lay_over(mesh, &kept, Some(layout.positions.clone()), weights, stages)?;
+            let retry = lay_over(
+                mesh,
+                &kept,
+                Some(layout.positions.clone()),
+                weights,
+                stages,
+                budget,
+            )?;
             if retry.flipped < layout.flipped {
                 for &k in &dropped {
                     reports[k].met = false;
@@ -216,7 +247,9 @@ pub(super) fn lay_over(
     start: Option<Vec<[f64; 2]>>,
     weights: Option<&[f64]>,
     stages: &str,
+    budget: &Budget,
 ) -> Result<Layout, InbetweenError> {
+    budget.check()?;
     let (vertices, targets): (Vec<u32>, Vec<[f64; 2]>) = pins.iter().copied().unzip();
     let pose = match start {
         Some(mut pose) => {
@@ -226,12 +259,13 @@ pub(super) fn lay_over(
             pose
         }
         None => {
-            let mut deformer = Deformer::new(mesh, PoseMethod::arap())?;
+            let method = PoseMethod::Arap(ArapOptions::default().with_budget(budget.clone()));
+            let mut deformer = Deformer::new(mesh, method)?;
             deformer.set_pins(&vertices)?;
             let size = mesh.diameter().max(f64::MIN_POSITIVE);
             let mut previous = deformer.positions().to_vec();
             for _ in 0..ARAP_ROUNDS {
-                deformer.drag(&targets)?;
+                deformer.drag(&targets).map_err(deform_error)?;
                 let moved = deformer
                     .positions()
                     .iter()
@@ -263,6 +297,7 @@ pub(super) fn lay_over(
         if layout.flipped == 0 {
             break;
         }
+        budget.check()?;
         match stage {
             'f' => {
                 // Foldover-free untangling, near the flips.
@@ -295,8 +330,11 @@ pub(super) fn lay_over(
                     &layout.positions,
                     &vertices,
                     // Any fewer flips are kept below: the layout is untangled further after.
-                    &UntangleOptions::default().with_best_effort(true),
-                )?;
+                    &UntangleOptions::default()
+                        .with_best_effort(true)
+                        .with_budget(budget.clone()),
+                )
+                .map_err(deform_error)?;
                 let left = bad(&mesh.faces, &repaired.positions);
                 if left < layout.flipped {
                     layout.flipped = left;
@@ -308,15 +346,14 @@ pub(super) fn lay_over(
                 let bound = (2.0 * max_distortion_unflipped(mesh, &layout.positions)).max(10.0);
                 let options = BoundedOptions::new(bound)
                     .with_inverted_bound(2.0)
-                    .with_iterations(RESCUE_ITERATIONS);
+                    .with_iterations(RESCUE_ITERATIONS)
+                    .with_budget(budget.clone());
                 let mut solver = BoundedDistortion::new(&SurfaceMesh::from(mesh), pins, options)
-                    .map_err(|e| {
-                        InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-                    })?;
+                    .map_err(bounded_error)?;
                 let mut trial = layout.positions.clone();
-                solver.solve_with(&mut trial, |_, _| {}).map_err(|e| {
-                    InbetweenError::Internal(format!("the bounded-distortion mapping: {e}"))
-                })?;
+                solver
+                    .solve_with(&mut trial, |_, _| {})
+                    .map_err(bounded_error)?;
                 let left = bad(&mesh.faces, &trial);
                 if left < layout.flipped
                     && trial.iter().all(|p| p[0].is_finite() && p[1].is_finite())

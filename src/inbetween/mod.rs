@@ -120,7 +120,7 @@ pub struct Match {
 }
 
 /// Options of [`compatible_mesh`] and [`Inbetween`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct InbetweenOptions {
     /// About how many vertices the mesh has (default 2000).
@@ -142,6 +142,13 @@ pub struct InbetweenOptions {
     /// holes). [`compatible_mesh`] does this by itself when a flipped region surrounds a
     /// hole, and [`Inbetween`] when the morph cannot set up a hole.
     pub transparent_holes: bool,
+    /// Bounds the construction in time or by a cancellation flag (default unlimited),
+    /// checked between its stages (each drawing's outline, each layout, each untangling
+    /// stage, the re-embedding, each polishing round) and inside its iterative solves (the
+    /// posing, untangling and bounded-distortion iterations): once spent,
+    /// [`InbetweenError::Stopped`]. [`InbetweenOptions::with_budget`] gives the morph's
+    /// frames the same budget.
+    pub budget: crate::Budget,
 }
 
 /// The default [`InbetweenOptions::pinhole`]: 64 square pixels, a hole of 8 by 8 pixels (at
@@ -157,6 +164,7 @@ impl Default for InbetweenOptions {
             morph: MorphOptions::default().with_placement(crate::Placement::Fit),
             pinhole: DEFAULT_PINHOLE,
             transparent_holes: false,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -190,6 +198,13 @@ impl InbetweenOptions {
     /// Holes under `area` square pixels are filled ([`InbetweenOptions::pinhole`]).
     pub fn with_pinhole(mut self, area: f64) -> Self {
         self.pinhole = area;
+        self
+    }
+    /// Bounds the construction, and the morph's frames, by `budget`
+    /// ([`InbetweenOptions::budget`], [`MorphOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.morph.budget = budget.clone();
+        self.budget = budget;
         self
     }
 
@@ -297,6 +312,9 @@ pub enum InbetweenError {
     /// A check of the construction failed: a bug.
     #[error("internal error: {0}")]
     Internal(String),
+    /// The options' [`crate::Budget`] was spent (cancelled or past its deadline).
+    #[error("stopped: {0}")]
+    Stopped(#[from] crate::Stopped),
 }
 
 /// The morph through the layouts: one segment, or a path through several.
@@ -350,18 +368,21 @@ impl Inbetween {
     ) -> Result<Inbetween, InbetweenError> {
         let path = compatible_path(drawings, matches, options)?;
         let holes = has_holes(&path.mesh);
-        match Inbetween::from_path(path, options.morph) {
+        match Inbetween::from_path(path, options.morph.clone()) {
             // The morph could not set up a hole of the mesh (it fills holes for its solve):
             // every hole as a transparent region instead, and the reports say why.
             Err(InbetweenError::Morph(e)) if holes && !options.transparent_holes => {
-                let mut path =
-                    compatible_path(drawings, matches, &options.with_transparent_holes(true))?;
+                let mut path = compatible_path(
+                    drawings,
+                    matches,
+                    &options.clone().with_transparent_holes(true),
+                )?;
                 for report in &mut path.reports {
                     report.notes.push(format!(
                         "the holes are transparent regions because the morph could not use them as holes: {e}"
                     ));
                 }
-                Inbetween::from_path(path, options.morph)
+                Inbetween::from_path(path, options.morph.clone())
             }
             made => made,
         }
@@ -393,13 +414,17 @@ impl Inbetween {
         options: MorphOptions,
     ) -> Result<Inbetween, InbetweenError> {
         let keyframes = path.keyframes();
+        let stopped = |e: MorphError| match e {
+            MorphError::Stopped(s) => InbetweenError::Stopped(s),
+            e => InbetweenError::Morph(e),
+        };
         let animation = if keyframes.len() == 2 {
-            Animation::Morph(Morph::new(&keyframes[0], &keyframes[1], options)?)
+            Animation::Morph(Morph::new(&keyframes[0], &keyframes[1], options).map_err(stopped)?)
         } else {
-            Animation::Path(KeyframePath::with_options(
-                &keyframes,
-                PathOptions::default().with_morph(options),
-            )?)
+            Animation::Path(
+                KeyframePath::with_options(&keyframes, PathOptions::default().with_morph(options))
+                    .map_err(stopped)?,
+            )
         };
         Ok(Inbetween { path, animation })
     }

@@ -197,6 +197,10 @@ impl Engine {
         };
         let mut vm = bdmorph_vm::Vm::new(program).map_err(solver)?;
         vm.set_factor_precision(options.factor_precision);
+        if !options.budget.is_unlimited() {
+            let budget = options.budget.clone();
+            vm.set_interrupt(Some(std::sync::Arc::new(move || budget.check().is_err())));
+        }
         let mut squared = keyframes
             .iter()
             .map(|k| vm.squared_lengths(&k.positions))
@@ -256,6 +260,7 @@ impl Engine {
         let n_unknowns = vm.u().len();
         let n_vertices = keyframes[0].positions.len();
         let n_slots = squared[0].len();
+        let tangents = options.tangents;
         Ok(Engine {
             rest: RestShape::new(&keyframes[0].positions, &faces[..visible.min(faces.len())]),
             distortion: vec![1.0; visible.min(faces.len())],
@@ -273,7 +278,7 @@ impl Engine {
                 s: 0.0,
                 u: vec![0.0; n_unknowns],
                 // Tangents only where they are predicted with.
-                du: if options.tangents {
+                du: if tangents {
                     vec![0.0; n_unknowns]
                 } else {
                     Vec::new()
@@ -389,6 +394,7 @@ impl Engine {
             Some(t) => FrameAt::Time(t),
             None => FrameAt::Weights(w.to_vec()),
         };
+        self.options.budget.check()?;
         self.check_weights(weights, time)?;
         if out.len() != self.vm.program().n_vertices() {
             return Err(MorphError::OutputLength {
@@ -444,6 +450,13 @@ impl Engine {
                     gradient_norm,
                     worst,
                 },
+                ClosureError::Vm(VmError::Interrupted { .. }) => MorphError::Stopped(
+                    self.options
+                        .budget
+                        .check()
+                        .err()
+                        .unwrap_or(crate::Stopped::Cancelled),
+                ),
                 ClosureError::Vm(other) => MorphError::Solver {
                     at: at(weights),
                     source: other,

@@ -20,7 +20,7 @@ use crate::morph::solver::Solver;
 use crate::mesh::{MeshError, PlanarMesh};
 
 /// Options of a [`Morph`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct MorphOptions {
     /// Newton's stopping rule (default: `||g|| < 1e-10`, at most 50 iterations).
@@ -71,6 +71,11 @@ pub struct MorphOptions {
     /// keyframes hold still in between and the frame does not swell; keyframes are reached
     /// exactly either way.
     pub placement: Placement,
+    /// Bounds each frame in time or by a cancellation flag, checked when a frame starts and
+    /// before every Newton iteration (default unlimited): once spent, the frame fails with
+    /// [`MorphError::Stopped`] and the next warm start is the last frame solved. Shared by
+    /// the object for its whole life: a timeout counts from when it was set.
+    pub budget: crate::Budget,
 }
 
 impl Default for MorphOptions {
@@ -85,6 +90,7 @@ impl Default for MorphOptions {
             threads: None,
             reach_inverted: false,
             placement: Placement::Anchor,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -168,6 +174,51 @@ impl MorphOptions {
     pub fn with_reuse_factor(mut self, reuse_factor: bool) -> Self {
         self.newton = self.newton.with_reuse_factor(reuse_factor);
         self
+    }
+    /// Bounds every frame by `budget` ([`MorphOptions::budget`]).
+    ///
+    /// ```
+    /// use std::sync::{atomic::{AtomicBool, Ordering}, Arc};
+    /// use bdmorph::{generate, Budget, Morph, MorphError, MorphOptions, Stopped};
+    /// let a = generate::disk(6, 0.2);
+    /// let b = generate::bend(&a, 0.5);
+    /// let cancel = Arc::new(AtomicBool::new(false));
+    /// let options = MorphOptions::default().with_budget(Budget::unlimited().with_cancel(cancel.clone()));
+    /// let mut morph = Morph::new(&a, &b, options)?;
+    /// morph.frame(0.5)?;
+    /// cancel.store(true, Ordering::Relaxed); // a Cancel button, from any thread
+    /// assert!(matches!(morph.frame(0.7), Err(MorphError::Stopped(Stopped::Cancelled))));
+    /// # Ok::<(), MorphError>(())
+    /// ```
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
+        self
+    }
+
+    /// Refuses a Newton tolerance or step cap that is not a finite number above 0 and an
+    /// iteration limit of 0, naming the option.
+    pub(crate) fn validate(&self) -> Result<(), MorphError> {
+        let positive = |option: &'static str, value: f64| {
+            if value > 0.0 && value.is_finite() {
+                Ok(())
+            } else {
+                Err(MorphError::BadOption {
+                    option,
+                    value,
+                    expected: "a finite number above 0",
+                })
+            }
+        };
+        positive("newton.tolerance", self.newton.tolerance)?;
+        positive("newton.step_cap", self.newton.step_cap)?;
+        if self.newton.max_iterations == 0 {
+            return Err(MorphError::BadOption {
+                option: "newton.max_iterations",
+                value: 0.0,
+                expected: "at least 1",
+            });
+        }
+        Ok(())
     }
 }
 
@@ -435,6 +486,20 @@ pub enum MorphError {
         /// Buffer length.
         got: usize,
     },
+    /// An option out of its range (named as in [`MorphOptions`]), refused when the object
+    /// is built.
+    #[error("option `{option}` is {value}: it must be {expected}")]
+    BadOption {
+        /// The option's field name.
+        option: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
+    /// The options' [`crate::Budget`] was spent (cancelled or past its deadline).
+    #[error("stopped: {0}")]
+    Stopped(#[from] crate::Stopped),
 }
 
 /// How many of a failed frame's worst triangles its message shows.

@@ -162,6 +162,11 @@ impl PathOptions {
         self.easings = easings;
         self
     }
+    /// Bounds every frame by `budget` ([`MorphOptions::budget`] of [`PathOptions::morph`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.morph.budget = budget;
+        self
+    }
 }
 
 /// A compiled path through keyframes `K0, K1, ..., Kn` (planar meshes with the same
@@ -217,7 +222,7 @@ impl KeyframePath {
     ) -> Result<KeyframePath, MorphError> {
         check_path_options(keyframes.len(), &options)?;
         check_count(keyframes)?;
-        let engine = Solver::new(keyframes, Unwrap::Cumulative, options.morph)?;
+        let engine = Solver::new(keyframes, Unwrap::Cumulative, options.morph.clone())?;
         Ok(KeyframePath::assemble(engine, keyframes.len(), &options))
     }
 
@@ -230,7 +235,12 @@ impl KeyframePath {
     ) -> Result<KeyframePath, MorphError> {
         check_path_options(keyframes.len(), &options)?;
         check_count(keyframes)?;
-        let engine = Solver::with_program(program, keyframes, Unwrap::Cumulative, options.morph)?;
+        let engine = Solver::with_program(
+            program,
+            keyframes,
+            Unwrap::Cumulative,
+            options.morph.clone(),
+        )?;
         Ok(KeyframePath::assemble(engine, keyframes.len(), &options))
     }
 

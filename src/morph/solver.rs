@@ -192,10 +192,11 @@ impl Solver {
         unwrap: Unwrap,
         options: MorphOptions,
     ) -> Result<Solver, MorphError> {
+        options.validate()?;
         let pool = crate::threads::Pool::new(options.threads)?;
         let mut solver = pool.run(|| {
-            let mut solver = Solver::new_here(keyframes, unwrap, options)?;
-            solver.prepare_reach(keyframes, options)?;
+            let mut solver = Solver::new_here(keyframes, unwrap, options.clone())?;
+            solver.prepare_reach(keyframes, &options)?;
             Ok::<_, MorphError>(solver)
         })?;
         solver.pool = pool;
@@ -208,7 +209,7 @@ impl Solver {
     fn prepare_reach(
         &mut self,
         keyframes: &[PlanarMesh],
-        options: MorphOptions,
+        options: &MorphOptions,
     ) -> Result<(), MorphError> {
         if !(options.allow_inverted && options.reach_inverted) {
             return Ok(());
@@ -356,7 +357,7 @@ impl Solver {
                 real_faces,
                 &free,
                 unwrap,
-                options,
+                options.clone(),
             )?;
             infos.push(PieceInfo {
                 vertices: piece.vertices.len(),
@@ -409,11 +410,12 @@ impl Solver {
     ) -> Result<Solver, MorphError> {
         // The program holds one disk; a face it does not have is refused when the solver
         // looks up the face's edges ([`MorphError::ProgramMismatch`]).
+        options.validate()?;
         let pool = crate::threads::Pool::new(options.threads)?;
         let inverted = check(keyframes, options.allow_inverted)?;
         let mut solver = pool.run(|| {
-            let mut solver = Solver::disk(program, keyframes, inverted, unwrap, options)?;
-            solver.prepare_reach(keyframes, options)?;
+            let mut solver = Solver::disk(program, keyframes, inverted, unwrap, options.clone())?;
+            solver.prepare_reach(keyframes, &options)?;
             Ok::<_, MorphError>(solver)
         })?;
         solver.pool = pool;

@@ -83,18 +83,21 @@ pub fn distortion(c: [[f64; 2]; 2]) -> f64 {
     }
 }
 
-/// Refuses bounds that are not finite numbers of at least 1.
+/// Refuses bounds that are not finite numbers of at least 1, a tolerance that is not a
+/// finite number above 0 and an iteration limit of 0.
 fn check_bounds(options: &BoundedOptions) -> Result<(), ParamError> {
     for k in std::iter::once(options.max_distortion).chain(options.inverted_bound) {
         if !(k >= 1.0 && k.is_finite()) {
             return Err(ParamError::BadBound(k));
         }
     }
+    super::check_tolerance("tolerance", options.tolerance)?;
+    super::check_iterations("iterations", options.iterations)?;
     Ok(())
 }
 
 /// Options of [`BoundedDistortion`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct BoundedOptions {
     /// The bound `K ≥ 1` on every triangle's conformal distortion.
@@ -114,6 +117,10 @@ pub struct BoundedOptions {
     /// iterations stop at are the same: every triangle within `max_distortion`, none
     /// inverted.
     pub inverted_bound: Option<f64>,
+    /// Bounds [`BoundedDistortion::solve_with`] in time or by a cancellation flag, checked
+    /// before every iteration of either phase (default unlimited): once spent,
+    /// [`ParamError::Stopped`] (the map keeps the last iteration's result).
+    pub budget: crate::Budget,
 }
 
 impl BoundedOptions {
@@ -125,7 +132,13 @@ impl BoundedOptions {
             tolerance: 1e-3,
             newton_finish: true,
             inverted_bound: None,
+            budget: crate::Budget::unlimited(),
         }
+    }
+    /// Bounds the iterations by `budget` ([`BoundedOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
+        self
     }
     /// Sets the iteration limit.
     pub fn with_iterations(mut self, iterations: u32) -> Self {
@@ -208,12 +221,22 @@ impl BoundedDistortion {
     /// degenerate triangle; a 2D mesh has `z = 0`) with the positional constraints `pins`
     /// (vertex, target point in the plane). Without pins, vertex 0 stays where the starting
     /// map puts it (the problem is invariant to translations).
+    ///
+    /// # Errors
+    /// [`ParamError::EmptyMesh`] without a vertex or a triangle; [`ParamError::BadBound`] and
+    /// [`ParamError::BadOption`] for options out of range; the mesh's and the pins' errors.
     pub fn new(
         mesh: &SurfaceMesh,
         pins: &[(u32, [f64; 2])],
         options: BoundedOptions,
     ) -> Result<BoundedDistortion, ParamError> {
         check_bounds(&options)?;
+        if mesh.positions.is_empty() || mesh.faces.is_empty() {
+            return Err(ParamError::EmptyMesh {
+                vertices: mesh.positions.len(),
+                faces: mesh.faces.len(),
+            });
+        }
         if let Some(vertex) = mesh
             .positions
             .iter()
@@ -258,6 +281,12 @@ impl BoundedDistortion {
         stiffness: Option<&[f64]>,
     ) -> Result<BoundedDistortion, ParamError> {
         check_bounds(&options)?;
+        if n == 0 || frames.faces.is_empty() {
+            return Err(ParamError::EmptyMesh {
+                vertices: n,
+                faces: frames.len(),
+            });
+        }
         let pins: Vec<(u32, [f64; 2])> = pins.iter().map(|&v| (v, [0.0; 2])).collect();
         let mut frames = frames;
         if let Some(w) = stiffness {
@@ -376,11 +405,16 @@ impl BoundedDistortion {
     /// set half the tolerance inside `K`) by projected Newton with the pins held: its line
     /// search never inverts a triangle, and its energy is zero exactly on the maps within
     /// the bound.
+    ///
+    /// # Errors
+    /// [`ParamError::UvLength`] unless `uv` has one point per vertex; [`ParamError::Stopped`]
+    /// once [`BoundedOptions::budget`] is spent; a failed solve.
     pub fn solve_with(
         &mut self,
         uv: &mut [[f64; 2]],
         mut progress: impl FnMut(u32, f64),
     ) -> Result<BoundedReport, ParamError> {
+        super::check_uv_len(self.index.len(), uv)?;
         let started = std::time::Instant::now();
         for &(v, t) in &self.pins {
             uv[v as usize] = t;
@@ -398,6 +432,7 @@ impl BoundedDistortion {
             if (worst <= limit && inverted == 0) || iterations >= self.options.iterations {
                 break;
             }
+            self.options.budget.check()?;
             if worst < best * (1.0 - 1e-4) {
                 (best, since_best) = (worst, 0);
             } else {
@@ -479,7 +514,11 @@ impl BoundedDistortion {
     }
 
     /// One projection and one constrained least-squares step, in place.
+    ///
+    /// # Errors
+    /// [`ParamError::UvLength`] unless `uv` has one point per vertex; a failed solve.
     pub fn iterate(&mut self, uv: &mut [[f64; 2]]) -> Result<(), ParamError> {
+        super::check_uv_len(self.index.len(), uv)?;
         let k = self.rhs.len() / 2;
         let kb = self.options.max_distortion;
         let k_inverted = self.options.inverted_bound.map_or(kb, |k| k.min(kb));
@@ -783,9 +822,11 @@ pub fn flatten(
     mut progress: impl FnMut(usize, u32, f64),
 ) -> Result<Flattening, ParamError> {
     let started = std::time::Instant::now();
+    let max_distortion = options.max_distortion;
+    let start_options = ParamOptions::default().with_budget(options.budget.clone());
     let mut solver = BoundedDistortion::new(mesh, pins, options)?;
     let lower_bound = angle_lower_bound(mesh);
-    let infeasible = options.max_distortion < lower_bound.bound;
+    let infeasible = max_distortion < lower_bound.bound;
     let starts = if starts.is_empty() {
         &[ParamMethod::Tutte][..]
     } else {
@@ -796,7 +837,7 @@ pub fn flatten(
     let mut best: Option<(usize, Vec<[f64; 2]>)> = None;
     for (i, &start) in starts.iter().enumerate() {
         let began = std::time::Instant::now();
-        let mut p = Parameterization::new(mesh, start, ParamOptions::default())?;
+        let mut p = Parameterization::new(mesh, start, start_options.clone())?;
         p.solve()?;
         let mut uv = p.uv().to_vec();
         setup_seconds += began.elapsed().as_secs_f64();
@@ -817,12 +858,12 @@ pub fn flatten(
             break;
         }
     }
-    let (kept, uv) = best.ok_or(ParamError::BadBound(options.max_distortion))?;
+    let (kept, uv) = best.ok_or(ParamError::BadBound(max_distortion))?;
     Ok(Flattening {
         uv,
         attempts,
         kept,
-        bound: options.max_distortion,
+        bound: max_distortion,
         lower_bound,
         setup_seconds,
     })

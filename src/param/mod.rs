@@ -110,7 +110,7 @@ impl std::str::FromStr for ParamMethod {
 }
 
 /// Options of a [`Parameterization`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct ParamOptions {
     /// Threads for this object's work: `None` (default) for rayon's global pool, one thread
@@ -132,6 +132,10 @@ pub struct ParamOptions {
     /// minimum. Zero minimises plain ARAP (which may then stall against a collapsing
     /// triangle: [`Stop::Stalled`]).
     pub collapse_barrier: f64,
+    /// Bounds [`Parameterization::solve`] in time or by a cancellation flag, checked before
+    /// every iteration (default unlimited): once spent, [`ParamError::Stopped`] (the map
+    /// keeps the last iteration's result).
+    pub budget: crate::Budget,
 }
 
 /// The default weight of `arap-newton`'s collapse barrier ([`ParamOptions::collapse_barrier`]).
@@ -218,6 +222,7 @@ impl Default for ParamOptions {
             tolerance: 1e-9,
             collapse_barrier: DEFAULT_COLLAPSE_BARRIER,
             threads: None,
+            budget: crate::Budget::unlimited(),
         }
     }
 }
@@ -241,6 +246,11 @@ impl ParamOptions {
     /// Sets the weight of `arap-newton`'s collapse barrier (zero: plain ARAP).
     pub fn with_collapse_barrier(mut self, weight: f64) -> Self {
         self.collapse_barrier = weight;
+        self
+    }
+    /// Bounds the iterations by `budget` ([`ParamOptions::budget`]).
+    pub fn with_budget(mut self, budget: crate::Budget) -> Self {
+        self.budget = budget;
         self
     }
 }
@@ -323,6 +333,73 @@ pub enum ParamError {
         /// Why.
         source: CholeskyError,
     },
+    /// The mesh has no vertex or no triangle.
+    #[error("the mesh is empty ({vertices} vertices, {faces} triangles)")]
+    EmptyMesh {
+        /// Vertex count.
+        vertices: usize,
+        /// Triangle count.
+        faces: usize,
+    },
+    /// A map given with a number of points other than the mesh's vertex count.
+    #[error("the map has {got} points for {expected} vertices")]
+    UvLength {
+        /// The mesh's vertex count.
+        expected: usize,
+        /// Points given.
+        got: usize,
+    },
+    /// An option out of its range (named as in the options struct).
+    #[error("option `{option}` is {value}: it must be {expected}")]
+    BadOption {
+        /// The option's field name.
+        option: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
+    /// The options' [`crate::Budget`] was spent (cancelled or past its deadline).
+    #[error("stopped: {0}")]
+    Stopped(#[from] crate::Stopped),
+}
+
+/// Refuses `uv` unless it has one point per vertex.
+pub(crate) fn check_uv_len(expected: usize, uv: &[[f64; 2]]) -> Result<(), ParamError> {
+    if uv.len() == expected {
+        Ok(())
+    } else {
+        Err(ParamError::UvLength {
+            expected,
+            got: uv.len(),
+        })
+    }
+}
+
+/// Refuses a tolerance that is not a finite number above 0 (naming the option).
+pub(crate) fn check_tolerance(option: &'static str, value: f64) -> Result<(), ParamError> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ParamError::BadOption {
+            option,
+            value,
+            expected: "a finite number above 0",
+        })
+    }
+}
+
+/// Refuses an iteration count of 0 (naming the option).
+pub(crate) fn check_iterations(option: &'static str, value: u32) -> Result<(), ParamError> {
+    if value >= 1 {
+        Ok(())
+    } else {
+        Err(ParamError::BadOption {
+            option,
+            value: f64::from(value),
+            expected: "at least 1",
+        })
+    }
 }
 
 /// The distortion of a map, area-weighted means over the triangles, and its bad triangles.
@@ -405,7 +482,12 @@ impl SolveReport {
 }
 
 /// The distortion of the map `uv` (one point per vertex) of `mesh`.
+///
+/// # Errors
+/// [`ParamError::UvLength`] unless `uv` has one point per vertex, and the mesh's own errors
+/// (a face naming a vertex out of range, a degenerate triangle).
 pub fn energies(mesh: &SurfaceMesh, uv: &[[f64; 2]]) -> Result<Energies, ParamError> {
+    check_uv_len(mesh.positions.len(), uv)?;
     check_indices(mesh)?;
     let frames = Frames::new(mesh).map_err(|face| ParamError::Degenerate { face })?;
     Ok(energies_of(&frames, uv))
@@ -491,7 +573,7 @@ impl Parameterization {
         options: ParamOptions,
     ) -> Result<Parameterization, ParamError> {
         let pool = crate::threads::Pool::new(options.threads)?;
-        let mut built = pool.run(|| Parameterization::new_here(mesh, method, options))?;
+        let mut built = pool.run(|| Parameterization::new_here(mesh, method, options.clone()))?;
         built.pool = pool;
         Ok(built)
     }
@@ -512,6 +594,16 @@ impl Parameterization {
         let barrier = options.collapse_barrier;
         if !(barrier >= 0.0 && barrier.is_finite()) {
             return Err(ParamError::BadBarrier(barrier));
+        }
+        check_tolerance("tolerance", options.tolerance)?;
+        if let Some(iterations) = options.iterations {
+            check_iterations("iterations", iterations)?;
+        }
+        if mesh.positions.is_empty() || mesh.faces.is_empty() {
+            return Err(ParamError::EmptyMesh {
+                vertices: mesh.positions.len(),
+                faces: mesh.faces.len(),
+            });
         }
         let objective = match method {
             ParamMethod::Arap => Energy::Arap,
@@ -645,6 +737,9 @@ impl Parameterization {
         let mut blocked_run = 0;
         let mut limiting_face = None;
         while iterations < limit {
+            if !matches!(self.solver, Solver::Direct) {
+                self.options.budget.check()?;
+            }
             let Some(report) = self.step()? else {
                 break;
             };

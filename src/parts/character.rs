@@ -137,6 +137,18 @@ pub enum CharacterError {
     /// Making the character was cancelled or ran out of time (see [`crate::Budget`]).
     #[error("making the character stopped: {0}")]
     Stopped(#[from] crate::Stopped),
+    /// A layer whose pixels are not `width × height × 4` bytes.
+    #[error("layer '{layer}' is {width} x {height} pixels but holds {got} bytes, not {width} x {height} x 4")]
+    LayerPixels {
+        /// The layer.
+        layer: String,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// Bytes it holds.
+        got: usize,
+    },
 }
 
 /// Where each layer's padded crop lies in the atlas: `[left, top, width, height]` in pixels,
@@ -147,11 +159,30 @@ pub type AtlasPlaces = Vec<[u32; 4]>;
 /// function of the layers, so the same file always gives the same atlas.
 ///
 /// # Errors
-/// [`CharacterError::AtlasTooLarge`] beyond [`MAX_ATLAS_SIDE`].
+/// [`CharacterError::AtlasTooLarge`] beyond [`MAX_ATLAS_SIDE`];
+/// [`CharacterError::LayerPixels`] for a layer whose pixels are not `width × height × 4`
+/// bytes.
 pub fn atlas(layers: &[Layer]) -> Result<(Image, AtlasPlaces), CharacterError> {
+    for l in layers {
+        let (w, h) = (l.image.width, l.image.height);
+        let expected = u64::from(w) * u64::from(h) * 4;
+        if l.image.rgba.len() as u64 != expected {
+            return Err(CharacterError::LayerPixels {
+                layer: l.name.clone(),
+                width: w,
+                height: h,
+                got: l.image.rgba.len(),
+            });
+        }
+    }
     let sizes: Vec<(u32, u32)> = layers
         .iter()
-        .map(|l| (l.image.width + 2 * PAD, l.image.height + 2 * PAD))
+        .map(|l| {
+            (
+                l.image.width.saturating_add(2 * PAD),
+                l.image.height.saturating_add(2 * PAD),
+            )
+        })
         .collect();
     let widest = sizes.iter().map(|s| s.0).max().unwrap_or(1);
     let area: f64 = sizes.iter().map(|s| f64::from(s.0) * f64::from(s.1)).sum();

@@ -4,11 +4,38 @@
 //! exactly (both vertices are one unknown). Morphing moves each piece by its own BDMORPH frame
 //! and then places the pieces so that the joints stay together ([`Placement`]).
 
-use crate::mesh::PlanarMesh;
+use crate::mesh::{MeshError, PlanarMesh};
 
 /// Each vertex's piece (triangles connected through shared vertices), numbered in the order of
 /// their first triangle; `u32::MAX` for a vertex no triangle uses. Also how many pieces.
-pub fn pieces_of(faces: &[[u32; 3]], n: usize) -> (Vec<u32>, usize) {
+///
+/// # Errors
+/// [`MeshError::IndexOutOfRange`] for the first face that names a vertex `>= n`.
+///
+/// ```
+/// use bdmorph::parts::pieces_of;
+/// let (piece, count) = pieces_of(&[[0, 1, 2], [3, 4, 5]], 7)?;
+/// assert_eq!((piece[4], piece[6], count), (1, u32::MAX, 2));
+/// assert!(pieces_of(&[[0, 1, 9]], 3).is_err());
+/// # Ok::<(), bdmorph::MeshError>(())
+/// ```
+pub fn pieces_of(faces: &[[u32; 3]], n: usize) -> Result<(Vec<u32>, usize), MeshError> {
+    if let Some((face, &vertex)) = faces
+        .iter()
+        .enumerate()
+        .find_map(|(i, f)| f.iter().find(|&&v| v as usize >= n).map(|v| (i, v)))
+    {
+        return Err(MeshError::IndexOutOfRange {
+            face,
+            vertex,
+            n_vertices: n,
+        });
+    }
+    Ok(pieces_in_range(faces, n))
+}
+
+/// [`pieces_of`] for faces whose indices are all below `n` (checked by the caller).
+fn pieces_in_range(faces: &[[u32; 3]], n: usize) -> (Vec<u32>, usize) {
     let mut parent: Vec<u32> = (0..n as u32).collect();
     fn find(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
@@ -53,7 +80,9 @@ pub struct Weld {
 }
 
 impl Weld {
-    /// Welds `joints` (pairs of vertices of `rest`) into single vertices.
+    /// Welds `joints` (pairs of vertices of `rest`) into single vertices. Joints naming a
+    /// vertex out of range are ignored; a face naming one keeps an index out of range
+    /// (`u32::MAX`), which whatever uses the welded mesh refuses.
     pub fn new(rest: &PlanarMesh, joints: &[[u32; 2]]) -> Weld {
         let n = rest.positions.len();
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -87,7 +116,7 @@ impl Weld {
             faces: rest
                 .faces
                 .iter()
-                .map(|f| f.map(|v| of[v as usize]))
+                .map(|f| f.map(|v| of.get(v as usize).copied().unwrap_or(u32::MAX)))
                 .collect(),
         };
         Weld { of, mesh, first }
@@ -99,16 +128,23 @@ impl Weld {
     }
 
     /// `positions` of the whole mesh gathered onto the welded one (each welded vertex from its
-    /// first vertex).
+    /// first vertex; NaN for a vertex `positions` is too short to hold).
     pub fn gather(&self, positions: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
         out.clear();
-        out.extend(self.first.iter().map(|&v| positions[v as usize]));
+        out.extend(
+            self.first
+                .iter()
+                .map(|&v| positions.get(v as usize).copied().unwrap_or([f64::NAN; 2])),
+        );
     }
 
-    /// The welded mesh's positions spread back onto the whole mesh.
+    /// The welded mesh's positions spread back onto the whole mesh (a vertex `welded` is too
+    /// short to hold is left as it is).
     pub fn scatter(&self, welded: &[[f64; 2]], out: &mut [[f64; 2]]) {
         for (o, &w) in out.iter_mut().zip(&self.of) {
-            *o = welded[w as usize];
+            if let Some(&p) = welded.get(w as usize) {
+                *o = p;
+            }
         }
     }
 }
@@ -154,7 +190,14 @@ impl Placement {
     /// Prepares the placement of `rest`'s pieces tied by `joints`.
     pub fn new(rest: &PlanarMesh, joints: &[[u32; 2]]) -> Placement {
         let n = rest.positions.len();
-        let (piece_of, pieces) = pieces_of(&rest.faces, n);
+        // Faces naming a vertex out of range (an invalid mesh) tie nothing.
+        let faces: Vec<[u32; 3]> = rest
+            .faces
+            .iter()
+            .copied()
+            .filter(|f| f.iter().all(|&v| (v as usize) < n))
+            .collect();
+        let (piece_of, pieces) = pieces_in_range(&faces, n);
         let joints: Vec<[u32; 2]> = joints
             .iter()
             .copied()
@@ -167,7 +210,7 @@ impl Placement {
             })
             .collect();
         let mut area = vec![0.0; pieces];
-        for f in &rest.faces {
+        for f in &faces {
             let p = piece_of[f[0] as usize];
             if p != u32::MAX {
                 area[p as usize] += rest.signed_area(f).abs();
@@ -261,8 +304,16 @@ impl Placement {
         &self.joints
     }
 
-    /// Places the pieces of `positions` (a frame of the rest mesh's vertices).
+    /// Places the pieces of `positions` (a frame of the rest mesh's vertices). Positions of
+    /// another length than the rest mesh's vertices are left as they are, and the report's
+    /// `largest_gap` is infinite.
     pub fn apply(&mut self, positions: &mut [[f64; 2]]) -> PlacementReport {
+        if positions.len() != self.piece_of.len() {
+            return PlacementReport {
+                largest_gap: f64::INFINITY,
+                ..PlacementReport::default()
+            };
+        }
         if self.joints.is_empty() {
             return PlacementReport::default();
         }
@@ -422,7 +473,7 @@ mod tests {
         let weld = Weld::new(&rest, &joints);
         assert_eq!(weld.mesh.positions.len(), 10);
         assert_eq!(weld.of[1], weld.of[4]);
-        assert_eq!(pieces_of(&weld.mesh.faces, 10).1, 1);
+        assert_eq!(pieces_of(&weld.mesh.faces, 10).unwrap().1, 1);
         let mut out = vec![[0.0; 2]; 12];
         let mut w = Vec::new();
         weld.gather(&rest.positions, &mut w);

@@ -15,6 +15,12 @@ pub enum VmError {
         /// Gradient norm at the last iterate.
         gradient_norm: f64,
     },
+    /// The caller's interrupt test ([`crate::Vm::set_interrupt`]) asked Newton to stop.
+    #[error("interrupted at Newton iteration {iteration}")]
+    Interrupted {
+        /// Iterations done before it.
+        iteration: u32,
+    },
     /// The gradient became NaN or infinite.
     #[error("the gradient became non-finite at Newton iteration {iteration}")]
     NonFinite {

@@ -83,6 +83,10 @@ impl std::fmt::Display for TriangleReport {
 
 use bdmorph_cholesky::Cholesky;
 
+/// A test asked before every Newton iteration: `true` stops the solve with
+/// [`VmError::Interrupted`] (a caller's deadline or cancellation flag).
+pub type Interrupt = std::sync::Arc<dyn Fn() -> bool + Send + Sync>;
+
 /// Executes one compiled program; owns every buffer it needs (see the crate documentation).
 pub struct Vm {
     program: Program,
@@ -127,6 +131,8 @@ pub struct Vm {
     /// happened).
     inherited_rate: (f64, f64),
     failure: Vec<TriangleReport>,
+    /// Asked before every Newton iteration whether to stop ([`Vm::set_interrupt`]).
+    interrupt: Option<Interrupt>,
 }
 
 impl std::fmt::Debug for Vm {
@@ -180,6 +186,7 @@ impl Vm {
             refactor_beyond,
             inherited_rate: (f64::NAN, f64::NAN),
             failure: Vec::new(),
+            interrupt: None,
             program,
         })
     }

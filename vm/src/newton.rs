@@ -155,6 +155,13 @@ fn norm(v: &[f64]) -> f64 {
 }
 
 impl Vm {
+    /// Sets the test [`Vm::newton`] asks before every iteration (`None`, the default: none):
+    /// when it answers `true` the solve stops with [`VmError::Interrupted`], `u` restored as
+    /// for any error. The test must not allocate for a solve to allocate nothing.
+    pub fn set_interrupt(&mut self, interrupt: Option<crate::Interrupt>) {
+        self.interrupt = interrupt;
+    }
+
     /// Solves for the flat metric from the current `u` (the previous frame's, a warm start).
     ///
     /// Each iteration evaluates the gradient and Hessian, stops when `||g||_2` is below the
@@ -232,6 +239,13 @@ impl Vm {
             }
             if gradient_norm < options.tolerance {
                 return Ok(());
+            }
+            if let Some(interrupt) = &self.interrupt {
+                if interrupt() {
+                    return Err(VmError::Interrupted {
+                        iteration: report.iterations,
+                    });
+                }
             }
             if report.iterations >= options.max_iterations {
                 return Err(VmError::NotConverged {

@@ -180,12 +180,15 @@ fn cancel_stops_a_long_export_within_a_second_and_a_second_job_is_answered() {
             r#"{"op":"export","format":"gif","name":"huge.gif","frames":3,"size":[16384,16384]}"#,
         )
         .expect("refused");
-    assert!(said.contains("at most"), "{said}");
+    assert!(
+        said.contains("at most") || said.contains("over the budget"),
+        "{said}"
+    );
     assert!(studio.page_is_served());
 }
 
 /// The studio's largest mesh (200,000 vertices) is made in about a second, and Cancel is
-/// heard between the stages of meshing (inside the mesher once it takes a budget).
+/// heard between the stages of meshing.
 #[test]
 fn cancel_stops_meshing_within_a_second() {
     let dir = scratch("bounds-cancel-mesh");
@@ -208,12 +211,13 @@ fn cancel_stops_meshing_within_a_second() {
 }
 
 #[test]
-#[ignore = "needs layered reading that takes a Budget (the PSD reader's branch)"]
 fn cancel_stops_opening_a_many_layer_psd_within_a_second() {
     let dir = scratch("bounds-cancel-open");
     let base = layered::figure();
     let mut layers = Vec::new();
-    for k in 0..2000 {
+    // As many layers as a character may have (more are refused at once), all overlapping:
+    // seconds of meshing and joints.
+    for k in 0..bdmorph::parts::MAX_PARTS {
         let l = &base[k % base.len()];
         layers.push(layered::TestLayer {
             name: format!("layer {k}"),
@@ -225,12 +229,11 @@ fn cancel_stops_opening_a_many_layer_psd_within_a_second() {
     let studio = Studio::start(&dir, None);
     let mut c = studio.client();
     assert_eq!(c.request(r#"{"op":"open","name":"many.psd"}"#), None);
-    let seconds = cancel_latency(&mut c, "opening a 2000-layer PSD");
+    let seconds = cancel_latency(&mut c, "opening a 256-layer PSD");
     assert!(seconds < 3.0, "{seconds} s");
 }
 
 #[test]
-#[ignore = "needs InbetweenOptions::with_budget to hear Cancel inside the drawing fit"]
 fn cancel_stops_a_drawing_fit_within_a_second() {
     use bdmorph::generate;
     use bdmorph::render::raster;
@@ -520,7 +523,6 @@ fn crafted_psd() -> Vec<u8> {
 }
 
 #[test]
-#[ignore = "needs the bounded PSD reader (the psd crate allocates what the file declares)"]
 fn a_crafted_psd_by_each_route_leaves_the_server_answering() {
     let dir = scratch("bounds-crafted-psd");
     let bytes = crafted_psd();

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
 use super::export::{export_with_drawings_to, ExportSettings};
-use super::open::{open, OpenOptions, Opened};
+use super::open::{open_with, OpenOptions, Opened};
 use super::project::Project;
 use crate::mesh::PlanarMesh;
 use crate::meshing::{Meshed, Outline};
@@ -225,9 +225,8 @@ impl MeshWork {
         if let Some([w, h]) = self.picture {
             outline.texture_frame = Some([0.0, 0.0, f64::from(w), f64::from(h)]);
         }
-        // TODO(lead): pass `progress.budget()` to the mesher (`MeshOptions::with_budget`)
-        // once the library's budgets land, so that Cancel stops it inside its refinement;
-        // until then it is heard between the stages here.
+        // The mesher has no budget of its own (its work is bounded by the studio's vertex
+        // cap, about a second at the largest): Cancel is heard between the stages here.
         let options = crate::meshing::MeshOptions::default().with_vertices(self.vertices);
         progress.cancelled()?;
         let meshed = crate::meshing::mesh_outline(&outline, &options).map_err(|e| e.to_string())?;
@@ -258,10 +257,13 @@ pub struct OpenWork {
 impl OpenWork {
     fn run(self, progress: &Progress) -> Result<Outcome, String> {
         progress.cancelled()?;
-        // TODO(lead): once layered reading takes a `&Budget`, `OpenOptions` carries
-        // `progress.budget()` to it, so that Cancel stops a many-layer file inside its
-        // layers; until then it is heard before and after the file is read.
-        let opened = open(&self.path, &self.workspace, &self.options)?;
+        // Cancel is heard between a layered picture's layers and while its character is made.
+        let opened = open_with(
+            &self.path,
+            &self.workspace,
+            &self.options,
+            &progress.budget(),
+        )?;
         progress.cancelled()?;
         Ok(Outcome::Opened {
             opened: Box::new(opened),
@@ -300,10 +302,10 @@ impl DrawingWork {
         progress.total.store(0, Ordering::Relaxed);
         progress.cancelled()?;
         let matches: Vec<Match> = self.pairs.iter().map(|&[a, b]| Match { a, b }).collect();
-        // TODO(lead): pass `progress.budget()` (`InbetweenOptions::with_budget`) once the
-        // library's budgets land, so that Cancel stops the fit inside its solves; until then
-        // it is heard before and after the fit.
-        let options = InbetweenOptions::default().with_picture(self.picture);
+        // Cancel is heard inside the fit's solves (its untangling and bounded stages).
+        let options = InbetweenOptions::default()
+            .with_picture(self.picture)
+            .with_budget(progress.budget());
         let fit = fit_drawing(
             &self.mesh,
             self.picture_height,

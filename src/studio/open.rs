@@ -271,6 +271,17 @@ pub fn name_in(workspace: &Path, file: &Path) -> String {
 
 /// Opens `file` (see the [module docs](self)); textures are named relative to `workspace`.
 pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Opened, String> {
+    open_with(file, workspace, options, &crate::Budget::unlimited())
+}
+
+/// As [`open`], stopping with "cancelled" (or the deadline's message) once `budget` is spent:
+/// it is checked between a layered picture's layers and while its character is made.
+pub fn open_with(
+    file: &Path,
+    workspace: &Path,
+    options: &OpenOptions,
+    budget: &crate::Budget,
+) -> Result<Opened, String> {
     let shown = file.display().to_string();
     let ext = file
         .extension()
@@ -424,7 +435,7 @@ pub fn open(file: &Path, workspace: &Path, options: &OpenOptions) -> Result<Open
             let name = name_in(workspace, file);
             let bytes = read_regular(file, MAX_PICTURE_BYTES).map_err(|e| e.to_string())?;
             let (project, texture, layered_notes) =
-                layered_project(&bytes, name).map_err(|e| format!("{shown}: {e}"))?;
+                layered_project_with(&bytes, name, budget).map_err(|e| format!("{shown}: {e}"))?;
             notes.extend(layered_notes);
             Ok(Opened {
                 project,
@@ -449,9 +460,23 @@ pub fn layered_project(
     bytes: &[u8],
     name: String,
 ) -> Result<(Project, Texture, Vec<String>), String> {
-    let layered = crate::parts::read_layered(bytes).map_err(|e| e.to_string())?;
-    let c = crate::parts::character(&layered, &crate::parts::CharacterOptions::default())
-        .map_err(|e| e.to_string())?;
+    layered_project_with(bytes, name, &crate::Budget::unlimited())
+}
+
+/// As [`layered_project`], stopping once `budget` is spent (between layers, and while the
+/// character's parts and joints are made).
+///
+/// # Errors
+/// As [`layered_project`]; "... stopped: cancelled" when the budget's flag is set.
+pub fn layered_project_with(
+    bytes: &[u8],
+    name: String,
+    budget: &crate::Budget,
+) -> Result<(Project, Texture, Vec<String>), String> {
+    let layered = crate::parts::read_layered_with(bytes, budget).map_err(|e| e.to_string())?;
+    let c =
+        crate::parts::character_with(&layered, &crate::parts::CharacterOptions::default(), budget)
+            .map_err(|e| e.to_string())?;
     let mut project = Project::new(&c.mesh, Some(c.texcoords.clone()));
     project.texture = Some(name.clone());
     project.parts = Some(

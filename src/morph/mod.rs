@@ -300,7 +300,7 @@ pub enum FrameAt {
 
 /// A time or weight as people read it: to 9 decimals (short enough to read, precise enough
 /// to reproduce a limit), and in exponent notation far from 1 (`1e20`, not 21 digits).
-struct Readable(f64);
+pub(crate) struct Readable(pub(crate) f64);
 
 impl std::fmt::Display for Readable {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -15,7 +15,7 @@
 //! let drawing = Drawing { faces: &mesh.faces, corner_uv: None, texture: None, face_colours: None, depth: None };
 //! let view = Viewport::fit([&mesh.positions[..]]);
 //! let size = ImageSize { width: 64, height: 48 };
-//! let image = raster::render(&mesh.positions, &drawing, &view, size);
+//! let image = raster::render(&mesh.positions, &drawing, &view, size)?;
 //! assert_eq!((image.width, image.height), (64, 48));
 //! let png = raster::encode_png(&image)?;
 //! assert_eq!(raster::decode_image(&png)?, image);

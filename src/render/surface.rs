@@ -12,8 +12,9 @@
 //! let sphere = generate::icosphere(2);
 //! let height: Vec<f64> = sphere.positions.iter().map(|p| p[2] + 1.0).collect();
 //! let size = ImageSize { width: 120, height: 100 };
-//! let image = surface::render_field(&sphere.positions, &sphere.faces, &height, size);
+//! let image = surface::render_field(&sphere.positions, &sphere.faces, &height, size)?;
 //! assert_eq!((image.width, image.height), (120, 100));
+//! # Ok::<(), bdmorph::render::raster::RenderError>(())
 //! ```
 
 use tiny_skia::{Color, FillRule, LineCap, Paint, PathBuilder, Pixmap, Stroke, Transform};

@@ -231,8 +231,19 @@ pub fn frames_kept(
 ) -> Result<(Vec<usize>, usize), String> {
     let count = settings.frames.unwrap_or_else(|| default_frames(project));
     if count > MAX_EXPORT_FRAMES {
+        let what = match settings.frames {
+            Some(n) => format!("{n} frames"),
+            None => {
+                let duration = project.keyframes.last().map_or(0.0, |k| k.time);
+                format!(
+                    "the animation lasts {} s: over {MAX_EXPORT_FRAMES} frames at {} fps",
+                    crate::morph::Readable(duration),
+                    crate::morph::Readable(project.fps)
+                )
+            }
+        };
         return Err(format!(
-            "{count} frames: an export makes at most {MAX_EXPORT_FRAMES}"
+            "{what}: an export makes at most {MAX_EXPORT_FRAMES} (give fewer frames)"
         ));
     }
     let count = count.max(2);

@@ -58,14 +58,6 @@ pub enum TextureError {
         /// Why.
         why: String,
     },
-    /// More pixels than the studio decodes ([`super::pictures::MAX_PICTURE_PIXELS`]).
-    #[error("{}: {why}", .path.display())]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// Its size and the limit.
-        why: String,
-    },
     /// Outside the workspace (named by a project from the page).
     #[error("{} is outside the workspace {}: the studio reads a project's picture only inside its folder", .path.display(), .workspace.display())]
     Outside {
@@ -89,10 +81,6 @@ pub fn read_texture(path: &Path, name: &str) -> Result<Texture, TextureError> {
     if crate::parts::layered_format(&bytes).is_some() {
         return layered_texture(path, name, &bytes);
     }
-    super::pictures::check_picture_size(&bytes).map_err(|why| TextureError::TooLarge {
-        path: path.to_path_buf(),
-        why,
-    })?;
     let image = raster::decode_image(&bytes).map_err(|source| TextureError::Decode {
         path: path.to_path_buf(),
         source,

@@ -2,9 +2,9 @@
 //!
 //! A picture costs its decoded pixels (4 bytes each) and its file's bytes (served to the page
 //! as they are). The cache holds at most [`PICTURE_CACHE_BYTES`] of them; when a new one would
-//! go over, the least recently used go first. A picture whose own cost is over the budget is
-//! refused before it is decoded ([`check_picture_size`] reads the size from the file's header),
-//! with its size and the limit in the message. Pictures in use (the document's picture, a
+//! go over, the least recently used go first. A picture over the pixel budget of every picture
+//! read ([`crate::render::MAX_PIXELS`]) is refused from its header before it is decoded
+//! ([`crate::render::raster::decode_image`]), with its size and the limit in the message. Pictures in use (the document's picture, a
 //! running export's copy) stay alive while they are used, whatever the cache dropped.
 
 use std::collections::VecDeque;
@@ -16,52 +16,9 @@ use super::open::Texture;
 /// room for one 8192 x 8192 picture (256 MiB decoded) and its file, or many smaller ones.
 pub const PICTURE_CACHE_BYTES: usize = 320 << 20;
 
-/// The most pixels of one picture the studio decodes: 8192 x 8192 (256 MiB decoded).
-pub const MAX_PICTURE_PIXELS: u64 = 8192 * 8192;
-
 /// What a picture costs in memory.
 pub fn cost(texture: &Texture) -> usize {
     texture.image.rgba.len() + texture.bytes.len()
-}
-
-/// The width and height a PNG or JPEG file declares, read from its header (no pixels are
-/// decoded); `None` for other bytes or a header that cannot be read.
-pub fn declared_size(bytes: &[u8]) -> Option<(u32, u32)> {
-    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        // The IHDR chunk comes first: length (4), "IHDR", width (4), height (4).
-        let ihdr = bytes.get(12..24)?;
-        if &ihdr[..4] != b"IHDR" {
-            return None;
-        }
-        let w = u32::from_be_bytes(ihdr[4..8].try_into().ok()?);
-        let h = u32::from_be_bytes(ihdr[8..12].try_into().ok()?);
-        return Some((w, h));
-    }
-    if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
-        use zune_jpeg::zune_core::bytestream::ZCursor;
-        let mut decoder = zune_jpeg::JpegDecoder::new(ZCursor::new(bytes));
-        decoder.decode_headers().ok()?;
-        let (w, h) = decoder.dimensions()?;
-        return Some((u32::try_from(w).ok()?, u32::try_from(h).ok()?));
-    }
-    None
-}
-
-/// `Err` with the reason when the PNG or JPEG `bytes` declare more than
-/// [`MAX_PICTURE_PIXELS`] (checked before decoding; other bytes pass, for their own reader).
-///
-/// # Errors
-/// The picture's size and the limit, in words.
-pub fn check_picture_size(bytes: &[u8]) -> Result<(), String> {
-    match declared_size(bytes) {
-        Some((w, h)) if u64::from(w) * u64::from(h) > MAX_PICTURE_PIXELS => Err(format!(
-            "{w} x {h} pixels ({} MiB decoded): the studio reads pictures of at most {} pixels (8192 x 8192, {} MiB); scale it down first",
-            (u64::from(w) * u64::from(h) * 4) >> 20,
-            MAX_PICTURE_PIXELS,
-            (MAX_PICTURE_PIXELS * 4) >> 20,
-        )),
-        _ => Ok(()),
-    }
 }
 
 /// Pictures read, by name, least recently used first, within a budget of bytes.
@@ -177,19 +134,5 @@ mod tests {
             "over the whole budget: not kept"
         );
         assert!(cache.bytes() <= 3 * one);
-    }
-
-    #[test]
-    fn sizes_are_read_from_the_header() {
-        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
-        png.extend_from_slice(&20000u32.to_be_bytes());
-        png.extend_from_slice(&3u32.to_be_bytes());
-        assert_eq!(declared_size(&png), Some((20000, 3)));
-        assert!(check_picture_size(&png).is_ok());
-        png[16..20].copy_from_slice(&16384u32.to_be_bytes());
-        png[20..24].copy_from_slice(&16384u32.to_be_bytes());
-        let e = check_picture_size(&png).unwrap_err();
-        assert!(e.contains("16384 x 16384"), "{e}");
-        assert_eq!(declared_size(b"GIF89a"), None);
     }
 }

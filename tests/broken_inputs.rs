@@ -233,7 +233,7 @@ fn posing_options_out_of_range_are_refused_by_name() {
     let mesh = disk();
     let cases: Vec<(PoseMethod, &str, &str)> = vec![
         (
-            PoseMethod::Kvf(KvfOptions::default().with_tolerance(0.0)),
+            PoseMethod::Kvf(KvfOptions::default().with_tolerance(-1e-9)),
             "kvf",
             "tolerance",
         ),
@@ -298,6 +298,15 @@ fn posing_options_out_of_range_are_refused_by_name() {
             ..
         })
     ));
+    // A tolerance of 0 is allowed for every posing method (a bounded number of iterations,
+    // none stopped early), as the Python package documents.
+    for method in [
+        PoseMethod::Kvf(KvfOptions::default().with_tolerance(0.0)),
+        PoseMethod::Arap(ArapOptions::default().with_tolerance(0.0)),
+        PoseMethod::Sd(SdOptions::default().with_tolerance(0.0)),
+    ] {
+        assert!(Deformer::new(&mesh, method).is_ok());
+    }
     // ARAP iterations of 0 before the projections stay allowed (projections only).
     assert!(Deformer::new(
         &mesh,

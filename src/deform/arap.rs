@@ -64,7 +64,7 @@ impl ArapOptions {
         self.budget = budget;
         self
     }
-    /// Refuses a tolerance that is not a finite number above 0 and 0 iterations.
+    /// Refuses a tolerance that is not a finite number >= 0 and 0 iterations.
     pub(crate) fn validate(&self) -> Result<(), DeformError> {
         super::check_tolerance("arap", "tolerance", self.tolerance)?;
         super::check_iterations("arap", "iterations", self.iterations)

@@ -179,7 +179,7 @@ impl KvfOptions {
         self.budget = budget;
         self
     }
-    /// Refuses a tolerance that is not a finite number above 0 and 0 steps or alternations
+    /// Refuses a tolerance that is not a finite number >= 0 and 0 steps or alternations
     /// (the weight and the distortion cap are checked by `set_pins`, as documented).
     pub(crate) fn validate(&self) -> Result<(), DeformError> {
         super::check_tolerance("kvf", "tolerance", self.tolerance)?;

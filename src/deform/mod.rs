@@ -240,20 +240,21 @@ impl DeformError {
     }
 }
 
-/// Refuses a tolerance that is not a finite number above 0 (naming the method and option).
+/// Refuses a tolerance that is not a finite number >= 0 (naming the method and option). Posing
+/// runs a bounded number of iterations, so 0 is allowed: never stop early.
 pub(crate) fn check_tolerance(
     method: &'static str,
     option: &'static str,
     value: f64,
 ) -> Result<(), DeformError> {
-    if value > 0.0 && value.is_finite() {
+    if value >= 0.0 && value.is_finite() {
         Ok(())
     } else {
         Err(DeformError::BadOption {
             method,
             option,
             value,
-            expected: "a finite number above 0",
+            expected: "a finite number >= 0",
         })
     }
 }

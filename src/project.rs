@@ -920,9 +920,11 @@ mod tests {
             faces: [0, mesh.faces.len() as u32],
             ..PartData::default()
         }]);
-        let mut value: serde_json::Value =
-            serde_json::from_slice(&parted.to_json()).expect("json");
-        assert!(value["parts"][0].get("hidden").is_none(), "absent when false");
+        let mut value: serde_json::Value = serde_json::from_slice(&parted.to_json()).expect("json");
+        assert!(
+            value["parts"][0].get("hidden").is_none(),
+            "absent when false"
+        );
         value["version"] = 3.into();
         let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
         assert_eq!(back, parted);

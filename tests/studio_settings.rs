@@ -56,7 +56,7 @@ fn jpeg_blocks(width: u16, height: u16, level: impl Fn(usize, usize) -> u8) -> V
         }
     };
     let mut bits: Vec<bool> = Vec::new();
-    let mut put = |code: u32, len: u32, bits: &mut Vec<bool>| {
+    let put = |code: u32, len: u32, bits: &mut Vec<bool>| {
         for i in (0..len).rev() {
             bits.push(code >> i & 1 == 1);
         }
@@ -105,7 +105,8 @@ fn figure_with_a_thin_arm() -> (Image, [[f64; 2]; 2]) {
             let hand = (p[0] - 160.0).hypot(p[1] - 45.0) < 14.0;
             let [a, b] = arm;
             let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-            let s = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+            let s =
+                (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
             let on_arm = (a[0] + s * dx - p[0]).hypot(a[1] + s * dy - p[1]) < 3.5;
             rgba.extend(if body || hand {
                 [40, 40, 40, 255]
@@ -130,7 +131,9 @@ fn figure_with_a_thin_arm() -> (Image, [[f64; 2]; 2]) {
 fn covered(positions: &[[f64; 2]], faces: &[[u32; 3]], p: [f64; 2]) -> bool {
     faces.iter().any(|f| {
         let [a, b, c] = f.map(|v| positions[v as usize]);
-        let side = |u: [f64; 2], v: [f64; 2]| (v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0]);
+        let side = |u: [f64; 2], v: [f64; 2]| {
+            (v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])
+        };
         let (s1, s2, s3) = (side(a, b), side(b, c), side(c, a));
         (s1 >= 0.0 && s2 >= 0.0 && s3 >= 0.0) || (s1 <= 0.0 && s2 <= 0.0 && s3 <= 0.0)
     })
@@ -147,7 +150,10 @@ fn open_from_list(page: &PageTab, name: &str) {
     let index = page.num(&format!(
         "[...document.querySelectorAll('#open-list button.file')].findIndex((b) => b.textContent.startsWith('{name} '))"
     ));
-    page.click_on(&format!("#open-list button.file:nth-child({})", index as usize + 1));
+    page.click_on(&format!(
+        "#open-list button.file:nth-child({})",
+        index as usize + 1
+    ));
 }
 
 /// The server's document, saved by a socket of the test's own to `name` (read back).
@@ -176,7 +182,10 @@ fn a_picture_opened_after_another_is_traced_by_its_own_settings() {
     std::fs::write(dir.join("photo.jpg"), &jpeg).expect("jpeg");
     let decoded = bdmorph::render::raster::decode_image(&jpeg).expect("the JPEG decodes");
     assert!(decoded.rgba.chunks(4).all(|p| p[3] == 255), "opaque");
-    assert!(decoded.rgba[..4].iter().take(3).all(|&c| c.abs_diff(235) <= 2));
+    assert!(decoded.rgba[..4]
+        .iter()
+        .take(3)
+        .all(|&c| c.abs_diff(235) <= 2));
     let (figure, arm) = figure_with_a_thin_arm();
     write_png(&dir.join("figure.png"), &figure);
     // `bdmorph mesh`'s choice for the PNG: its transparency, one piece with the arm.
@@ -215,7 +224,11 @@ fn a_picture_opened_after_another_is_traced_by_its_own_settings() {
         serde_json::json!({"background": null, "threshold": null}),
         "the PNG's own settings: its transparency"
     );
-    assert_eq!(page.num("studio.state.pieces"), 1.0, "one piece, the hand on the arm");
+    assert_eq!(
+        page.num("studio.state.pieces"),
+        1.0,
+        "one piece, the hand on the arm"
+    );
     // The arm is drawn: with the picture off, the mesh's colours lie along it.
     if page.eval("document.getElementById('texture').checked") == true {
         page.click_on("#texture");
@@ -231,7 +244,10 @@ fn a_picture_opened_after_another_is_traced_by_its_own_settings() {
     // The server's document: the arm's pixels are covered by its triangles.
     let doc = document(&studio, &dir, "check.json");
     for p in &samples {
-        assert!(covered(&doc.mesh.positions, &doc.mesh.faces, *p), "{p:?} in the mesh");
+        assert!(
+            covered(&doc.mesh.positions, &doc.mesh.faces, *p),
+            "{p:?} in the mesh"
+        );
     }
     assert_eq!(doc.picture.background, None);
 }
@@ -253,7 +269,10 @@ fn signature(studio: &Studio) -> serde_json::Value {
     let mut poses: Vec<Option<Vec<u32>>> = vec![None; keys.len()];
     let start = Instant::now();
     while poses.iter().any(Option::is_none) {
-        assert!(start.elapsed() < Duration::from_secs(30), "the keyframes' poses");
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "the keyframes' poses"
+        );
         if let Ok(Message::Binary(b)) = c.ws.read() {
             let kind = u32::from_le_bytes(b[..4].try_into().expect("kind"));
             if kind != 4 {
@@ -286,11 +305,17 @@ fn restored_work_keeps_its_name_and_its_undo_history() {
     page.wait("document.getElementById('prompt-dialog').open", 10);
     page.set_value("#prompt-value", "walk.json");
     page.click_on("#prompt-ok");
-    page.wait("studio.state.project === 'walk.json' && !studio.state.dirty", 10);
+    page.wait(
+        "studio.state.project === 'walk.json' && !studio.state.dirty",
+        10,
+    );
     let mut signatures = vec![signature(&studio)];
     let mut labels = Vec::new();
     let mut done = |page: &PageTab, steps: f64, signatures: &mut Vec<serde_json::Value>| {
-        page.wait(&format!("studio.state.history.steps === {steps} && !studio.busy()"), 20);
+        page.wait(
+            &format!("studio.state.history.steps === {steps} && !studio.busy()"),
+            20,
+        );
         labels.push(page.eval("studio.state.undo"));
         signatures.push(signature(&studio));
     };
@@ -323,7 +348,10 @@ fn restored_work_keeps_its_name_and_its_undo_history() {
             assert_eq!(kept["project_file"], "walk.json");
             break;
         }
-        assert!(start.elapsed() < Duration::from_secs(30), "the autosave: {kept}");
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "the autosave: {kept}"
+        );
         std::thread::sleep(Duration::from_millis(100));
     }
     assert!(state
@@ -337,25 +365,44 @@ fn restored_work_keeps_its_name_and_its_undo_history() {
     page.wait("studio.connected", 30);
     page.wait("!document.getElementById('banner-recovered').hidden", 10);
     let offered = page.eval("document.getElementById('recovered-text').textContent");
-    assert!(offered.as_str().unwrap_or("").contains("walk.json"), "{offered}");
+    assert!(
+        offered.as_str().unwrap_or("").contains("walk.json"),
+        "{offered}"
+    );
     page.shot("s2-0-offered.png");
     page.click_on("#recovered-restore");
-    page.wait("studio.state.keyframes.length === 2 && studio.state.fps === 12", 20);
+    page.wait(
+        "studio.state.keyframes.length === 2 && studio.state.fps === 12",
+        20,
+    );
     page.settle();
     assert_eq!(page.eval("studio.state.project"), "walk.json");
     assert_eq!(
         page.eval("document.getElementById('doc-name').textContent"),
         "walk.json"
     );
-    assert!(page.eval("document.title").as_str().unwrap_or("").contains("walk.json"));
+    assert!(page
+        .eval("document.title")
+        .as_str()
+        .unwrap_or("")
+        .contains("walk.json"));
     page.shot("s2-1-restored.png");
     assert_eq!(signature(&again), signatures[6], "restored as it was");
     // Undo goes back through the edits made before the kill, each exactly.
-    assert_eq!(page.num("studio.state.history.steps"), 7.0, "six edits and the restore");
+    assert_eq!(
+        page.num("studio.state.history.steps"),
+        7.0,
+        "six edits and the restore"
+    );
     for k in (0..6).rev() {
         assert_eq!(page.eval("studio.state.undo"), labels[k], "step {}", k + 1);
         page.undo();
-        assert_eq!(signature(&again), signatures[k], "undone to before step {}", k + 1);
+        assert_eq!(
+            signature(&again),
+            signatures[k],
+            "undone to before step {}",
+            k + 1
+        );
     }
     // Back at the saved project: clean again.
     page.wait("!studio.state.dirty", 10);
@@ -373,7 +420,11 @@ fn restored_work_keeps_its_name_and_its_undo_history() {
 fn part_lock_and_hide_are_saved_and_undone() {
     let Some(browser) = browser() else { return };
     let dir = scratch("s3-parts");
-    std::fs::write(dir.join("figure.psd"), layered::write_psd(&layered::figure())).expect("psd");
+    std::fs::write(
+        dir.join("figure.psd"),
+        layered::write_psd(&layered::figure()),
+    )
+    .expect("psd");
     let mut studio = Studio::start(&dir, Some("figure.psd"));
     let page = PageTab::open(&browser, &studio.url, &dir);
     page.wait("!!studio.texture && !!studio.state.parts", 30);
@@ -382,7 +433,9 @@ fn part_lock_and_hide_are_saved_and_undone() {
     }
     page.settle();
     let magenta = |c: [u8; 3]| c[0] > 170 && c[1] < 80 && c[2] > 170;
-    let shown = page.shot("s3-0-opened.png").count_in(page.canvas(), magenta);
+    let shown = page
+        .shot("s3-0-opened.png")
+        .count_in(page.canvas(), magenta);
     assert!(shown > 100, "the right forearm is drawn: {shown}");
     let part = |name: &str| {
         page.num(&format!(
@@ -392,16 +445,24 @@ fn part_lock_and_hide_are_saved_and_undone() {
     let forearm = part("forearm_r");
     let upper = part("upper_arm_l");
     page.click_on(".part-row[data-part='forearm_r'] button[title^='Hide']");
-    page.wait(&format!("studio.state.parts[{forearm}].hidden === true"), 10);
+    page.wait(
+        &format!("studio.state.parts[{forearm}].hidden === true"),
+        10,
+    );
     page.click_on(".part-row[data-part='upper_arm_l'] button[title^='Lock']");
     page.wait(&format!("studio.state.parts[{upper}].locked === true"), 10);
     assert_eq!(page.eval("studio.state.undo"), "lock upper_arm_l");
     page.settle();
-    let hidden = page.shot("s3-1-hidden.png").count_in(page.canvas(), magenta);
+    let hidden = page
+        .shot("s3-1-hidden.png")
+        .count_in(page.canvas(), magenta);
     assert!(hidden * 10 < shown, "hidden: {shown} -> {hidden}");
     // Undo and redo.
     page.undo();
-    assert_eq!(page.eval(&format!("!!studio.state.parts[{upper}].locked")), false);
+    assert_eq!(
+        page.eval(&format!("!!studio.state.parts[{upper}].locked")),
+        false
+    );
     page.key("z", &[ModifierKey::Ctrl, ModifierKey::Shift]);
     page.wait(&format!("studio.state.parts[{upper}].locked === true"), 10);
     // A reload keeps them (they are the document's, not the page's).
@@ -410,14 +471,21 @@ fn part_lock_and_hide_are_saved_and_undone() {
         &format!("!!studio.state.parts && studio.state.parts[{forearm}].hidden === true"),
         20,
     );
-    assert!(page.shown(".part-row[data-part='forearm_r'] button[title^='Show']"));
-    assert!(page.shown(".part-row[data-part='upper_arm_l'] button[title^='Unlock']"));
+    page.wait(
+        "!!document.querySelector(\".part-row[data-part='forearm_r'] button[title^='Show']\") && !!document.querySelector(\".part-row[data-part='upper_arm_l'] button[title^='Unlock']\")",
+        10,
+    );
+
+    page.shot("s3-1b-reloaded.png");
     // Saved with the project, and a studio opening it shows them.
     page.click_on("#save-as");
     page.wait("document.getElementById('prompt-dialog').open", 10);
     page.set_value("#prompt-value", "character.json");
     page.click_on("#prompt-ok");
-    page.wait("studio.state.project === 'character.json' && !studio.state.dirty", 10);
+    page.wait(
+        "studio.state.project === 'character.json' && !studio.state.dirty",
+        10,
+    );
     let text = std::fs::read_to_string(dir.join("character.json")).expect("saved");
     let saved: serde_json::Value = serde_json::from_str(&text).expect("json");
     assert_eq!(saved["version"], 4);
@@ -435,9 +503,17 @@ fn part_lock_and_hide_are_saved_and_undone() {
         page.click_on("#edges");
     }
     page.settle();
-    assert_eq!(page.eval(&format!("studio.state.parts[{forearm}].hidden")), true);
-    assert_eq!(page.eval(&format!("studio.state.parts[{upper}].locked")), true);
-    let reopened = page.shot("s3-2-reopened.png").count_in(page.canvas(), magenta);
+    assert_eq!(
+        page.eval(&format!("studio.state.parts[{forearm}].hidden")),
+        true
+    );
+    assert_eq!(
+        page.eval(&format!("studio.state.parts[{upper}].locked")),
+        true
+    );
+    let reopened = page
+        .shot("s3-2-reopened.png")
+        .count_in(page.canvas(), magenta);
     assert!(reopened * 10 < shown, "still hidden: {reopened}");
 }
 
@@ -487,14 +563,20 @@ fn notes_fade_errors_stay_and_equal_ones_are_merged() {
         10,
     );
     let notes = note_texts(&page);
-    let deleting: Vec<&String> = notes.iter().filter(|n| n.contains("cannot be deleted")).collect();
+    let deleting: Vec<&String> = notes
+        .iter()
+        .filter(|n| n.contains("cannot be deleted"))
+        .collect();
     assert_eq!(deleting.len(), 1, "{notes:?}");
     assert!(deleting[0].contains("×6"), "{notes:?}");
     page.shot("s4-1-merged.png");
     // An error stays past the notes' time.
     std::thread::sleep(Duration::from_secs(9));
     let notes = note_texts(&page);
-    assert!(notes.iter().any(|n| n.contains("cannot be deleted")), "{notes:?}");
+    assert!(
+        notes.iter().any(|n| n.contains("cannot be deleted")),
+        "{notes:?}"
+    );
     // Dismissed with one click, all six.
     page.click_on("#notes .note.error .dismiss");
     page.wait(
@@ -516,18 +598,37 @@ fn the_open_list_offers_only_studio_projects() {
     ));
     project.write(&dir.join("walk.json")).expect("project");
     let exported = std::process::Command::new(env!("CARGO_BIN_EXE_bdmorph"))
-        .args(["export", "walk.json", "-o", "sheet.png", "--sheet", "--size", "64x64"])
+        .args([
+            "export",
+            "walk.json",
+            "-o",
+            "sheet.png",
+            "--sheet",
+            "--size",
+            "64x64",
+        ])
         .current_dir(&dir)
         .output()
         .expect("runs");
-    assert!(exported.status.success(), "{}", String::from_utf8_lossy(&exported.stderr));
-    assert!(dir.join("sheet.json").is_file(), "the sheet's JSON is there");
+    assert!(
+        exported.status.success(),
+        "{}",
+        String::from_utf8_lossy(&exported.stderr)
+    );
+    assert!(
+        dir.join("sheet.json").is_file(),
+        "the sheet's JSON is there"
+    );
     let studio = Studio::start(&dir, None);
     let page = PageTab::open(&browser, &studio.url, &dir);
     page.click_on("#open");
     page.wait("document.getElementById('open-dialog').open", 10);
-    page.wait("document.querySelectorAll('#open-list button.file').length > 0", 10);
-    let listed = page.eval("[...document.querySelectorAll('#open-list button.file')].map((b) => b.textContent)");
+    page.wait(
+        "document.querySelectorAll('#open-list button.file').length > 0",
+        10,
+    );
+    let listed = page
+        .eval("[...document.querySelectorAll('#open-list button.file')].map((b) => b.textContent)");
     let listed: Vec<&str> = listed
         .as_array()
         .expect("rows")
@@ -535,7 +636,16 @@ fn the_open_list_offers_only_studio_projects() {
         .map(|r| r.as_str().unwrap_or(""))
         .collect();
     page.shot("s5-0-open.png");
-    assert!(listed.iter().any(|r| r.starts_with("walk.json (project")), "{listed:?}");
-    assert!(listed.iter().any(|r| r.starts_with("sheet.png (picture")), "{listed:?}");
-    assert!(!listed.iter().any(|r| r.starts_with("sheet.json")), "{listed:?}");
+    assert!(
+        listed.iter().any(|r| r.starts_with("walk.json (project")),
+        "{listed:?}"
+    );
+    assert!(
+        listed.iter().any(|r| r.starts_with("sheet.png (picture")),
+        "{listed:?}"
+    );
+    assert!(
+        !listed.iter().any(|r| r.starts_with("sheet.json")),
+        "{listed:?}"
+    );
 }

@@ -18,13 +18,9 @@ pub fn edit(
     locked: bool,
 ) -> Result<Option<(String, Edit)>, String> {
     let parts = doc.parts.as_deref().unwrap_or_default();
-    let p = parts.get(part).ok_or_else(|| {
-        format!(
-            "there is no part {} (there are {})",
-            part + 1,
-            parts.len()
-        )
-    })?;
+    let p = parts
+        .get(part)
+        .ok_or_else(|| format!("there is no part {} (there are {})", part + 1, parts.len()))?;
     let label = match (p.hidden != hidden, p.locked != locked) {
         (false, false) => return Ok(None),
         (true, false) if hidden => format!("hide {}", p.name),

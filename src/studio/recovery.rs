@@ -160,15 +160,21 @@ mod tests {
                 positions: vec![[1.5, -2.25]; 100],
             },
         );
-        h.push("time", Edit::Time {
-            keyframe: 1,
-            time: 0.5,
-        });
+        h.push(
+            "time",
+            Edit::Time {
+                keyframe: 1,
+                time: 0.5,
+            },
+        );
         let step = h.take_undo().expect("time");
-        h.undone(step, Edit::Time {
-            keyframe: 1,
-            time: 2.0,
-        });
+        h.undone(
+            step,
+            Edit::Time {
+                keyframe: 1,
+                time: 2.0,
+            },
+        );
         let dir = std::env::temp_dir().join(format!("bdmorph-history-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("dir");
         let path = dir.join("h.history");

@@ -28,9 +28,7 @@ use super::project::{Keyframe, PictureSettings, Project};
 use super::protocol::{
     frame_bytes, ghost_bytes, kind, mesh_bytes, paint_bytes, upload, Request, MAX_GHOSTS,
 };
-use super::workspace::{
-    kind_of, read_regular, AutosaveCopy, Recovered, Workspace, MAX_UPLOAD,
-};
+use super::workspace::{kind_of, read_regular, AutosaveCopy, Recovered, Workspace, MAX_UPLOAD};
 use crate::mesh::PlanarMesh;
 use crate::render::{colour, raster, Background, Drawing, ImageSize, Viewport};
 
@@ -1688,7 +1686,10 @@ impl Session {
             self.history.graft(history);
         }
         if let Some(why) = work.history_note {
-            self.note(format!("recovered work restored without its undo history: {why}"), false);
+            self.note(
+                format!("recovered work restored without its undo history: {why}"),
+                false,
+            );
         }
         self.source = work.source;
         // Its project file, when it is still a name in the workspace: Save writes there.

@@ -620,8 +620,8 @@ impl Workspace {
     /// generation when that history is there. Both atomically.
     pub fn keep(&self, copy: &AutosaveCopy, written: Option<u64>) -> Result<Option<u64>, String> {
         private_dir(&self.state_dir()).map_err(|e| e.to_string())?;
-        let mut kept = written
-            .filter(|&g| g == copy.generation && self.autosave_history_path().is_file());
+        let mut kept =
+            written.filter(|&g| g == copy.generation && self.autosave_history_path().is_file());
         let mut failed = None;
         if let Some(history) = &copy.history {
             match super::recovery::write(&self.autosave_history_path(), history) {
@@ -798,7 +798,10 @@ impl Workspace {
         private_dir(&aside).map_err(|e| e.to_string())?;
         let history = path.with_extension("history");
         if history.is_file() {
-            let _ = std::fs::rename(&history, aside.join(Path::new(name).with_extension("history")));
+            let _ = std::fs::rename(
+                &history,
+                aside.join(Path::new(name).with_extension("history")),
+            );
         }
         std::fs::rename(&path, aside.join(name)).map_err(|e| format!("{name}: {e}"))
     }
@@ -937,7 +940,10 @@ mod tests {
         let written = ws.keep(&copy(&history, true), None).expect("kept");
         assert_eq!(written, Some(history.generation()));
         // Kept again without the history (unchanged): it still goes with the document.
-        assert_eq!(ws.keep(&copy(&history, false), written).expect("kept"), written);
+        assert_eq!(
+            ws.keep(&copy(&history, false), written).expect("kept"),
+            written
+        );
         let dead = |ws: &Workspace| {
             let state = ws.root().join(".bdmorph-studio");
             std::fs::rename(ws.autosave_path(), state.join("autosave-4000000001.json"))
@@ -974,20 +980,32 @@ mod tests {
     fn only_studio_projects_are_listed_among_json_files() {
         let ws = scratch("sniff");
         let project = Project::new(&crate::generate::disk(3, 0.1), None);
-        project.write(&ws.root().join("walk.json")).expect("written");
+        project
+            .write(&ws.root().join("walk.json"))
+            .expect("written");
         std::fs::write(
             ws.root().join("sheet.json"),
             br#"{"frames": [{"x": 0}], "meta": {"format": "RGBA8888"}}"#,
         )
         .expect("written");
-        std::fs::write(ws.root().join("tricky.json"), br#"{"note": "\"format\": \"bdmorph-studio\" is", "format": "x"}"#)
-            .expect("written");
-        std::fs::write(ws.root().join("spaced.json"), b"{\n  \"format\" :\t\"bdmorph-studio\" }")
-            .expect("written");
+        std::fs::write(
+            ws.root().join("tricky.json"),
+            br#"{"note": "\"format\": \"bdmorph-studio\" is", "format": "x"}"#,
+        )
+        .expect("written");
+        std::fs::write(
+            ws.root().join("spaced.json"),
+            b"{\n  \"format\" :\t\"bdmorph-studio\" }",
+        )
+        .expect("written");
         let names: Vec<String> = ws.list().into_iter().map(|e| e.name).collect();
         assert_eq!(names, ["spaced.json", "walk.json"]);
-        assert!(names_studio_format(br#"{"format":"bdmorph-studio","version":4"#));
-        assert!(!names_studio_format(br#"{"format":"bdmorph-studio-autosave"}"#));
+        assert!(names_studio_format(
+            br#"{"format":"bdmorph-studio","version":4"#
+        ));
+        assert!(!names_studio_format(
+            br#"{"format":"bdmorph-studio-autosave"}"#
+        ));
         assert!(!names_studio_format(br#"{"format":"bdmorph-studi"#));
     }
 

@@ -7,7 +7,7 @@
 //! ```json
 //! {
 //!   "format": "bdmorph-studio",
-//!   "version": 3,
+//!   "version": 4,
 //!   "mesh": { "positions": [[0, 0], [1, 0], [0, 1]], "faces": [[0, 1, 2]], "texcoords": null },
 //!   "texture": null,
 //!   "method": { "name": "sd", "weight": 100, "max_distortion": 3 },
@@ -20,8 +20,8 @@
 //! }
 //! ```
 //!
-//! Version 1 files (without `outline` and `picture`) and version 2 files (without keyframes'
-//! drawings) are read as well. A file is refused whole,
+//! Version 1 files (without `outline` and `picture`), version 2 files (without keyframes'
+//! drawings) and version 3 files (without parts' `hidden` and `locked`) are read as well. A file is refused whole,
 //! with the reason, when it is not JSON, is another program's or a newer version's, is damaged
 //! (a pose with the wrong number of points or a point that is not finite, a triangle naming a
 //! missing vertex, times out of order, an unknown easing, a pin out of range or twice, ...), or
@@ -36,8 +36,8 @@ use crate::mesh::PlanarMesh;
 
 /// The `format` field of every project file.
 pub const FORMAT: &str = "bdmorph-studio";
-/// The version this studio writes (it reads this one and versions 1 and 2).
-pub const VERSION: u32 = 3;
+/// The version this studio writes (it reads this one and versions 1, 2 and 3).
+pub const VERSION: u32 = 4;
 
 /// The most keyframes a project holds.
 pub const MAX_KEYFRAMES: usize = 1000;
@@ -111,7 +111,7 @@ pub struct Project {
 }
 
 /// A part of a character: a layer's mesh within the project's.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PartData {
     /// The layer's name.
     pub name: String,
@@ -119,6 +119,12 @@ pub struct PartData {
     pub vertices: [u32; 2],
     /// Its triangles, `[first, end)` (parts are drawn in triangle order).
     pub faces: [u32; 2],
+    /// Hidden while editing (exports and `bdmorph render` draw every part). Absent: shown.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub hidden: bool,
+    /// Locked: its vertices take no new pin in the studio. Absent: unlocked.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub locked: bool,
 }
 
 /// Whether `parts` lie within `n` vertices and `m` triangles and do not share any.
@@ -185,6 +191,8 @@ pub fn with_part_order(doc: &Project, order: &[u32]) -> Result<(Project, String)
             name: p.name.clone(),
             vertices: p.vertices,
             faces: [first, old_of_new.len() as u32],
+            hidden: p.hidden,
+            locked: p.locked,
         });
     }
     old_of_new.extend((0..m).filter(|&f| !in_part[f]));
@@ -576,7 +584,7 @@ impl Project {
             other => return Err(ProjectError::Format(other.unwrap_or("none").into())),
         }
         match envelope.version {
-            Some(1 | 2 | VERSION) => {}
+            Some(1..=3 | VERSION) => {}
             found => {
                 return Err(ProjectError::Version {
                     found: found.unwrap_or(0),
@@ -847,7 +855,7 @@ mod tests {
                 .expect_err("refused")
                 .to_string()
         };
-        assert!(broken("\"version\": 3", "\"version\": 4").contains("another version"));
+        assert!(broken("\"version\": 4", "\"version\": 5").contains("another version"));
         assert!(broken("bdmorph-studio", "something-else").contains("not a bdmorph studio"));
         assert!(broken("\"time\": 1.5", "\"time\": 0.0").contains("times start at 0"));
         assert!(broken("ease-in-out", "bouncy").contains("keyframe 2"));
@@ -904,6 +912,29 @@ mod tests {
         value["version"] = 2.into();
         let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
         assert_eq!(back, project);
+        // Version 3 (parts without hidden and locked) too: every part shown and unlocked.
+        let mut parted = project.clone();
+        parted.parts = Some(vec![PartData {
+            name: "body".into(),
+            vertices: [0, mesh.positions.len() as u32],
+            faces: [0, mesh.faces.len() as u32],
+            ..PartData::default()
+        }]);
+        let mut value: serde_json::Value = serde_json::from_slice(&parted.to_json()).expect("json");
+        assert!(
+            value["parts"][0].get("hidden").is_none(),
+            "absent when false"
+        );
+        value["version"] = 3.into();
+        let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
+        assert_eq!(back, parted);
+        let mut flagged = parted.clone();
+        if let Some(p) = flagged.parts.as_mut() {
+            p[0].hidden = true;
+            p[0].locked = true;
+        }
+        let back = Project::from_json(&flagged.to_json()).expect("reads");
+        assert_eq!(back, flagged);
     }
 
     #[test]
@@ -924,11 +955,14 @@ mod tests {
                 name: "a".into(),
                 vertices: [0, 4],
                 faces: [0, 2],
+                ..PartData::default()
             },
             PartData {
                 name: "b".into(),
                 vertices: [4, 8],
                 faces: [2, 4],
+                hidden: true,
+                locked: true,
             },
         ]);
         doc.depth = Some(vec![1, 2, 3, 4]);
@@ -944,6 +978,10 @@ mod tests {
             .collect();
         assert_eq!(names, ["b", "a"]);
         assert_eq!(out.parts.as_ref().expect("parts")[0].faces, [0, 2]);
+        // Hidden and locked go with their part.
+        assert!(out.parts.as_ref().expect("parts")[0].hidden);
+        assert!(out.parts.as_ref().expect("parts")[0].locked);
+        assert!(!out.parts.as_ref().expect("parts")[1].locked);
         assert!(label.contains("draw"), "{label}");
         out.check().expect("a valid project");
         for bad in [&[0u32][..], &[0, 0], &[0, 2], &[]] {

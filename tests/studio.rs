@@ -497,8 +497,8 @@ fn damaged_and_foreign_projects_are_refused_at_start() {
     let text = String::from_utf8(good.to_json()).expect("utf8");
     for (name, body, said) in [
         (
-            "v4.json",
-            text.replacen("\"version\": 3", "\"version\": 4", 1),
+            "v5.json",
+            text.replacen("\"version\": 4", "\"version\": 5", 1),
             "another version",
         ),
         (
@@ -634,6 +634,19 @@ fn a_killed_studio_s_work_is_recovered_by_the_next_start() {
     assert_eq!(c.request(r#"{"op":"select","keyframe":1}"#), None);
     assert_eq!(c.positions(), dragged, "the drag is back");
     assert_eq!(c.state["recovered"].as_array().map(Vec::len), Some(0));
+    // Undo goes back through the edits made before the kill (their history was kept beside
+    // the autosave), then past the restore.
+    let steps = c.state["history"]["steps"].as_u64().expect("steps");
+    assert!(steps > 1, "the recovered edits can be undone: {}", c.state);
+    for _ in 1..steps {
+        assert_eq!(c.request(r#"{"op":"undo"}"#), None);
+    }
+    assert_eq!(
+        c.state["keyframes"].as_array().map(Vec::len),
+        Some(1),
+        "undone: as opened"
+    );
+    assert_eq!(c.state["undo"], "restore recovered work");
     assert_eq!(c.request(r#"{"op":"undo"}"#), None);
     assert_eq!(
         c.state["keyframes"].as_array().map(Vec::len),

@@ -142,6 +142,7 @@ pub(super) fn run(args: &MeshArgs) -> Result<(), String> {
                     name: p.name.clone(),
                     vertices: p.vertices,
                     faces: p.faces,
+                    ..PartData::default()
                 })
                 .collect(),
         );

@@ -15,8 +15,9 @@ use super::project::{
     Keyframe, MeshData, MethodData, PictureSettings, Project,
 };
 
-/// One change to the document.
-#[derive(Clone, Debug, PartialEq)]
+/// One change to the document (kept in the history, and beside the autosave as JSON: an edit
+/// read back is checked as every edit is, when it is applied).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Edit {
     /// A keyframe's pose.
     Pose {
@@ -128,6 +129,16 @@ pub enum Edit {
     Depth(Option<Vec<i8>>),
     /// The stiffness painted on the triangles (see [`Project::stiffness`]).
     Stiffness(Option<Vec<f64>>),
+    /// A part hidden or shown while editing, locked or unlocked (see
+    /// [`super::project::PartData`]).
+    PartFlags {
+        /// The part (in the document's bottom-first list).
+        part: usize,
+        /// Hidden while editing.
+        hidden: bool,
+        /// Its vertices take no new pin.
+        locked: bool,
+    },
     /// Several edits as one step, applied in order.
     Batch(Vec<Edit>),
 }
@@ -600,6 +611,30 @@ impl Edit {
                     },
                 )
             }
+            Edit::PartFlags {
+                part,
+                hidden,
+                locked,
+            } => {
+                let count = doc.parts.as_ref().map_or(0, Vec::len);
+                let p = doc
+                    .parts
+                    .as_mut()
+                    .and_then(|parts| parts.get_mut(part))
+                    .ok_or_else(|| format!("there is no part {} (there are {count})", part + 1))?;
+                let old = Edit::PartFlags {
+                    part,
+                    hidden: std::mem::replace(&mut p.hidden, hidden),
+                    locked: std::mem::replace(&mut p.locked, locked),
+                };
+                (
+                    old,
+                    Touched {
+                        settings: true,
+                        ..touched
+                    },
+                )
+            }
             Edit::Texture { texture, texcoords } => {
                 if let Some(uv) = &texcoords {
                     if uv.len() != n || !finite(uv) {
@@ -696,6 +731,12 @@ mod tests {
         p.keyframes
             .push(keyframe_at(2.0, generate::bend(&mesh, 0.6).positions));
         p.outline = vec![vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]];
+        p.parts = Some(vec![super::super::project::PartData {
+            name: "all".into(),
+            vertices: [0, p.mesh.positions.len() as u32],
+            faces: [0, p.mesh.faces.len() as u32],
+            ..Default::default()
+        }]);
         p
     }
 
@@ -767,9 +808,22 @@ mod tests {
                 texcoords: Some(vec![[0.5, 0.5]; n]),
             },
             Edit::Document(Box::new(Project::new(&generate::grid(3, 3, 0.0), None))),
+            Edit::PartFlags {
+                part: 0,
+                hidden: true,
+                locked: false,
+            },
+            Edit::PartFlags {
+                part: 0,
+                hidden: false,
+                locked: true,
+            },
             Edit::Batch(vec![Edit::Fps(30.0), Edit::Delete { at: 2 }]),
         ];
         for edit in edits {
+            // Kept beside the autosave as JSON: read back the same.
+            let json = serde_json::to_string(&edit).expect("json");
+            assert_eq!(serde_json::from_str::<Edit>(&json).expect("reads"), edit);
             let mut doc = start.clone();
             let (inverse, _) = edit
                 .clone()
@@ -851,6 +905,11 @@ mod tests {
             Edit::Texture {
                 texture: None,
                 texcoords: Some(vec![]),
+            },
+            Edit::PartFlags {
+                part: 1,
+                hidden: true,
+                locked: true,
             },
             Edit::Batch(vec![Edit::Fps(30.0), Edit::Delete { at: 9 }]),
         ];

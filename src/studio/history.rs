@@ -10,6 +10,7 @@
 //! back to a save makes the document clean again.
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use super::edit::Edit;
 
@@ -23,8 +24,8 @@ pub const HISTORY_STEPS: usize = 1000;
 pub struct Step {
     /// What the step did, for the page ("drag", "delete keyframe 3", ...).
     pub label: String,
-    /// The edit that reverses it.
-    pub edit: Edit,
+    /// The edit that reverses it (shared with a copy being written beside the autosave).
+    pub edit: Arc<Edit>,
     /// The state after the step (on the undo side) or before it (on the redo side).
     pub id: u64,
     bytes: usize,
@@ -45,6 +46,9 @@ pub struct History {
     saved: Option<u64>,
     limit_bytes: usize,
     limit_steps: usize,
+    /// Bumped on every change to the history (a copy written at one generation is the
+    /// history of the document written at the same one).
+    generation: u64,
 }
 
 impl Default for History {
@@ -66,11 +70,13 @@ impl History {
             saved: Some(0),
             limit_bytes: bytes,
             limit_steps: steps.max(1),
+            generation: 0,
         }
     }
 
     /// Sets other limits (the oldest steps go at once if over them).
     pub fn set_limits(&mut self, bytes: usize, steps: usize) {
+        self.generation += 1;
         self.limit_bytes = bytes;
         self.limit_steps = steps.max(1);
         self.drop_oldest();
@@ -96,6 +102,7 @@ impl History {
 
     /// Records a step done: `inverse` undoes it. The redo side is cleared.
     pub fn push(&mut self, label: impl Into<String>, inverse: Edit) {
+        self.generation += 1;
         for step in self.redo.drain(..) {
             self.bytes -= step.bytes;
             // A saved state only reachable by redo is gone.
@@ -108,7 +115,7 @@ impl History {
         self.next_id += 1;
         self.undo.push_back(Step {
             label: label.into(),
-            edit: inverse,
+            edit: Arc::new(inverse),
             id,
             bytes,
         });
@@ -129,6 +136,7 @@ impl History {
     /// Takes the newest undo step out (to apply its edit); give it back with
     /// [`History::undone`] (its edit's inverse) or [`History::restore_undo`] (unchanged).
     pub fn take_undo(&mut self) -> Option<Step> {
+        self.generation += 1;
         let step = self.undo.pop_back()?;
         self.bytes -= step.bytes;
         Some(step)
@@ -137,6 +145,7 @@ impl History {
     /// Takes the newest redo step out; give it back with [`History::redone`] or
     /// [`History::restore_redo`].
     pub fn take_redo(&mut self) -> Option<Step> {
+        self.generation += 1;
         let step = self.redo.pop()?;
         self.bytes -= step.bytes;
         Some(step)
@@ -148,7 +157,7 @@ impl History {
         self.bytes += bytes;
         self.redo.push(Step {
             label: step.label,
-            edit: redo,
+            edit: Arc::new(redo),
             id: step.id,
             bytes,
         });
@@ -160,7 +169,7 @@ impl History {
         self.bytes += bytes;
         self.undo.push_back(Step {
             label: step.label,
-            edit: undo,
+            edit: Arc::new(undo),
             id: step.id,
             bytes,
         });
@@ -180,6 +189,7 @@ impl History {
 
     /// The document was saved in its present state.
     pub fn mark_saved(&mut self) {
+        self.generation += 1;
         self.saved = Some(self.state());
     }
 
@@ -212,6 +222,154 @@ impl History {
     pub fn labels(&self) -> impl Iterator<Item = &str> {
         self.undo.iter().map(|s| s.label.as_str())
     }
+
+    /// The redo steps' labels, the next one to redo first.
+    pub fn redo_labels(&self) -> impl Iterator<Item = &str> {
+        self.redo.iter().rev().map(|s| s.label.as_str())
+    }
+
+    /// Bumped on every change to the history.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// A copy of the history to write (cheap: the edits are shared), of at most `max_bytes`
+    /// of edits: the newest undo steps first, then the redo steps nearest to the present;
+    /// the older ones are left out (and counted as dropped).
+    pub fn snapshot(&self, max_bytes: usize) -> Snapshot {
+        let mut budget = max_bytes;
+        let mut take = |s: &Step| {
+            let fits = s.bytes <= budget;
+            if fits {
+                budget -= s.bytes;
+            }
+            fits
+        };
+        let mut undo: Vec<SnapshotStep> = Vec::new();
+        for s in self.undo.iter().rev() {
+            if !take(s) {
+                break;
+            }
+            undo.push(SnapshotStep::of(s));
+        }
+        undo.reverse();
+        let left_out = self.undo.len() - undo.len();
+        let base = if left_out == 0 {
+            self.base
+        } else {
+            self.undo[left_out - 1].id
+        };
+        let mut redo: Vec<SnapshotStep> = Vec::new();
+        for s in self.redo.iter().rev() {
+            if !take(s) {
+                break;
+            }
+            redo.push(SnapshotStep::of(s));
+        }
+        redo.reverse();
+        Snapshot {
+            generation: self.generation,
+            base,
+            saved: self.saved,
+            dropped: self.dropped + left_out,
+            undo,
+            redo,
+        }
+    }
+
+    /// Puts the steps of `kept` (a history written beside an autosave of the document now
+    /// open) on top of this one's: undo then goes back through them, then through the steps
+    /// before them. The redo side becomes `kept`'s; the saved state is `kept`'s when it is
+    /// among them.
+    pub fn graft(&mut self, kept: Snapshot<Edit>) {
+        self.generation += 1;
+        for step in self.redo.drain(..) {
+            self.bytes -= step.bytes;
+        }
+        // The state below `kept`'s oldest step is this history's present one.
+        let below = self.state();
+        let mut ids = std::collections::HashMap::new();
+        ids.insert(kept.base, below);
+        let mut fresh = |old: u64, next: &mut u64| {
+            let id = *next;
+            *next += 1;
+            ids.insert(old, id);
+            id
+        };
+        let mut undo = Vec::with_capacity(kept.undo.len());
+        for s in kept.undo {
+            let id = fresh(s.id, &mut self.next_id);
+            undo.push((s, id));
+        }
+        let mut redo = Vec::with_capacity(kept.redo.len());
+        for s in kept.redo {
+            let id = fresh(s.id, &mut self.next_id);
+            redo.push((s, id));
+        }
+        let saved = kept.saved.and_then(|s| ids.get(&s).copied());
+        for (s, id) in undo {
+            let bytes = s.edit.bytes() + 64;
+            self.bytes += bytes;
+            self.undo.push_back(Step {
+                label: s.label,
+                edit: Arc::new(s.edit),
+                id,
+                bytes,
+            });
+        }
+        for (s, id) in redo {
+            let bytes = s.edit.bytes() + 64;
+            self.bytes += bytes;
+            self.redo.push(Step {
+                label: s.label,
+                edit: Arc::new(s.edit),
+                id,
+                bytes,
+            });
+        }
+        self.saved = saved;
+        self.dropped += kept.dropped;
+        self.drop_oldest();
+    }
+}
+
+/// One step of a [`Snapshot`].
+#[derive(Clone, Debug)]
+pub struct SnapshotStep<E = Arc<Edit>> {
+    /// What it did.
+    pub label: String,
+    /// Its state's number.
+    pub id: u64,
+    /// The edit that reverses it (undo side) or does it again (redo side).
+    pub edit: E,
+}
+
+impl SnapshotStep<Arc<Edit>> {
+    fn of(s: &Step) -> SnapshotStep<Arc<Edit>> {
+        SnapshotStep {
+            label: s.label.clone(),
+            id: s.id,
+            edit: s.edit.clone(),
+        }
+    }
+}
+
+/// A copy of a history, as written beside an autosave ([`History::snapshot`]) and read back
+/// ([`History::graft`]).
+#[derive(Clone, Debug)]
+pub struct Snapshot<E = Arc<Edit>> {
+    /// The history's generation when it was taken.
+    pub generation: u64,
+    /// The state below the oldest undo step.
+    pub base: u64,
+    /// The saved state, if any.
+    pub saved: Option<u64>,
+    /// The steps dropped (to stay within the limits, or left out of the copy).
+    pub dropped: usize,
+    /// The undo steps, oldest first.
+    pub undo: Vec<SnapshotStep<E>>,
+    /// The redo steps, the furthest first (the next to redo last).
+    pub redo: Vec<SnapshotStep<E>>,
 }
 
 #[cfg(test)]
@@ -241,6 +399,59 @@ mod tests {
         assert_eq!(h.redo_len(), 0);
         assert!(h.dirty());
         assert_eq!(h.labels().collect::<Vec<_>>(), ["a", "c"]);
+    }
+
+    #[test]
+    fn a_kept_history_grafted_on_undoes_back_to_its_save() {
+        // The history of a studio that was killed: saved, then two steps, one undone.
+        let mut old = History::default();
+        old.mark_saved();
+        old.push("a", Edit::Fps(1.0));
+        old.push("b", Edit::Fps(2.0));
+        let step = old.take_undo().expect("b");
+        old.undone(step, Edit::Fps(3.0));
+        let kept = old.snapshot(usize::MAX);
+        let kept = Snapshot {
+            generation: kept.generation,
+            base: kept.base,
+            saved: kept.saved,
+            dropped: kept.dropped,
+            undo: kept
+                .undo
+                .into_iter()
+                .map(|s| SnapshotStep {
+                    label: s.label,
+                    id: s.id,
+                    edit: Edit::clone(&s.edit),
+                })
+                .collect(),
+            redo: kept
+                .redo
+                .into_iter()
+                .map(|s| SnapshotStep {
+                    label: s.label,
+                    id: s.id,
+                    edit: Edit::clone(&s.edit),
+                })
+                .collect(),
+        };
+        // A new studio: something, then the restore, then the kept steps on top.
+        let mut h = History::default();
+        h.push("x", Edit::Fps(9.0));
+        h.push("restore", Edit::Fps(8.0));
+        let generation = h.generation();
+        h.graft(kept);
+        assert!(h.generation() > generation);
+        assert_eq!(h.labels().collect::<Vec<_>>(), ["x", "restore", "a"]);
+        assert_eq!(h.redo_labels().collect::<Vec<_>>(), ["b"]);
+        assert!(h.dirty());
+        // Undoing "a" reaches the state saved before the kill: clean.
+        let step = h.take_undo().expect("a");
+        assert_eq!(*step.edit, Edit::Fps(1.0));
+        h.undone(step, Edit::Fps(5.0));
+        assert!(!h.dirty());
+        let step = h.take_undo().expect("restore");
+        assert_eq!(step.label, "restore");
     }
 
     #[test]

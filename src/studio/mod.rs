@@ -32,10 +32,12 @@ pub mod jobs;
 pub mod listen;
 pub mod messages;
 pub mod open;
+pub mod part_flags;
 pub mod pictures;
 /// The project file (the crate's [`crate::project`], with the feature `project`).
 pub use crate::project;
 pub mod protocol;
+pub mod recovery;
 pub mod server;
 pub mod session;
 pub mod workspace;
@@ -213,11 +215,11 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
             eprintln!("studio: stopping");
         })
         .await;
-        // Unsaved work is kept for the next start.
-        let last = app.session().autosave_copy();
+        // Unsaved work is kept for the next start, with its undo history.
+        let last = app.session().autosave_copy(None);
         match last {
-            Some((project, source, _)) => match workspace.autosave(&project, source.as_deref()) {
-                Ok(()) => eprintln!(
+            Some(copy) => match workspace.keep(&copy, None) {
+                Ok(_) => eprintln!(
                     "studio: unsaved changes kept in {} (the next studio in this folder offers them)",
                     workspace.autosave_path().display()
                 ),
@@ -233,31 +235,39 @@ pub fn run(options: StudioOptions) -> Result<(), StudioError> {
 /// [`workspace::AUTOSAVE_SECONDS`] while it has unsaved changes.
 async fn autosave(app: Arc<server::App>) {
     let mut written = u64::MAX;
+    // The generation of the undo history last written beside it.
+    let mut history: Option<u64> = None;
     let mut interval =
         tokio::time::interval(std::time::Duration::from_secs(workspace::AUTOSAVE_SECONDS));
     loop {
         interval.tick().await;
         let copy = {
             let session = app.session();
-            match session.autosave_copy() {
-                Some(c) if c.2 != written => Some((c, session.workspace().clone())),
+            // The history is copied (its edits shared, not cloned) only when it changed.
+            let kept = history.filter(|_| session.workspace().autosave_history_path().is_file());
+            match session.autosave_copy(kept) {
+                Some(c) if c.version != written || c.history.is_some() => {
+                    Some((c, session.workspace().clone()))
+                }
                 Some(_) => None,
                 None => {
                     if written != 0 {
                         session.workspace().clear_autosave();
                         written = 0;
+                        history = None;
                     }
                     None
                 }
             }
         };
-        if let Some(((project, source, version), workspace)) = copy {
-            let done = tokio::task::spawn_blocking(move || {
-                workspace.autosave(&project, source.as_deref())
-            })
-            .await;
+        if let Some((copy, workspace)) = copy {
+            let version = copy.version;
+            let done = tokio::task::spawn_blocking(move || workspace.keep(&copy, history)).await;
             match done {
-                Ok(Ok(())) => written = version,
+                Ok(Ok(h)) => {
+                    written = version;
+                    history = h;
+                }
                 Ok(Err(e)) => eprintln!("studio: autosave failed: {e}"),
                 Err(_) => {}
             }

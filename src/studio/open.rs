@@ -474,6 +474,7 @@ pub fn layered_project_with(
                 name: p.name.clone(),
                 vertices: p.vertices,
                 faces: p.faces,
+                ..super::project::PartData::default()
             })
             .collect(),
     );

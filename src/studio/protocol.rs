@@ -251,6 +251,15 @@ pub enum Request {
         /// The weight.
         weight: f64,
     },
+    /// A part hidden or shown while editing, locked or unlocked (one undo step, saved).
+    PartFlags {
+        /// The part, by its index in the document's list (bottom first).
+        part: usize,
+        /// Hidden while editing (exports draw every part).
+        hidden: bool,
+        /// Its vertices take no new pin.
+        locked: bool,
+    },
     /// A character's draw order (one undo step): `order` lists the parts (by their index in
     /// the document's list) bottom first; each is drawn over the ones before it.
     PartOrder {

@@ -28,7 +28,7 @@ use super::project::{Keyframe, PictureSettings, Project};
 use super::protocol::{
     frame_bytes, ghost_bytes, kind, mesh_bytes, paint_bytes, upload, Request, MAX_GHOSTS,
 };
-use super::workspace::{kind_of, read_regular, Recovered, Workspace, MAX_UPLOAD};
+use super::workspace::{kind_of, read_regular, AutosaveCopy, Recovered, Workspace, MAX_UPLOAD};
 use crate::mesh::PlanarMesh;
 use crate::render::{colour, raster, Background, Drawing, ImageSize, Viewport};
 
@@ -568,7 +568,7 @@ impl Session {
             .into());
         };
         let select = step.edit.keyframe();
-        match self.apply(step.edit.clone()) {
+        match self.apply(Edit::clone(&step.edit)) {
             Ok(inverse) => {
                 if undo {
                     self.history.undone(step, inverse);
@@ -1252,11 +1252,23 @@ impl Session {
         Ok(path)
     }
 
-    /// Writes the autosave if the document changed since `since` (a [`Session::version`]);
-    /// the version written. Called off the lock with a copy when the document is large.
-    pub fn autosave_copy(&self) -> Option<(Project, Option<String>, u64)> {
-        self.dirty()
-            .then(|| (self.doc.clone(), self.source.clone(), self.version))
+    /// What the autosave keeps, when the document has unsaved changes (written off the lock):
+    /// the document, its names, and its undo history when `history_written` (the generation
+    /// of the history written last) is not the history's generation now.
+    pub fn autosave_copy(&self, history_written: Option<u64>) -> Option<AutosaveCopy> {
+        let generation = self.history.generation();
+        self.dirty().then(|| AutosaveCopy {
+            project: self.doc.clone(),
+            source: self.source.clone(),
+            project_file: self
+                .project_file
+                .as_deref()
+                .and_then(|p| self.workspace.name_of(p)),
+            version: self.version,
+            generation,
+            history: (history_written != Some(generation))
+                .then(|| self.history.snapshot(super::recovery::HISTORY_FILE_BYTES)),
+        })
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1451,8 +1463,10 @@ impl Session {
             name: name.to_owned(),
             path,
             workspace: self.workspace.root().to_path_buf(),
+            // Tracing settings belong to the picture they were chosen for: a newly opened
+            // picture gets its own (transparency when it has any, else its border's colour),
+            // never the previous document's.
             options: OpenOptions {
-                picture: self.doc.picture.clone(),
                 pictures_inside: true,
                 ..OpenOptions::default()
             },
@@ -1492,15 +1506,25 @@ impl Session {
             Some(uv) => uv.clone(),
             None => fitted_uv(&self.doc.mesh.positions, &texture.image).0,
         };
+        // The tracing settings were the previous picture's: this one gets its own, as a
+        // picture opened does.
+        let mut notes = Vec::new();
+        let settings = super::open::picture_settings(
+            &texture.image,
+            &PictureSettings::default(),
+            &mut notes,
+            name,
+        );
         let texture = Arc::new(texture);
         self.textures.insert(texture);
-        self.commit(
-            format!("picture {name}"),
-            Edit::Texture {
-                texture: Some(name.to_owned()),
-                texcoords: Some(uv),
-            },
-        )
+        let mut edit = Edit::Texture {
+            texture: Some(name.to_owned()),
+            texcoords: Some(uv),
+        };
+        if self.doc.picture != settings {
+            edit = Edit::Batch(vec![edit, Edit::Picture(settings)]);
+        }
+        self.commit(format!("picture {name}"), edit)
     }
 
     /// A picture of the workspace, read once and kept.
@@ -1651,16 +1675,37 @@ impl Session {
     }
 
     fn recover(&mut self, name: &str) -> Done {
-        let (project, source) = self.workspace.recovered_project(name)?;
-        self.commit("restore recovered work", Edit::Document(Box::new(project)))?;
-        self.source = source;
-        self.project_file = None;
+        let work = self.workspace.recovered_work(name)?;
+        self.commit(
+            "restore recovered work",
+            Edit::Document(Box::new(work.project)),
+        )?;
+        // Its undo history on top: undo goes back through its edits, then to what was open.
+        let steps = work.history.as_ref().map_or(0, |h| h.undo.len());
+        if let Some(history) = work.history {
+            self.history.graft(history);
+        }
+        if let Some(why) = work.history_note {
+            self.note(
+                format!("recovered work restored without its undo history: {why}"),
+                false,
+            );
+        }
+        self.source = work.source;
+        // Its project file, when it is still a name in the workspace: Save writes there.
+        self.project_file = work
+            .project_file
+            .and_then(|n| self.workspace.file(&n, &[".json"]).ok());
         self.show_keyframe(0);
         // Restored: it is now this studio's work, autosaved as such.
         let _ = self.workspace.discard(name);
         self.recovered = self.workspace.recovered();
         self.note(
-            "recovered work restored (Undo goes back to what was open before); save it to keep it",
+            if steps > 0 {
+                format!("recovered work restored with its {steps} undo steps (Undo goes back through them, then to what was open before); save it to keep it")
+            } else {
+                "recovered work restored (Undo goes back to what was open before); save it to keep it".to_owned()
+            },
             false,
         );
         Ok(())
@@ -2160,6 +2205,17 @@ impl Session {
                 }
             }
             Request::PaintDepth { faces, all, level } => self.paint_depth(&faces, all, level)?,
+            Request::PartFlags {
+                part,
+                hidden,
+                locked,
+            } => {
+                if let Some((label, edit)) =
+                    super::part_flags::edit(&self.doc, part, hidden, locked)?
+                {
+                    self.commit(label, edit)?;
+                }
+            }
             Request::PartOrder { order } => {
                 let (project, label) = super::project::with_part_order(&self.doc, &order)?;
                 self.commit(label, Edit::Document(Box::new(project)))?

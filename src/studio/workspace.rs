@@ -4,7 +4,8 @@
 //! - `token`: the page's secret, kept so that after a restart on the same workspace (and port)
 //!   an open page reconnects by itself; `port`: the port last used, taken again when free.
 //! - `autosave-PID.json`: the document of a running studio, written every few seconds while it
-//!   has unsaved changes ([`AUTOSAVE_SECONDS`]) and when it stops.
+//!   has unsaved changes ([`AUTOSAVE_SECONDS`]) and when it stops, with the name of its project
+//!   file; `autosave-PID.history` beside it: its undo history ([`super::recovery`]).
 //! - `recovered/`: the autosaves of studios no longer running (stopped with unsaved changes,
 //!   killed, crashed), moved there by the next start, which offers to restore them.
 //!
@@ -214,6 +215,62 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
     Ok(bytes)
 }
 
+/// How much of a `.json` file is read to tell whether it is a studio project.
+pub const SNIFF_BYTES: u64 = 64 << 10;
+
+/// Whether the file at `path` is a studio project: a regular file (opened without blocking)
+/// whose first [`SNIFF_BYTES`] hold `"format": "bdmorph-studio"` (the first field the studio
+/// writes). A sprite sheet's JSON, or any other program's, is not.
+pub fn is_project_file(path: &Path) -> bool {
+    use std::io::Read;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let Ok(file) = options.open(path) else {
+        return false;
+    };
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return false;
+    }
+    let mut head = Vec::new();
+    if file.take(SNIFF_BYTES).read_to_end(&mut head).is_err() {
+        return false;
+    }
+    names_studio_format(&head)
+}
+
+/// Whether JSON text (perhaps cut short) has the key `"format"` with the value
+/// `"bdmorph-studio"`.
+fn names_studio_format(text: &[u8]) -> bool {
+    let key = b"\"format\"";
+    let value = super::project::FORMAT.as_bytes();
+    let mut from = 0;
+    while let Some(at) = text[from..].windows(key.len()).position(|w| w == key) {
+        let mut rest = &text[from + at + key.len()..];
+        let skip = |r: &mut &[u8]| {
+            while let [b' ' | b'\t' | b'\n' | b'\r', tail @ ..] = *r {
+                *r = tail;
+            }
+        };
+        skip(&mut rest);
+        if let [b':', tail @ ..] = rest {
+            rest = tail;
+            skip(&mut rest);
+            if let [b'"', tail @ ..] = rest {
+                if tail.starts_with(value) && tail.get(value.len()) == Some(&b'"') {
+                    return true;
+                }
+            }
+        }
+        from += at + key.len();
+    }
+    false
+}
+
 /// Whether `name` is the name of a frame an OBJ export writes (`frame_0000.obj`, ...).
 fn is_frame_name(name: &str, ending: &str) -> bool {
     name.strip_prefix("frame_")
@@ -243,6 +300,8 @@ pub struct Recovered {
     pub saved_at: u64,
     /// The file that studio had opened, if any.
     pub source: Option<String>,
+    /// The project file it saved to, if any (a name in the workspace).
+    pub project: Option<String>,
     /// Its keyframes.
     pub keyframes: usize,
     /// Its vertices.
@@ -255,7 +314,45 @@ struct Autosave {
     format: String,
     saved_at: u64,
     source: Option<String>,
+    /// The project file a plain save wrote to (its name in the workspace).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    project_file: Option<String>,
+    /// The generation of the undo history kept beside it, if one was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    history: Option<u64>,
     project: Project,
+}
+
+/// What is written as a studio's autosave.
+#[derive(Debug)]
+pub struct AutosaveCopy {
+    /// The document.
+    pub project: Project,
+    /// The file it was opened from.
+    pub source: Option<String>,
+    /// The project file a plain save writes to (its name in the workspace), if any.
+    pub project_file: Option<String>,
+    /// The session's version of the document.
+    pub version: u64,
+    /// The undo history's generation (that of the history kept beside it).
+    pub generation: u64,
+    /// The history, when it changed since it was last written.
+    pub history: Option<super::history::Snapshot>,
+}
+
+/// Recovered work as it is restored.
+#[derive(Debug)]
+pub struct RecoveredWork {
+    /// The document.
+    pub project: Project,
+    /// The file the studio that kept it had opened.
+    pub source: Option<String>,
+    /// The project file it saved to (a name in the workspace), if any.
+    pub project_file: Option<String>,
+    /// Its undo history, when one was kept with it and reads back.
+    pub history: Option<super::history::Snapshot<super::edit::Edit>>,
+    /// Why a history kept with it is not used, if one is not.
+    pub history_note: Option<String>,
 }
 
 const AUTOSAVE_FORMAT: &str = "bdmorph-studio-autosave";
@@ -441,6 +538,10 @@ impl Workspace {
                 if !is_plain(&name) || self.file(&name, &[]).is_err() {
                     return None;
                 }
+                // Only studio projects among JSON files (not a sprite sheet's frames).
+                if kind == "project" && !is_project_file(&e.path()) {
+                    return None;
+                }
                 let modified = meta
                     .modified()
                     .ok()
@@ -503,23 +604,79 @@ impl Workspace {
             .join(format!("autosave-{}.json", std::process::id()))
     }
 
-    /// Writes the autosave (atomically).
+    /// Writes the autosave (atomically), without a history.
     pub fn autosave(&self, project: &Project, source: Option<&str>) -> Result<(), String> {
+        self.write_autosave(project, source, None, None)
+    }
+
+    /// The undo history kept beside this studio's autosave.
+    pub fn autosave_history_path(&self) -> PathBuf {
+        self.state_dir()
+            .join(format!("autosave-{}.history", std::process::id()))
+    }
+
+    /// Writes `copy` as the autosave: first its history when it has one (the history of
+    /// generation `written` is already there), then the document naming the history's
+    /// generation when that history is there. Both atomically.
+    pub fn keep(&self, copy: &AutosaveCopy, written: Option<u64>) -> Result<Option<u64>, String> {
+        private_dir(&self.state_dir()).map_err(|e| e.to_string())?;
+        let mut kept =
+            written.filter(|&g| g == copy.generation && self.autosave_history_path().is_file());
+        let mut failed = None;
+        if let Some(history) = &copy.history {
+            match super::recovery::write(&self.autosave_history_path(), history) {
+                Ok(()) => kept = Some(copy.generation),
+                Err(e) => failed = Some(e.to_string()),
+            }
+        }
+        self.write_autosave(
+            &copy.project,
+            copy.source.as_deref(),
+            copy.project_file.as_deref(),
+            kept,
+        )?;
+        match failed {
+            Some(e) => Err(e),
+            None => Ok(kept),
+        }
+    }
+
+    fn write_autosave(
+        &self,
+        project: &Project,
+        source: Option<&str>,
+        project_file: Option<&str>,
+        history: Option<u64>,
+    ) -> Result<(), String> {
         private_dir(&self.state_dir()).map_err(|e| e.to_string())?;
         let body = Autosave {
             format: AUTOSAVE_FORMAT.into(),
             saved_at: now(),
             source: source.map(str::to_owned),
+            project_file: project_file.map(str::to_owned),
+            history,
             project: project.clone(),
         };
         let bytes = serde_json::to_vec(&body).map_err(|e| e.to_string())?;
         crate::io::write_bytes_atomic(self.autosave_path(), &bytes).map_err(|e| e.to_string())
     }
 
-    /// Removes this studio's autosave (the document is saved, or the studio stopped with
-    /// nothing unsaved).
+    /// Removes this studio's autosave and its history (the document is saved, or the studio
+    /// stopped with nothing unsaved).
     pub fn clear_autosave(&self) {
         let _ = std::fs::remove_file(self.autosave_path());
+        let _ = std::fs::remove_file(self.autosave_history_path());
+    }
+
+    /// The name of `path` when it is a file directly in the workspace.
+    pub fn name_of(&self, path: &Path) -> Option<String> {
+        let name = path.file_name()?.to_str()?;
+        let parent = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        (is_plain(name) && std::fs::canonicalize(parent).ok()? == self.canonical)
+            .then(|| name.to_owned())
     }
 
     fn recovered_dir(&self) -> PathBuf {
@@ -546,9 +703,19 @@ impl Workspace {
             if private_dir(&self.recovered_dir()).is_err() {
                 return;
             }
+            let stamp = now();
             let to = self
                 .recovered_dir()
-                .join(format!("recovered-{}-{pid}.json", now()));
+                .join(format!("recovered-{stamp}-{pid}.json"));
+            // Its history first: recovered work is listed once its document is there.
+            let history = self.state_dir().join(format!("autosave-{pid}.history"));
+            if history.is_file() {
+                let _ = std::fs::rename(
+                    history,
+                    self.recovered_dir()
+                        .join(format!("recovered-{stamp}-{pid}.history")),
+                );
+            }
             let _ = std::fs::rename(entry.path(), to);
         }
     }
@@ -570,6 +737,7 @@ impl Workspace {
                     name,
                     saved_at: save.saved_at,
                     source: save.source,
+                    project: save.project_file,
                     keyframes: save.project.keyframes.len(),
                     vertices: save.project.mesh.positions.len(),
                 })
@@ -600,11 +768,41 @@ impl Workspace {
         Ok((save.project, save.source))
     }
 
-    /// Puts recovered work aside (into `recovered/discarded/`, not deleted).
+    /// Recovered work as it is restored: its document, names and undo history.
+    pub fn recovered_work(&self, name: &str) -> Result<RecoveredWork, String> {
+        let (save, path) = self.read_recovered(name)?;
+        let (history, history_note) = match save.history {
+            None => (None, None),
+            Some(generation) => match super::recovery::read(&path.with_extension("history")) {
+                Ok(h) if h.generation == generation => (Some(h), None),
+                Ok(_) => (
+                    None,
+                    Some("its undo history was of another moment (the studio stopped while writing it)".to_owned()),
+                ),
+                Err(e) => (None, Some(e.to_string())),
+            },
+        };
+        Ok(RecoveredWork {
+            project: save.project,
+            source: save.source,
+            project_file: save.project_file,
+            history,
+            history_note,
+        })
+    }
+
+    /// Puts recovered work aside (into `recovered/discarded/`, not deleted), with its history.
     pub fn discard(&self, name: &str) -> Result<(), String> {
         let (_, path) = self.read_recovered(name)?;
         let aside = self.recovered_dir().join("discarded");
         private_dir(&aside).map_err(|e| e.to_string())?;
+        let history = path.with_extension("history");
+        if history.is_file() {
+            let _ = std::fs::rename(
+                &history,
+                aside.join(Path::new(name).with_extension("history")),
+            );
+        }
         std::fs::rename(&path, aside.join(name)).map_err(|e| format!("{name}: {e}"))
     }
 
@@ -721,6 +919,94 @@ mod tests {
         ws.discard(&found[0].name).expect("discards");
         assert!(ws.recovered().is_empty());
         assert!(ws.recovered_project("../token").is_err());
+    }
+
+    #[test]
+    fn recovered_work_keeps_its_project_name_and_history() {
+        use super::super::edit::Edit;
+        use super::super::history::History;
+        let ws = scratch("recover-history");
+        let project = Project::new(&crate::generate::disk(3, 0.1), None);
+        let mut history = History::default();
+        history.push("frame rate 12", Edit::Fps(25.0));
+        let copy = |history: &History, with: bool| AutosaveCopy {
+            project: project.clone(),
+            source: Some("a.png".into()),
+            project_file: Some("walk.json".into()),
+            version: 1,
+            generation: history.generation(),
+            history: with.then(|| history.snapshot(usize::MAX)),
+        };
+        let written = ws.keep(&copy(&history, true), None).expect("kept");
+        assert_eq!(written, Some(history.generation()));
+        // Kept again without the history (unchanged): it still goes with the document.
+        assert_eq!(
+            ws.keep(&copy(&history, false), written).expect("kept"),
+            written
+        );
+        let dead = |ws: &Workspace| {
+            let state = ws.root().join(".bdmorph-studio");
+            std::fs::rename(ws.autosave_path(), state.join("autosave-4000000001.json"))
+                .expect("rename");
+            std::fs::rename(
+                ws.autosave_history_path(),
+                state.join("autosave-4000000001.history"),
+            )
+            .expect("rename");
+            ws.collect_recoveries();
+            ws.recovered()
+        };
+        let found = dead(&ws);
+        assert_eq!(found[0].project.as_deref(), Some("walk.json"));
+        let work = ws.recovered_work(&found[0].name).expect("reads");
+        assert_eq!(work.project_file.as_deref(), Some("walk.json"));
+        let kept = work.history.expect("its history");
+        assert_eq!(kept.undo.len(), 1);
+        assert_eq!(kept.undo[0].label, "frame rate 12");
+        assert_eq!(kept.undo[0].edit, Edit::Fps(25.0));
+        ws.discard(&found[0].name).expect("discards");
+        // A history of another moment than the document is not used.
+        ws.keep(&copy(&history, true), None).expect("kept");
+        history.push("frame rate 30", Edit::Fps(12.0));
+        super::super::recovery::write(&ws.autosave_history_path(), &history.snapshot(usize::MAX))
+            .expect("written");
+        let found = dead(&ws);
+        let work = ws.recovered_work(&found[0].name).expect("reads");
+        assert!(work.history.is_none());
+        assert!(work.history_note.is_some());
+    }
+
+    #[test]
+    fn only_studio_projects_are_listed_among_json_files() {
+        let ws = scratch("sniff");
+        let project = Project::new(&crate::generate::disk(3, 0.1), None);
+        project
+            .write(&ws.root().join("walk.json"))
+            .expect("written");
+        std::fs::write(
+            ws.root().join("sheet.json"),
+            br#"{"frames": [{"x": 0}], "meta": {"format": "RGBA8888"}}"#,
+        )
+        .expect("written");
+        std::fs::write(
+            ws.root().join("tricky.json"),
+            br#"{"note": "\"format\": \"bdmorph-studio\" is", "format": "x"}"#,
+        )
+        .expect("written");
+        std::fs::write(
+            ws.root().join("spaced.json"),
+            b"{\n  \"format\" :\t\"bdmorph-studio\" }",
+        )
+        .expect("written");
+        let names: Vec<String> = ws.list().into_iter().map(|e| e.name).collect();
+        assert_eq!(names, ["spaced.json", "walk.json"]);
+        assert!(names_studio_format(
+            br#"{"format":"bdmorph-studio","version":4"#
+        ));
+        assert!(!names_studio_format(
+            br#"{"format":"bdmorph-studio-autosave"}"#
+        ));
+        assert!(!names_studio_format(br#"{"format":"bdmorph-studi"#));
     }
 
     #[test]

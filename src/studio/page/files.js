@@ -19,7 +19,7 @@ on("files", (msg) => {
   list.textContent = "";
   const rows = [];
   for (const r of msg.recovered) {
-    rows.push({ text: `recovered work from ${when(r.saved_at)}: ${r.keyframes} keyframes, ${r.vertices} vertices${r.source ? `, from ${r.source}` : ""}`, open: () => send({ op: "recover", name: r.name }) });
+    rows.push({ text: `recovered work${r.project ? ` of ${r.project}` : ""} from ${when(r.saved_at)}: ${r.keyframes} keyframes, ${r.vertices} vertices${r.source && r.source !== r.project ? `, from ${r.source}` : ""}`, open: () => send({ op: "recover", name: r.name }) });
   }
   for (const f of msg.files) rows.push({ text: `${f.name} (${f.kind}, ${(f.bytes / 1024).toFixed(0)} KB)`, open: () => openFile(f.name) });
   if (!rows.length) list.textContent = `No pictures, meshes, outlines or projects in ${msg.workspace}. Drop a file on the page to add one.`;
@@ -71,7 +71,7 @@ on("state", (st) => {
   const r = st.recovered[0];
   banner.hidden = !r;
   if (r) {
-    $("recovered-text").textContent = `Unsaved work a studio in this folder kept when it stopped (${when(r.saved_at)}): ${r.keyframes} keyframes, ${r.vertices} vertices${r.source ? `, from ${r.source}` : ""}${st.recovered.length > 1 ? ` (and ${st.recovered.length - 1} more in Open)` : ""}.`;
+    $("recovered-text").textContent = `Unsaved work${r.project ? ` on ${r.project}` : ""} a studio in this folder kept when it stopped (${when(r.saved_at)}): ${r.keyframes} keyframes, ${r.vertices} vertices${r.source && r.source !== r.project ? `, from ${r.source}` : ""}${st.recovered.length > 1 ? ` (and ${st.recovered.length - 1} more in Open)` : ""}.`;
     $("recovered-restore").onclick = () => send({ op: "recover", name: r.name });
     $("recovered-aside").onclick = () => send({ op: "discard", name: r.name });
   }

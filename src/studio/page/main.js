@@ -72,7 +72,8 @@ on("error", (msg) => {
     return;
   }
   S.errors.push(msg.message);
-  if (S.errors.length > 6) S.errors.shift();
+  // Equal errors are shown once with how many (panels.js): room for a few kinds.
+  if (S.errors.length > 50) S.errors.shift();
 });
 on("open", () => connection(true));
 on("close", (was) => connection(false, was));

@@ -1,5 +1,6 @@
 // The page's messages and small dialogs: the status bar (one line, fixed height), notes from
-// the server and this page's refused requests (each kept until dismissed), the progress of
+// the server and this page's refused requests (a note fades after a few seconds, an error
+// stays until dismissed; equal ones are shown once, with how many), the progress of
 // background work with Cancel, the connection banner, the undo and redo buttons with what
 // they would do, and confirm/prompt dialogs.
 
@@ -24,31 +25,76 @@ export function showStatus() {
 }
 
 // Notes from the server (for every tab) and this page's errors, newest last, each with ×.
+// A note fades NOTE_MS after this page first showed it; an error stays until dismissed.
+// Equal notes (the same text, both notes or both errors) are one, with "×N".
+// (The fade itself is the last eighth of that time: studio.css, note-fade.)
+export const NOTE_MS = 6000;
+const noteSeen = new Map(); // server note id -> when this page first showed it
+let noteTimer = null;
 function drawNotes() {
   const box = $("notes");
   const st = S.state;
+  const now = performance.now();
   const items = [];
-  if (st) for (const n of st.notes) items.push({ text: n.text, error: n.error, dismiss: () => send({ op: "dismiss", note: n.id }) });
-  S.errors.forEach((text, i) => items.push({ text, error: true, dismiss: () => { S.errors.splice(i, 1); redraw(); } }));
-  const key = JSON.stringify(items.map((i) => [i.text, i.error]));
+  if (st) {
+    const ids = new Set(st.notes.map((n) => n.id));
+    for (const id of noteSeen.keys()) if (!ids.has(id)) noteSeen.delete(id);
+    for (const n of st.notes) {
+      if (!noteSeen.has(n.id)) noteSeen.set(n.id, now);
+      items.push({ text: n.text, error: n.error, seen: noteSeen.get(n.id), dismiss: () => send({ op: "dismiss", note: n.id }) });
+    }
+  }
+  S.errors.forEach((text) => items.push({ text, error: true, seen: now, dismiss: () => { S.errors = S.errors.filter((e) => e !== text); redraw(); } }));
+  // Equal ones merged (at the place of the newest), then the faded ones left out.
+  const groups = new Map();
+  for (const item of items) {
+    const k = JSON.stringify([item.text, item.error]);
+    const g = groups.get(k);
+    if (g) {
+      groups.delete(k);
+      g.count++;
+      g.seen = Math.max(g.seen, item.seen);
+      const first = g.dismiss, then = item.dismiss;
+      g.dismiss = () => { first(); then(); };
+      groups.set(k, g);
+    } else groups.set(k, { ...item, count: 1 });
+  }
+  const shown = [...groups.values()].filter((g) => g.error || now - g.seen < NOTE_MS).slice(-6);
+  // Drawn again when the next one fades.
+  const next = Math.min(...shown.filter((g) => !g.error).map((g) => g.seen + NOTE_MS - now));
+  clearTimeout(noteTimer);
+  if (Number.isFinite(next)) noteTimer = setTimeout(redraw, Math.max(0, next) + 20);
+  const key = JSON.stringify(shown.map((g) => [g.text, g.error, g.count, g.error ? 0 : g.seen]));
   if (box.dataset.key === key) return;
   box.dataset.key = key;
   box.textContent = "";
-  for (const item of items.slice(-6)) {
+  for (const item of shown) {
     const el = document.createElement("div");
-    el.className = "note" + (item.error ? " error" : "");
+    el.className = "note" + (item.error ? " error" : " fades");
+    // The fade runs over the note's time, wherever this drawing starts in it.
+    if (!item.error) {
+      el.style.animationDuration = `${NOTE_MS}ms`;
+      el.style.animationDelay = `${-(now - item.seen)}ms`;
+    }
     const text = document.createElement("span");
     text.textContent = item.text;
+    el.append(text);
+    if (item.count > 1) {
+      const count = document.createElement("span");
+      count.className = "count";
+      count.textContent = `×${item.count}`;
+      count.title = `${item.count} times`;
+      el.append(count);
+    }
     const x = document.createElement("button");
     x.textContent = "×";
     x.title = "Dismiss";
     x.className = "dismiss";
     x.onclick = item.dismiss;
-    el.append(text, x);
+    el.append(x);
     box.appendChild(el);
   }
 }
-
 function drawJob() {
   const st = S.state, box = $("job");
   if (!st || !st.job) { box.hidden = true; return; }

@@ -1,13 +1,14 @@
 // The parts panel, for a character made from a layered picture: one row per part, front
 // first (as layer panels list them), with its name (a click selects the pins on it), an eye
 // (shown or hidden while editing; every export draws every part), a lock (its vertices take no
-// new pin) and two arrows that change the draw order (one undoable step on the server). The
-// joints are drawn on the canvas as small rings, where two parts are tied.
+// new pin) and two arrows that change the draw order. Hiding, locking and the draw order are
+// each an undoable step on the server, saved with the project. The joints are drawn on the
+// canvas as small rings, where two parts are tied.
 
 import { S, $, ctx, dpr, toCanvas, redraw } from "./view.js";
 import { send } from "./net.js";
 
-S.hiddenParts = new Set();   // part names hidden on the page
+S.hiddenParts = new Set();   // part names hidden (the document's, as the state says)
 S.lockedParts = new Set();   // part names whose vertices take no new pin
 S.faceHidden = null;         // Uint8Array m: 1 for a triangle of a hidden part, or null
 S.vertexLocked = null;       // Uint8Array n: 1 for a vertex of a locked part, or null
@@ -15,6 +16,8 @@ S.vertexLocked = null;       // Uint8Array n: 1 for a vertex of a locked part, o
 // The per-triangle and per-vertex masks from the sets, for the drawing and the picking.
 function syncMasks() {
   const parts = (S.state && S.state.parts) || [];
+  S.hiddenParts = new Set(parts.filter((p) => p.hidden).map((p) => p.name));
+  S.lockedParts = new Set(parts.filter((p) => p.locked).map((p) => p.name));
   S.faceHidden = null;
   S.vertexLocked = null;
   for (const p of parts) {
@@ -53,7 +56,7 @@ export function drawPartsPanel() {
   $("parts-panel").hidden = !parts || S.state.mode === "outline";
   syncMasks();
   if (!parts) return;
-  const key = JSON.stringify([parts, [...S.hiddenParts], [...S.lockedParts]]);
+  const key = JSON.stringify(parts);
   if ($("part-list").dataset.key === key) return;
   $("part-list").dataset.key = key;
   const list = $("part-list");
@@ -75,16 +78,13 @@ export function drawPartsPanel() {
       setTimeout(redraw, 2600);
       redraw();
     };
-    const hidden = S.hiddenParts.has(p.name), locked = S.lockedParts.has(p.name);
+    const hidden = !!p.hidden, locked = !!p.locked;
     row.append(
       button(hidden ? "◌" : "●", hidden ? "Show this part" : "Hide this part while editing (exports draw every part)", () => {
-        if (hidden) S.hiddenParts.delete(p.name); else S.hiddenParts.add(p.name);
-        drawPartsPanel();
-        redraw();
+        send({ op: "part_flags", part: i, hidden: !hidden, locked });
       }, !hidden),
       button(locked ? "⊠" : "□", locked ? "Unlock: its vertices take pins again" : "Lock: its vertices take no new pin", () => {
-        if (locked) S.lockedParts.delete(p.name); else S.lockedParts.add(p.name);
-        drawPartsPanel();
+        send({ op: "part_flags", part: i, hidden, locked: !locked });
       }, locked),
       name,
       button("▲", "Draw in front of the part above", () => move(i, 1)),

@@ -30,12 +30,14 @@ pub mod guard;
 pub mod history;
 pub mod jobs;
 pub mod listen;
+pub mod loops;
 pub mod messages;
 pub mod open;
 pub mod pictures;
 /// The project file (the crate's [`crate::project`], with the feature `project`).
 pub use crate::project;
 pub mod protocol;
+pub mod scene;
 pub mod server;
 pub mod session;
 pub mod workspace;

@@ -189,10 +189,7 @@ fn six_drag_scrubs_each_followed_by_i_make_keys_at_the_released_times() {
             .filter(|t| !before.contains(t))
             .collect();
         assert_eq!(new.len(), 1, "drag {i}: one new keyframe: {after:?}");
-        assert_eq!(
-            new[0], shown,
-            "drag {i}: the keyframe is at the time shown"
-        );
+        assert_eq!(new[0], shown, "drag {i}: the keyframe is at the time shown");
         assert!(
             (new[0] - to).abs() <= 1.0 / fps,
             "drag {i}: the keyframe at {} s, released at {to} s",
@@ -232,7 +229,11 @@ fn i_one_second_past_the_only_key_then_play() {
     // Past the end of the timeline the playhead stops.
     page.key("ArrowRight", &[]);
     page.settle();
-    assert_eq!(server_shown(&studio), 1.0, "the timeline ends a second past the last key");
+    assert_eq!(
+        server_shown(&studio),
+        1.0,
+        "the timeline ends a second past the last key"
+    );
     page.shot("t2-past-the-key.png");
     page.key("i", &[]);
     page.wait("studio.state.keyframes.length === 2", 20);
@@ -249,19 +250,24 @@ fn i_one_second_past_the_only_key_then_play() {
     page.settle();
     let rest_y = page.num(&format!("studio.rest[{}]", 2 * hand + 1));
     let posed_y = page.num(&format!("studio.pose[{}]", 2 * hand + 1));
-    assert!(posed_y > rest_y + 30.0, "the hand moved up: {rest_y} -> {posed_y}");
+    assert!(
+        posed_y > rest_y + 30.0,
+        "the hand moved up: {rest_y} -> {posed_y}"
+    );
     // Play once (no loop) from the start, watching the hand in every frame shown.
     page.click_on("#loop");
     page.key("Home", &[]);
     page.settle();
     page.eval(&format!(
-        "(() => {{ window.seen = []; const look = () => {{ window.seen.push([studio.frameInfo.time, studio.pose[{}]]); if (studio.playing || studio.busy() || window.seen.length < 3) requestAnimationFrame(look); }}; requestAnimationFrame(look); return true; }})()",
+        "(() => {{ window.seen = []; window.seeing = true; const look = () => {{ window.seen.push([studio.frameInfo.time, studio.pose[{}]]); if (window.seeing) requestAnimationFrame(look); }}; requestAnimationFrame(look); return true; }})()",
         2 * hand + 1
     ));
     page.key(" ", &[]);
     page.wait("studio.playing", 5);
     page.wait("!studio.playing && !studio.busy()", 20);
     page.settle();
+    page.eval("(window.seeing = false)");
+    std::thread::sleep(Duration::from_millis(50));
     let seen: Vec<(f64, f64)> = page
         .eval("window.seen")
         .as_array()
@@ -317,7 +323,10 @@ fn the_scene_length_is_set_saved_undone_and_exported() {
     assert_eq!(saved["length"], 4.0);
     page.undo();
     assert_eq!(page.eval("studio.state.length"), serde_json::Value::Null);
-    assert_eq!(page.eval("document.getElementById('scene-length').value"), "");
+    assert_eq!(
+        page.eval("document.getElementById('scene-length').value"),
+        ""
+    );
     assert_eq!(page.num("studio.state.duration"), 2.0);
     // Exported from the command line: 4 s at 25 fps, 101 frames; the saved file without a
     // length, 51 (as before).
@@ -376,16 +385,34 @@ fn a_paste_onto_a_keyframe_asks_replace_or_insert_after() {
     );
     page.shot("t4-asked.png");
     page.click_on("#confirm-ok");
-    page.wait("studio.state.undo && studio.state.undo.includes('replaced')", 10);
+    page.wait(
+        "studio.state.undo && studio.state.undo.includes('replaced')",
+        10,
+    );
     page.settle();
     assert_eq!(server_times(&studio), [0.0, 1.0, 2.0], "no keyframe added");
-    page.wait("studio.ghosts.get(2) && studio.ghosts.get(2).rev === studio.state.keyframes[2].rev", 10);
+    page.wait(
+        "studio.ghosts.get(2) && studio.ghosts.get(2).rev === studio.state.keyframes[2].rev",
+        10,
+    );
     assert_eq!(pose_of(2), first, "keyframe 3 has keyframe 1's pose");
     page.undo();
-    page.wait("studio.ghosts.get(2) && studio.ghosts.get(2).rev === studio.state.keyframes[2].rev", 10);
+    page.wait(
+        "studio.ghosts.get(2) && studio.ghosts.get(2).rev === studio.state.keyframes[2].rev",
+        10,
+    );
     assert_eq!(pose_of(2), third, "undone in one step");
-    // Again, inserting after: a frame later.
-    page.key("v", &[ModifierKey::Ctrl]);
+    // Copied again (an edit of the keyframes asks for a new copy), inserted after: a frame
+    // later.
+    let copy_first_paste_on_third = || {
+        page.click(on_ruler(&page, 0.0));
+        page.settle();
+        page.key("c", &[ModifierKey::Ctrl]);
+        page.click(on_ruler(&page, 2.0));
+        page.settle();
+        page.key("v", &[ModifierKey::Ctrl]);
+    };
+    copy_first_paste_on_third();
     page.wait("document.getElementById('confirm-dialog').open", 5);
     page.click_on("#confirm-other");
     page.wait("studio.state.keyframes.length === 4", 10);
@@ -394,7 +421,7 @@ fn a_paste_onto_a_keyframe_asks_replace_or_insert_after() {
     page.undo();
     assert_eq!(server_times(&studio), [0.0, 1.0, 2.0]);
     // Cancel does nothing.
-    page.key("v", &[ModifierKey::Ctrl]);
+    copy_first_paste_on_third();
     page.wait("document.getElementById('confirm-dialog').open", 5);
     page.click_on("#confirm-cancel");
     page.settle();
@@ -423,12 +450,19 @@ fn a_whole_outline_loop_is_selected_and_deleted() {
     let page = PageTab::open(&browser, &studio.url, &dir);
     page.settle();
     page.click_on("#outline-mode");
-    page.wait("studio.state.mode === 'outline' && studio.outline.length === 2", 20);
+    page.wait(
+        "studio.state.mode === 'outline' && studio.outline.length === 2",
+        20,
+    );
     page.settle();
     let loops = page.eval("studio.outline");
     let (ball, body) = {
         let n = |i: usize| loops[i].as_array().expect("loop").len();
-        if n(0) < n(1) { (0, 1) } else { (1, 0) }
+        if n(0) < n(1) {
+            (0, 1)
+        } else {
+            (1, 0)
+        }
     };
     let body_points = loops[body].clone();
     // Shift+click on a point of the ball's loop.
@@ -455,7 +489,9 @@ fn a_whole_outline_loop_is_selected_and_deleted() {
     page.wait("!document.getElementById('delete-loop').disabled", 5);
     assert_eq!(page.num("studio.selectedLoop.ring"), ball as f64);
     std::thread::sleep(Duration::from_millis(150));
-    let selected = page.shot("t5-selected.png").count_in(page.canvas(), magenta);
+    let selected = page
+        .shot("t5-selected.png")
+        .count_in(page.canvas(), magenta);
     assert!(
         selected > before + 500,
         "the loop selected is drawn highlighted: {before} -> {selected} magenta pixels"
@@ -465,13 +501,29 @@ fn a_whole_outline_loop_is_selected_and_deleted() {
     page.key("Delete", &[]);
     page.wait("studio.outline.length === 1", 10);
     page.settle();
-    assert_eq!(page.eval("studio.outline[0]"), body_points, "the other loop stays");
-    assert_eq!(page.num("studio.state.keyframes.length"), 1.0, "no keyframe deleted");
-    assert!(page.eval("studio.state.undo").as_str().expect("undo").contains("remove loop"));
+    assert_eq!(
+        page.eval("studio.outline[0]"),
+        body_points,
+        "the other loop stays"
+    );
+    assert_eq!(
+        page.num("studio.state.keyframes.length"),
+        1.0,
+        "no keyframe deleted"
+    );
+    assert!(page
+        .eval("studio.state.undo")
+        .as_str()
+        .expect("undo")
+        .contains("remove loop"));
     page.shot("t5-deleted.png");
     page.undo();
     page.wait("studio.outline.length === 2", 10);
-    assert_eq!(page.eval("studio.outline"), loops, "undone: the loop is back in its place");
+    assert_eq!(
+        page.eval("studio.outline"),
+        loops,
+        "undone: the loop is back in its place"
+    );
     // The button does the same.
     page.mouse(
         headless_chrome::protocol::cdp::Input::DispatchMouseEventTypeOption::MousePressed,
@@ -516,8 +568,16 @@ fn the_export_dialog_names_its_range_and_exports_what_it_says() {
     assert_eq!(said, "0.00-4.00 s, 101 frames");
     page.shot("t6-dialog.png");
     page.click_on("#export");
-    page.wait("document.getElementById('notes').textContent.includes('exported')", 60);
-    assert_eq!(std::fs::read_dir(dir.join("whole")).expect("folder").count(), 101);
+    page.wait(
+        "document.getElementById('notes').textContent.includes('exported')",
+        60,
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.join("whole"))
+            .expect("folder")
+            .count(),
+        101
+    );
     // The loop range, chosen.
     page.set_value("#export-name", "looped");
     page.click_on("#export-open");
@@ -525,8 +585,16 @@ fn the_export_dialog_names_its_range_and_exports_what_it_says() {
     let said = page.eval("document.getElementById('export-range-text').textContent");
     assert_eq!(said, "1.00-2.00 s, 26 frames");
     page.click_on("#export");
-    page.wait("studio.state.notes.filter((n) => n.text.includes('exported')).length >= 2", 60);
-    assert_eq!(std::fs::read_dir(dir.join("looped")).expect("folder").count(), 26);
+    page.wait(
+        "studio.state.notes.filter((n) => n.text.includes('exported')).length >= 2",
+        60,
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.join("looped"))
+            .expect("folder")
+            .count(),
+        26
+    );
     // The command line: the whole animation by default, the loop range on request.
     let run = |args: &[&str]| {
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_bdmorph"))
@@ -536,8 +604,25 @@ fn the_export_dialog_names_its_range_and_exports_what_it_says() {
             .expect("runs");
         assert!(status.success(), "{args:?}");
     };
-    run(&["export", "anim.json", "--format", "obj", "-q", "-o", "cli-whole"]);
-    run(&["export", "anim.json", "--format", "obj", "-q", "--loop-range", "-o", "cli-loop"]);
+    run(&[
+        "export",
+        "anim.json",
+        "--format",
+        "obj",
+        "-q",
+        "-o",
+        "cli-whole",
+    ]);
+    run(&[
+        "export",
+        "anim.json",
+        "--format",
+        "obj",
+        "-q",
+        "--loop-range",
+        "-o",
+        "cli-loop",
+    ]);
     let count = |d: &str| std::fs::read_dir(dir.join(d)).expect("folder").count();
     assert_eq!((count("cli-whole"), count("cli-loop")), (101, 26));
     for i in [0, 13, 25] {
@@ -571,7 +656,10 @@ fn the_drawing_dialog_keeps_both_pictures_still_as_pairs_are_added() {
     page.settle();
     page.eval("(document.getElementById('drawing-open').click(), true)");
     page.wait("document.getElementById('drawing-dialog').open", 5);
-    page.wait("document.getElementById('drawing-name').options.length > 1", 10);
+    page.wait(
+        "document.getElementById('drawing-name').options.length > 1",
+        10,
+    );
     page.set_value("#drawing-name", "drawn.png");
     std::thread::sleep(Duration::from_millis(800));
     let rects = || (page.rect("#drawing-rest"), page.rect("#drawing-new"));
@@ -594,7 +682,10 @@ fn the_drawing_dialog_keeps_both_pictures_still_as_pairs_are_added() {
         }
     }
     page.shot("t7-pairs.png");
-    assert_eq!(page.num("document.getElementById('drawing-pairs').children.length"), 6.0);
+    assert_eq!(
+        page.num("document.getElementById('drawing-pairs').children.length"),
+        6.0
+    );
     let end = rects();
     assert!(
         moved < 0.5 && start == end,

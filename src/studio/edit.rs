@@ -11,8 +11,8 @@
 //! shows them.
 
 use super::project::{
-    check_depth, check_length, check_limits, check_loop_range, check_outline, check_pins, check_stiffness,
-    Keyframe, MeshData, MethodData, PictureSettings, Project,
+    check_depth, check_length, check_limits, check_loop_range, check_outline, check_pins,
+    check_stiffness, Keyframe, MeshData, MethodData, PictureSettings, Project,
 };
 
 /// One change to the document.

@@ -468,7 +468,11 @@ impl Engine {
             return Ok(time);
         }
         let last = doc.last_key();
-        let t = if last > 0.0 { time.min(last) / last } else { 0.0 };
+        let t = if last > 0.0 {
+            time.min(last) / last
+        } else {
+            0.0
+        };
         let mut frame = std::mem::take(&mut self.frame);
         let result = self
             .path(doc)

@@ -457,8 +457,7 @@ pub fn frame_bytes(
     worst: f64,
     flipped: usize,
 ) -> Vec<u8> {
-    let mut out =
-        Vec::with_capacity(FRAME_HEADER + 8 * positions.len() + 4 * distortion.len());
+    let mut out = Vec::with_capacity(FRAME_HEADER + 8 * positions.len() + 4 * distortion.len());
     for x in [kind, seq, positions.len() as u32, distortion.len() as u32] {
         out.extend_from_slice(&x.to_le_bytes());
     }

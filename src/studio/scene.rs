@@ -68,7 +68,10 @@ pub fn replace_edit(
     keyframe: usize,
     copy: usize,
 ) -> Result<(String, Edit), SceneError> {
-    let source = doc.keyframes.get(copy).ok_or(SceneError::NoKeyframe(copy + 1))?;
+    let source = doc
+        .keyframes
+        .get(copy)
+        .ok_or(SceneError::NoKeyframe(copy + 1))?;
     if keyframe >= doc.keyframes.len() {
         return Err(SceneError::NoKeyframe(keyframe + 1));
     }
@@ -109,8 +112,7 @@ mod tests {
     }
 
     #[test]
-    fn without_a_length_the_animation_ends_at_its_last_keyframe_and_the_timeline_a_second_later(
-    ) {
+    fn without_a_length_the_animation_ends_at_its_last_keyframe_and_the_timeline_a_second_later() {
         let doc = two_keys();
         assert_eq!(doc.end(), 2.0);
         assert_eq!(timeline_end(&doc), 3.0);
@@ -181,16 +183,28 @@ mod tests {
         assert_eq!(doc.keyframes[1].time, 2.0, "its time stays");
         inverse.apply(&mut doc).expect("undone");
         assert_eq!(doc, before);
-        assert_eq!(replace_edit(&doc, 1, 1).err(), Some(SceneError::SameKeyframe(2)));
-        assert_eq!(replace_edit(&doc, 5, 0).err(), Some(SceneError::NoKeyframe(6)));
-        assert_eq!(replace_edit(&doc, 0, 7).err(), Some(SceneError::NoKeyframe(8)));
+        assert_eq!(
+            replace_edit(&doc, 1, 1).err(),
+            Some(SceneError::SameKeyframe(2))
+        );
+        assert_eq!(
+            replace_edit(&doc, 5, 0).err(),
+            Some(SceneError::NoKeyframe(6))
+        );
+        assert_eq!(
+            replace_edit(&doc, 0, 7).err(),
+            Some(SceneError::NoKeyframe(8))
+        );
     }
 
     #[test]
     fn version_3_projects_are_read_without_a_length() {
         let doc = two_keys();
         let mut value: serde_json::Value = serde_json::from_slice(&doc.to_json()).expect("json");
-        assert!(value.get("length").is_none(), "no length written when none is set");
+        assert!(
+            value.get("length").is_none(),
+            "no length written when none is set"
+        );
         value["version"] = 3.into();
         let back = Project::from_json(value.to_string().as_bytes()).expect("reads");
         assert_eq!(back.length, None);

@@ -497,8 +497,8 @@ fn damaged_and_foreign_projects_are_refused_at_start() {
     let text = String::from_utf8(good.to_json()).expect("utf8");
     for (name, body, said) in [
         (
-            "v4.json",
-            text.replacen("\"version\": 3", "\"version\": 4", 1),
+            "v5.json",
+            text.replacen("\"version\": 4", "\"version\": 5", 1),
             "another version",
         ),
         (

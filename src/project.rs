@@ -21,7 +21,9 @@
 //! ```
 //!
 //! Version 1 files (without `outline` and `picture`), version 2 files (without keyframes'
-//! drawings) and version 3 files (without parts' `hidden` and `locked`) are read as well. A file is refused whole,
+//! drawings) and version 3 files (without parts' `hidden` and `locked` and the scene's
+//! `length`) are read as well; a project without a `length` plays and exports from 0 to its
+//! last keyframe, as before. A file is refused whole,
 //! with the reason, when it is not JSON, is another program's or a newer version's, is damaged
 //! (a pose with the wrong number of points or a point that is not finite, a triangle naming a
 //! missing vertex, times out of order, an unknown easing, a pin out of range or twice, ...), or
@@ -38,6 +40,8 @@ use crate::mesh::PlanarMesh;
 pub const FORMAT: &str = "bdmorph-studio";
 /// The version this studio writes (it reads this one and versions 1, 2 and 3).
 pub const VERSION: u32 = 4;
+/// The longest scene, in seconds (a day).
+pub const MAX_LENGTH: f64 = 86_400.0;
 
 /// The most keyframes a project holds.
 pub const MAX_KEYFRAMES: usize = 1000;
@@ -83,6 +87,12 @@ pub struct Project {
     /// animation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loop_range: Option<[f64; 2]>,
+    /// The scene's length in seconds, set by the animator: playback and exports cover
+    /// `[0, length]`, the last keyframe's pose held after it (a length before the last
+    /// keyframe counts as the last keyframe's time: see [`Project::end`]). `None`: the
+    /// animation ends at its last keyframe, as projects saved before version 4 play.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<f64>,
     /// The draw order: a depth level per triangle (from -[`MAX_DEPTH`] to [`MAX_DEPTH`]),
     /// painted on the rest mesh; where a pose overlaps itself the higher level is drawn in
     /// front. `None`: every triangle at level 0, drawn in triangle order.
@@ -283,6 +293,19 @@ pub fn check_stiffness(stiffness: Option<&[f64]>, faces: usize) -> Result<(), St
         ));
     }
     Ok(())
+}
+
+/// The scene's length: none, or a number of seconds in (0, [`MAX_LENGTH`]].
+///
+/// # Errors
+/// A length that is not finite, not positive or too long, in words.
+pub fn check_length(length: Option<f64>) -> Result<(), String> {
+    match length {
+        Some(l) if !(l.is_finite() && l > 0.0 && l <= MAX_LENGTH) => Err(format!(
+            "scene length {l} s: give one in (0, {MAX_LENGTH}] seconds"
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Whether a loop range is `[from, to]` with `0 <= from < to`, both finite.
@@ -543,6 +566,7 @@ impl Project {
                 drawing: None,
             }],
             loop_range: None,
+            length: None,
             depth: None,
             stiffness: None,
             parts: None,
@@ -559,6 +583,18 @@ impl Project {
         self.placement
             .as_deref()
             .map_or(Ok(crate::Placement::Anchor), str::parse)
+    }
+
+    /// The last keyframe's time, in seconds.
+    pub fn last_key(&self) -> f64 {
+        self.keyframes.last().map_or(0.0, |k| k.time)
+    }
+
+    /// Where playback and exports end, in seconds: the scene's [`Project::length`] when one
+    /// is set (never before the last keyframe), else the last keyframe's time.
+    pub fn end(&self) -> f64 {
+        let last = self.last_key();
+        self.length.map_or(last, |l| l.max(last))
     }
 
     /// The rest mesh.
@@ -655,6 +691,9 @@ impl Project {
             return damaged(format!("picture settings: {e}"));
         }
         if let Err(e) = check_loop_range(self.loop_range) {
+            return damaged(e);
+        }
+        if let Err(e) = check_length(self.length) {
             return damaged(e);
         }
         let m = self.mesh.faces.len();
@@ -756,7 +795,10 @@ pub fn path_of(
 pub struct Animation {
     path: crate::KeyframePath,
     placement: Option<crate::parts::Placement>,
+    /// Where it ends ([`Project::end`]).
     duration: f64,
+    /// The last keyframe's time (the path's end; its pose is held from there on).
+    last: f64,
 }
 
 impl Animation {
@@ -784,17 +826,19 @@ impl Animation {
         Ok(Animation {
             path: path_of(doc, &meshes).map_err(|e| e.to_string())?,
             placement,
-            duration: doc.keyframes.last().map_or(0.0, |k| k.time),
+            duration: doc.end(),
+            last: doc.last_key(),
         })
     }
 
-    /// The last keyframe's time, in seconds.
+    /// How long it lasts, in seconds: the scene's length when the project sets one, else
+    /// the last keyframe's time ([`Project::end`]).
     pub fn duration(&self) -> f64 {
         self.duration
     }
 
     /// The animation at `time` seconds (clamped to it) into `out` (one point per vertex); the
-    /// time used.
+    /// time used. After the last keyframe, its pose is held.
     ///
     /// # Errors
     /// The path's, in words.
@@ -804,12 +848,12 @@ impl Animation {
         } else {
             0.0
         };
-        let t = if self.duration > 0.0 {
-            time / self.duration
+        let t = if self.last > 0.0 {
+            time.min(self.last) / self.last
         } else {
             0.0
         };
-        self.frame_at(t, out)?;
+        self.path_at(t, out)?;
         Ok(time)
     }
 
@@ -818,6 +862,17 @@ impl Animation {
     /// # Errors
     /// The path's, in words.
     pub fn frame_at(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<(), String> {
+        // Without a length of its own the animation is its path, frame for frame.
+        let t = if self.duration > self.last && self.last > 0.0 {
+            (t * self.duration).min(self.last) / self.last
+        } else {
+            t
+        };
+        self.path_at(t, out)
+    }
+
+    /// The path at `t` in [0, 1] of its keyframes' span, placed.
+    fn path_at(&mut self, t: f64, out: &mut [[f64; 2]]) -> Result<(), String> {
         self.path.frame_into(t, out).map_err(|e| e.to_string())?;
         if let Some(placement) = self.placement.as_mut() {
             placement.apply(out);

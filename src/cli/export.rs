@@ -54,6 +54,28 @@ pub(super) fn parse_range(text: &str) -> Result<[usize; 2], String> {
     Ok([a, b])
 }
 
+/// The frames of `project`'s loop range, of its animation sampled at `frames` (default: its
+/// duration times its frame rate, plus one), as the studio's Export dialog picks them.
+fn loop_frames(
+    project: &bdmorph::studio::project::Project,
+    frames: Option<usize>,
+) -> Result<[usize; 2], String> {
+    let [from, to] = project
+        .loop_range
+        .ok_or("--loop-range: the project has no loop range (set one in the studio)")?;
+    let count = frames.unwrap_or_else(|| bdmorph::studio::export::default_frames(project));
+    let last = count.saturating_sub(1);
+    let end = project.end();
+    let at = |t: f64| -> usize {
+        if end > 0.0 {
+            ((t.min(end) / end * last as f64).round() as usize).min(last)
+        } else {
+            0
+        }
+    };
+    Ok([at(from), at(to).max(at(from))])
+}
+
 pub(super) fn run(args: ExportArgs) -> Result<(), String> {
     let format = match args.format.as_deref() {
         Some(f) => f.parse()?,
@@ -68,7 +90,7 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
             "--sheet makes a sprite sheet: leave out --format, or give --format sheet".into(),
         );
     }
-    let settings = ExportSettings {
+    let mut settings = ExportSettings {
         format,
         frames: args.frames,
         range: args.range,
@@ -96,6 +118,9 @@ pub(super) fn run(args: ExportArgs) -> Result<(), String> {
         ));
     }
     let opened = open(&args.project, workspace, &OpenOptions::default())?;
+    if args.loop_range {
+        settings.range = Some(loop_frames(&opened.project, args.frames)?);
+    }
     for note in &opened.notes {
         if !args.quiet {
             eprintln!("bdmorph: note: {note}");

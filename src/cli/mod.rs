@@ -338,6 +338,7 @@ enum Command {
     ///   bdmorph export wave.json -o wave.apng --background transparent --size 800x600
     ///   bdmorph export wave.json -o sheet.png --sheet --background transparent --size 256x256
     ///   bdmorph export wave.json -o frames/ --background transparent --range 0-24
+    ///   bdmorph export wave.json -o loop.gif --loop-range
     ///   bdmorph export wave.json -o wave.gif --background '#202020'
     #[command(verbatim_doc_comment)]
     Export(ExportArgs),
@@ -373,9 +374,14 @@ struct ExportArgs {
     /// The animation sampled at N frames (default: duration x fps + 1).
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
-    /// The frames kept, FIRST-LAST (0-based, inclusive), for example 0-24.
+    /// The frames kept, FIRST-LAST (0-based, inclusive), for example 0-24 (default: the
+    /// whole animation, to the scene's length when the project sets one).
     #[arg(long, value_name = "FIRST-LAST", value_parser = export::parse_range)]
     range: Option<[usize; 2]>,
+    /// Only the project's loop range (the frames from its start to its end), as the studio's
+    /// Export dialog offers it.
+    #[arg(long, conflicts_with = "range")]
+    loop_range: bool,
     /// transparent (APNG, WebP, sprite sheets, PNG frames), or a colour: #rrggbb, #rgb,
     /// white, black, grey, ... (default white).
     #[arg(long, value_name = "transparent|COLOR", allow_hyphen_values = true)]

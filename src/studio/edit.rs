@@ -11,8 +11,8 @@
 //! shows them.
 
 use super::project::{
-    check_depth, check_limits, check_loop_range, check_outline, check_pins, check_stiffness,
-    Keyframe, MeshData, MethodData, PictureSettings, Project,
+    check_depth, check_length, check_limits, check_loop_range, check_outline, check_pins,
+    check_stiffness, Keyframe, MeshData, MethodData, PictureSettings, Project,
 };
 
 /// One change to the document (kept in the history, and beside the autosave as JSON: an edit
@@ -73,6 +73,8 @@ pub enum Edit {
     Fps(f64),
     /// The range playback loops over, or the whole animation.
     LoopRange(Option<[f64; 2]>),
+    /// The scene's length in seconds, or none (the animation ends at its last keyframe).
+    Length(Option<f64>),
     /// The whole outline.
     Outline(Vec<Vec<[f64; 2]>>),
     /// A loop inserted into the outline at place `at`.
@@ -485,6 +487,17 @@ impl Edit {
                     },
                 )
             }
+            Edit::Length(length) => {
+                check_length(length)?;
+                let old = std::mem::replace(&mut doc.length, length);
+                (
+                    Edit::Length(old),
+                    Touched {
+                        settings: true,
+                        ..touched
+                    },
+                )
+            }
             Edit::Outline(loops) => {
                 check_outline(&loops)?;
                 let old = std::mem::replace(&mut doc.outline, loops);
@@ -782,6 +795,7 @@ mod tests {
             }),
             Edit::Fps(12.0),
             Edit::LoopRange(Some([0.5, 1.5])),
+            Edit::Length(Some(4.5)),
             Edit::Outline(vec![]),
             Edit::AddLoop {
                 at: 1,
@@ -892,6 +906,8 @@ mod tests {
             Edit::Fps(0.0),
             Edit::LoopRange(Some([1.0, 1.0])),
             Edit::LoopRange(Some([f64::NAN, 1.0])),
+            Edit::Length(Some(0.0)),
+            Edit::Length(Some(f64::INFINITY)),
             Edit::MovePoint {
                 ring: 0,
                 index: 9,

@@ -452,15 +452,27 @@ impl Engine {
         self.path.as_mut().ok_or_else(|| "no path".to_owned())
     }
 
-    /// The animation at `time` seconds (clamped to it) into [`Engine::frame`]; the time used.
+    /// The animation at `time` seconds into [`Engine::frame`] (clamped to the timeline,
+    /// [`super::scene::timeline_end`]; after the last keyframe its pose is held, as playback
+    /// and exports hold it); the time used.
     pub fn compute(&mut self, doc: &Project, time: f64) -> Result<f64, String> {
-        let duration = doc.keyframes.last().map_or(0.0, |k| k.time);
+        let end = super::scene::timeline_end(doc);
         let time = if time.is_finite() {
-            time.clamp(0.0, duration)
+            time.clamp(0.0, end)
         } else {
             0.0
         };
-        let t = if duration > 0.0 { time / duration } else { 0.0 };
+        if let [only] = doc.keyframes.as_slice() {
+            // One keyframe: its pose all along.
+            self.frame.clone_from(&only.positions);
+            return Ok(time);
+        }
+        let last = doc.last_key();
+        let t = if last > 0.0 {
+            time.min(last) / last
+        } else {
+            0.0
+        };
         let mut frame = std::mem::take(&mut self.frame);
         let result = self
             .path(doc)

@@ -219,8 +219,7 @@ pub struct Exported {
 
 /// The animation's frame count at its frame rate: `duration * fps + 1`.
 pub fn default_frames(project: &Project) -> usize {
-    let duration = project.keyframes.last().map_or(0.0, |k| k.time);
-    ((duration * project.fps).round() as usize).saturating_add(1)
+    ((project.end() * project.fps).round() as usize).saturating_add(1)
 }
 
 /// The frames `settings` keeps of the animation (indices into its `count` frames) and
@@ -234,7 +233,7 @@ pub fn frames_kept(
         let what = match settings.frames {
             Some(n) => format!("{n} frames"),
             None => {
-                let duration = project.keyframes.last().map_or(0.0, |k| k.time);
+                let duration = project.end();
                 format!(
                     "the animation lasts {} s: over {MAX_EXPORT_FRAMES} frames at {} fps",
                     crate::morph::Readable(duration),

@@ -207,6 +207,11 @@ pub enum Request {
         /// The point.
         index: usize,
     },
+    /// A whole loop of the outline removed (one undo step).
+    OutlineRemoveLoop {
+        /// The loop.
+        ring: usize,
+    },
     /// A new mesh from the document's outline, about `vertices` vertices; the animation is
     /// carried over to it (one undo step).
     MeshOutline {
@@ -270,6 +275,20 @@ pub enum Request {
     LoopRange {
         /// The range.
         range: Option<[f64; 2]>,
+    },
+    /// The scene's length in seconds, or `null`: it ends at the last keyframe (one undo
+    /// step).
+    Length {
+        /// Seconds.
+        length: Option<f64>,
+    },
+    /// Keyframe `keyframe`'s pose and pins replaced by keyframe `copy`'s (a paste onto a
+    /// keyframe; one undo step).
+    ReplaceKeyframe {
+        /// The keyframe replaced.
+        keyframe: usize,
+        /// The keyframe copied.
+        copy: usize,
     },
     /// Show the animation's frame at `time`.
     Scrub {
@@ -428,9 +447,14 @@ pub fn ghost_bytes(keyframe: usize, revision: u64, positions: &[[f64; 2]]) -> Ve
     out
 }
 
+/// The bytes before a frame's positions ([`frame_bytes`]).
+pub const FRAME_HEADER: usize = 40;
+
 /// A frame as a binary message: `[kind, seq, n, m]` as u32, `[largest distortion]` f32,
-/// `[flipped]` u32, `[time]` f32, `[keyframe]` u32 (or `u32::MAX`), then `2n` f32 positions
-/// and `m` f32 distortions (flipped triangles as f32 infinity).
+/// `[flipped]` u32, `[time]` f32, `[keyframe]` u32 (or `u32::MAX`), `[time]` again as f64
+/// (the time shown, exactly as the server holds it: what the page's playhead and every
+/// command at the playhead use), then `2n` f32 positions and `m` f32 distortions (flipped
+/// triangles as f32 infinity).
 #[allow(clippy::too_many_arguments)]
 pub fn frame_bytes(
     kind: u32,
@@ -442,7 +466,7 @@ pub fn frame_bytes(
     worst: f64,
     flipped: usize,
 ) -> Vec<u8> {
-    let mut out = Vec::with_capacity(32 + 8 * positions.len() + 4 * distortion.len());
+    let mut out = Vec::with_capacity(FRAME_HEADER + 8 * positions.len() + 4 * distortion.len());
     for x in [kind, seq, positions.len() as u32, distortion.len() as u32] {
         out.extend_from_slice(&x.to_le_bytes());
     }
@@ -450,6 +474,7 @@ pub fn frame_bytes(
     out.extend_from_slice(&(flipped as u32).to_le_bytes());
     out.extend_from_slice(&(time as f32).to_le_bytes());
     out.extend_from_slice(&keyframe.map_or(u32::MAX, |k| k as u32).to_le_bytes());
+    out.extend_from_slice(&time.to_le_bytes());
     for p in positions {
         out.extend_from_slice(&(p[0] as f32).to_le_bytes());
         out.extend_from_slice(&(p[1] as f32).to_le_bytes());

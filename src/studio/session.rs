@@ -596,8 +596,9 @@ impl Session {
         &self.doc.keyframes[self.view.current]
     }
 
+    /// The end of the timeline ([`super::scene::timeline_end`]).
     fn duration(&self) -> f64 {
-        self.doc.keyframes.last().map_or(0.0, |k| k.time)
+        super::scene::timeline_end(&self.doc)
     }
 
     /// The keyframe at time `t` (within a microsecond), if one.
@@ -1608,7 +1609,7 @@ impl Session {
         if pairs.iter().flatten().flatten().any(|c| !c.is_finite()) {
             return Err("a point pair that is not finite".into());
         }
-        let time = time.unwrap_or(self.duration() + 1.0);
+        let time = time.unwrap_or(self.doc.last_key() + 1.0);
         if !(time.is_finite() && time > 0.0 && time <= 1e6) {
             return Err(format!(
                 "a keyframe at {time} s: give a time after the first keyframe"
@@ -1759,7 +1760,9 @@ impl Session {
             "method": self.doc.method,
             "fps": self.doc.fps,
             "loop_range": self.doc.loop_range,
-            "duration": self.duration(),
+            "duration": self.doc.end(),
+            "length": self.doc.length,
+            "timeline": self.duration(),
             "textured": self.texture.is_some() && self.doc.mesh.texcoords.is_some(),
             "texture_rev": self.revs.texture,
             "texture_name": self.texture.as_ref().map(|t| t.name.clone()),
@@ -2176,6 +2179,13 @@ impl Session {
                 )?;
             }
             Request::OutlineRemove { ring, index } => self.outline_remove(ring, index)?,
+            Request::OutlineRemoveLoop { ring } => {
+                let (label, edit, drawing) =
+                    super::loops::remove_loop(&self.doc, ring, self.view.drawing)
+                        .map_err(|e| e.to_string())?;
+                self.commit(label, edit)?;
+                self.view.drawing = drawing;
+            }
             Request::MeshOutline { vertices } => {
                 let work = self.mesh_outline(self.doc.outline.clone(), vertices)?;
                 reply.work = Some(self.start(work)?);
@@ -2232,6 +2242,16 @@ impl Session {
                     None => "loop over the whole animation".to_owned(),
                 };
                 self.commit(label, Edit::LoopRange(range))?;
+            }
+            Request::Length { length } => {
+                let (label, edit) =
+                    super::scene::length_edit(&self.doc, length).map_err(|e| e.to_string())?;
+                self.commit(label, edit)?;
+            }
+            Request::ReplaceKeyframe { keyframe, copy } => {
+                let (label, edit) = super::scene::replace_edit(&self.doc, keyframe, copy)
+                    .map_err(|e| e.to_string())?;
+                self.commit(label, edit)?;
             }
             Request::Scrub { time, .. } => self.scrub(time)?,
             Request::Save { name, overwrite } => {

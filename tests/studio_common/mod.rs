@@ -302,13 +302,13 @@ impl Client {
 
 /// Positions of a binary frame (kind 1 or 3).
 pub fn positions(frame: &[u8]) -> Vec<[f32; 2]> {
-    if frame.len() < 32 {
+    if frame.len() < 40 {
         return Vec::new();
     }
     let n = u32::from_le_bytes(frame[8..12].try_into().expect("n")) as usize;
     (0..n)
         .map(|i| {
-            let at = 32 + 8 * i;
+            let at = 40 + 8 * i;
             [
                 f32::from_le_bytes(frame[at..at + 4].try_into().expect("x")),
                 f32::from_le_bytes(frame[at + 4..at + 8].try_into().expect("y")),

@@ -210,7 +210,7 @@ export function openDrawing() {
   D.listing = true;
   S.filesFor = "drawing";
   send({ op: "list_files" });
-  const last = S.state.duration;
+  const last = S.state.keyframes[S.state.keyframes.length - 1].time;
   $("drawing-time").placeholder = String(+(last + 1).toFixed(2));
   draw();
   if (!$("drawing-dialog").open) $("drawing-dialog").showModal();

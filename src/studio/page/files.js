@@ -108,8 +108,10 @@ $("attach-file").addEventListener("change", async () => {
   $("attach-file").value = "";
 });
 
-// The export dialog: format, name, size (empty: the subject's aspect), frames (empty: all, or
-// the loop range), background (transparent for the formats that keep it).
+// The export dialog: format, name, size (empty: the subject's aspect), range (the whole
+// animation, as `bdmorph export` makes it, the loop range, or frames given; the dialog names
+// the seconds and frames it will export), background (transparent for the formats that keep
+// it).
 const ALPHA = new Set(["apng", "webp", "sheet", "frames", "still"]);
 function syncExport() {
   const f = $("export-format").value;
@@ -120,6 +122,15 @@ function syncExport() {
   $("export-colour").hidden = $("export-background").value !== "colour";
   const total = S.state ? Math.round(S.state.duration * S.state.fps) + 1 : 0;
   $("export-count").textContent = total ? `of 0 to ${total - 1}` : "";
+  $("export-range").querySelector('option[value="loop"]').disabled = !(S.state && S.state.loop_range);
+  if ($("export-range").value === "loop" && !(S.state && S.state.loop_range)) $("export-range").value = "all";
+  $("export-frames").hidden = $("export-range").value !== "frames";
+  const frames = exportFrames();
+  // A frame's time: the frames are spread evenly over the animation.
+  const secs = (i) => (total > 1 ? ((i / (total - 1)) * S.state.duration).toFixed(2) : "0.00");
+  $("export-range-text").textContent = f === "still" ? "the frame shown"
+    : !frames ? "" : f === "png" ? `five frames of ${secs(frames[0])}-${secs(frames[1])} s`
+    : `${secs(frames[0])}-${secs(frames[1])} s, ${frames[1] - frames[0] + 1} frames`;
   $("export-hint").textContent = {
     gif: "an animated GIF, opaque", mp4: "H.264 video, opaque",
     apng: "lossless, with transparency: browsers, FFmpeg, editors",
@@ -138,16 +149,28 @@ $("export-format").addEventListener("change", () => {
   syncExport();
 });
 $("export-background").addEventListener("change", syncExport);
-$("export-open").onclick = () => {
-  // The loop range, when there is one, is what is exported by default.
-  const range = S.state && S.state.loop_range;
-  if (range && $("export-first").value === "" && $("export-last").value === "") {
-    $("export-first").placeholder = String(Math.round(range[0] * S.state.fps));
-    $("export-last").placeholder = String(Math.round(range[1] * S.state.fps));
-  } else {
-    $("export-first").placeholder = "first";
-    $("export-last").placeholder = "last";
+for (const id of ["export-range", "export-first", "export-last"]) $(id).addEventListener("input", syncExport);
+// The frames [first, last] the range chosen exports (of the animation's 0 to total - 1), or
+// null when they are not given yet.
+function exportFrames() {
+  const st = S.state;
+  if (!st) return null;
+  const total = Math.round(st.duration * st.fps) + 1;
+  const which = $("export-range").value;
+  if (which === "loop" && st.loop_range) {
+    // As `bdmorph export --loop-range` picks them.
+    const at = (t) => (st.duration > 0 ? Math.min(Math.round((Math.min(t, st.duration) / st.duration) * (total - 1)), total - 1) : 0);
+    const [a, b] = st.loop_range.map(at);
+    return [a, Math.max(a, b)];
   }
+  if (which === "frames") {
+    const num = (el) => (el.value !== "" ? Number(el.value) : null);
+    const first = num($("export-first")) ?? 0, last = num($("export-last")) ?? total - 1;
+    return [first, last];
+  }
+  return [0, total - 1];
+}
+$("export-open").onclick = () => {
   syncExport();
   $("export-dialog").showModal();
 };
@@ -162,10 +185,11 @@ $("export").onclick = () => {
     if (w === "" || h === "") { S.errors.push("give both the width and the height, or neither"); redraw(); return; }
     request.size = [Number(w), Number(h)];
   }
-  const num = (el) => (el.value !== "" ? Number(el.value) : el.placeholder !== "" && !isNaN(Number(el.placeholder)) ? Number(el.placeholder) : null);
-  const first = num($("export-first")), last = num($("export-last"));
-  const total = S.state ? Math.round(S.state.duration * S.state.fps) + 1 : 0;
-  if (first !== null || last !== null) request.range = [first ?? 0, last ?? total - 1];
+  // The whole animation is sent without a range (as `bdmorph export` makes it).
+  if ($("export-range").value !== "all") {
+    const frames = exportFrames();
+    if (frames) request.range = frames;
+  }
   const bg = $("export-background").value;
   request.background = bg === "colour" ? $("export-colour").value : bg;
   S.pendingExport = request;

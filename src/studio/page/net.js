@@ -126,15 +126,16 @@ function onBinary(buffer) {
     redraw();
     return;
   }
-  const frame = new DataView(buffer, 0, 32);
+  const frame = new DataView(buffer, 0, 40);
   const seq = frame.getUint32(4, true), n = frame.getUint32(8, true), m = frame.getUint32(12, true);
   if (n !== S.n || m !== S.m) return;
   S.frameInfo = {
     worst: frame.getFloat32(16, true), flipped: frame.getUint32(20, true),
-    time: frame.getFloat32(24, true), keyframe: frame.getUint32(28, true),
+    // The time shown, exactly as the server holds it (f64): the playhead's when idle.
+    time: frame.getFloat64(32, true), keyframe: frame.getUint32(28, true),
   };
-  S.pose = new Float32Array(buffer, 32, 2 * n);
-  S.dist = new Float32Array(buffer, 32 + 8 * n, m);
+  S.pose = new Float32Array(buffer, 40, 2 * n);
+  S.dist = new Float32Array(buffer, 40 + 8 * n, m);
   S.showing = kind === KIND_POSE ? "pose" : "frame";
   // The keyframe posed is the newest copy of its pose (kept under the revision last said).
   if (kind === KIND_POSE && S.state && S.state.keyframes[S.frameInfo.keyframe]) {

@@ -8,6 +8,7 @@
 
 import { S, $, ctx, dpr, redraw } from "./view.js";
 import { needPoses } from "./net.js";
+import { playheadTime } from "./timeline.js";
 
 const BEFORE = [214, 39, 40], AFTER = [44, 160, 44];
 const paths = new Map(); // keyframe -> { pos, fill, loops }: each ghost's outline path
@@ -23,7 +24,7 @@ export function ghostKeys() {
     below = st.current - 1;
     above = st.current + 1;
   } else {
-    const t = S.playing || S.sliding ? S.localTime : st.shown.time;
+    const t = playheadTime();
     above = times.findIndex((time) => time > t + 1e-9);
     if (above < 0) above = times.length;
     below = times.map((time) => time < t - 1e-9).lastIndexOf(true);

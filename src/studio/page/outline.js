@@ -2,10 +2,11 @@
 // border's colour or a colour given, and a threshold: each change traces again, so the loops
 // show what will be meshed), loops edited point by point (every edit an undoable step on the
 // server), drawn by clicks, imported from SVG or .poly, then meshed. The new mesh keeps the
-// animation: every keyframe is carried over to it.
+// animation: every keyframe is carried over to it. Shift+click selects a whole loop, which
+// Delete (or the Delete loop button) removes in one undoable step.
 
 import { S, $, canvas, dpr, eventCanvas, toCanvas, toWorld, redraw } from "./view.js";
-import { send } from "./net.js";
+import { send, on } from "./net.js";
 
 const outlining = () => S.state && S.state.mode === "outline";
 
@@ -36,9 +37,40 @@ function nearestSegment(px, py, radius) {
   return best;
 }
 
+// The loop selected (Shift+click): its place, and its length and first point, so that a
+// selection another tab's edit has made stale is dropped rather than misapplied.
+S.selectedLoop = null;
+export function selectedLoop() {
+  const sel = S.selectedLoop, loop = sel && S.outline[sel.ring];
+  const fresh = loop && loop.length === sel.n && loop[0][0] === sel.first[0] && loop[0][1] === sel.first[1];
+  return fresh ? sel.ring : null;
+}
+function syncLoopButton() { $("delete-loop").disabled = selectedLoop() === null; }
+// Removes the loop selected; whether there was one.
+export function deleteSelectedLoop() {
+  const ring = selectedLoop();
+  if (!outlining() || ring === null) return false;
+  S.selectedLoop = null;
+  send({ op: "outline_remove_loop", ring });
+  syncLoopButton();
+  redraw();
+  return true;
+}
+$("delete-loop").onclick = deleteSelectedLoop;
+on("outline", () => { if (selectedLoop() === null) S.selectedLoop = null; syncLoopButton(); });
+
 canvas.addEventListener("mousedown", (e) => {
   if (!outlining() || e.button !== 0 || e.altKey) return; // Alt+drag pans (pose.js)
   const [px, py] = eventCanvas(e);
+  if (e.shiftKey) {
+    const hit = nearestSegment(px, py, 10 * dpr()) || nearestPoint(px, py, 10 * dpr());
+    const loop = hit && S.outline[hit[0]];
+    S.selectedLoop = loop ? { ring: hit[0], n: loop.length, first: loop[0] } : null;
+    syncLoopButton();
+    redraw();
+    return;
+  }
+  if (S.selectedLoop) { S.selectedLoop = null; syncLoopButton(); }
   const hit = nearestPoint(px, py, 10 * dpr());
   const drawing = S.state.drawing;
   if (hit && drawing !== null && hit[0] === drawing && hit[1] === 0 && S.outline[drawing].length >= 3) {

@@ -139,11 +139,13 @@ function drawOutline() {
       return d && d.ring === li && d.index === pi ? d.point : p;
     });
     if (!points.length) return;
-    ctx.strokeStyle = li === drawing ? "#e6550d" : "#1f4ea8";
-    ctx.lineWidth = 2 * dpr();
+    const selected = S.selectedLoop && S.selectedLoop.ring === li && li !== drawing;
+    ctx.strokeStyle = li === drawing ? "#e6550d" : selected ? "#ff00cc" : "#1f4ea8";
+    ctx.lineWidth = (selected ? 4 : 2) * dpr();
     ctx.beginPath();
     points.forEach((p, i) => { const [x, y] = toCanvas(p[0], p[1]); if (i) ctx.lineTo(x, y); else ctx.moveTo(x, y); });
     if (li !== drawing) ctx.closePath();
+    if (selected) { ctx.fillStyle = "rgba(255,0,204,0.25)"; ctx.fill("evenodd"); }
     ctx.stroke();
     ctx.fillStyle = li === drawing ? "#e6550d" : "#1f4ea8";
     const every = Math.max(1, Math.floor(points.length / 400));

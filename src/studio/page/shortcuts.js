@@ -9,6 +9,7 @@ import { togglePlay, stepFrame, stepKey, insertKey, copyKey, pasteKey, duplicate
 import { setTool, selectAllPins, selectNone } from "./pose.js";
 import { toggleOnion } from "./onion.js";
 import { setMode, toggleTheme } from "./layout.js";
+import { deleteSelectedLoop } from "./outline.js";
 
 const plain = (key) => (e) => !e.ctrlKey && !e.metaKey && !e.altKey && e.key === key;
 const ctrl = (key, shift = false) => (e) => (e.ctrlKey || e.metaKey) && e.shiftKey === shift && e.key.toLowerCase() === key;
@@ -26,7 +27,7 @@ export const SHORTCUTS = [
   ["copy", "Ctrl+C", "Copy the selected keyframe", ctrl("c"), copyKey],
   ["paste", "Ctrl+V", "Paste the copied keyframe at the playhead", ctrl("v"), pasteKey],
   ["duplicate", "Ctrl+D", "Duplicate the selected keyframe (after the last)", ctrl("d"), duplicateKey],
-  ["delete", "Delete", "Delete the selected keyframe (Undo brings it back)", (e) => plain("Delete")(e) || plain("Backspace")(e), () => deleteKey(false)],
+  ["delete", "Delete", "Delete the selected keyframe, or in Outline the loop selected with Shift+click (Undo brings it back)", (e) => plain("Delete")(e) || plain("Backspace")(e), () => { if (!deleteSelectedLoop()) deleteKey(false); }],
   ["undo", "Ctrl+Z", "Undo", ctrl("z"), () => send({ op: "undo" })],
   ["redo", "Ctrl+Shift+Z", "Redo (also Ctrl+Y)", (e) => ctrl("z", true)(e) || ctrl("y")(e), () => send({ op: "redo" })],
   ["save", "Ctrl+S", "Save", ctrl("s"), save],

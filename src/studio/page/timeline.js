@@ -20,7 +20,7 @@ S.copied = null;      // { keyframe, rev } of the copied keyframe
 
 function span() {
   const st = S.state;
-  return S.axis.span || Math.max(st ? st.duration : 1, 0.5);
+  return S.axis.span || Math.max(st ? st.timeline : 1, 0.5);
 }
 // The axis's size, kept by an observer: reading it from the element would force a layout of
 // the page on every frame.
@@ -38,13 +38,26 @@ S.timeToPage = (t) => {
   return [r.left + 1 + timeToX(t), r.top + r.height / 2];
 };
 
-// The time the playhead shows.
+// The time the playhead shows: while playing, or while a time asked for here is not shown
+// yet, that time (the frame for it is on its way: nothing can overtake it in the one-slot
+// mailbox, and the server drops a scrub only for a newer one); otherwise the time of the
+// frame shown, exactly as the server holds it. The readout, the status line, and every
+// command at the playhead (insert, paste, loop ends, zoom) read it here, so they agree.
 export function playheadTime() {
-  const st = S.state;
-  if (!st) return 0;
+  if (!S.state) return 0;
   if (S.playing || S.sliding) return S.localTime;
-  if ("keyframe" in st.shown) return st.keyframes[st.current].time;
-  return st.shown.time; // the server's own number (the frame's header holds it as f32)
+  return S.frameInfo.time;
+}
+// A time asked for: the playhead shows it until the frame for it has come.
+function showTime(time) {
+  S.localTime = time;
+  S.sliding = true;
+  request({ op: "scrub", time });
+}
+// The frame asked for has come (nothing in flight or waiting) and no drag goes on: the
+// playhead is the frame's again.
+function settleSlide() {
+  if (S.sliding && !S.scrubbing && !S.playing && !S.busy()) S.sliding = false;
 }
 // Kept for the exports' "still at the playhead".
 export const sliderTime = playheadTime;
@@ -62,7 +75,7 @@ let rulerStamp = "";
 function drawRuler() {
   const c = $("ruler"), st = S.state;
   const w = box.rw, h = box.rh;
-  const stamp = [S.axis.start, span(), st.duration, st.fps, w, h, S.theme, dpr()].join();
+  const stamp = [S.axis.start, span(), st.duration, st.timeline, st.fps, w, h, S.theme, dpr()].join();
   if (stamp === rulerStamp) return;
   rulerStamp = stamp;
   if (c.width !== Math.round(w * dpr())) { c.width = Math.round(w * dpr()); c.height = Math.round(h * dpr()); }
@@ -96,10 +109,12 @@ function drawRuler() {
     g.fillText(Math.abs(t * fps - frame) < 1e-6 ? `${label} · ${frame}` : label, x + 3, 10);
   }
   g.stroke();
-  // The end of the animation.
+  // Past the end of the animation (where playback and exports stop; the playhead may go on
+  // to the end of the timeline, to make a keyframe there), and past the timeline.
   g.fillStyle = "rgba(128,128,128,0.18)";
-  const end = timeToX(st.duration);
+  const end = timeToX(st.duration), last = timeToX(st.timeline);
   if (end < w) g.fillRect(end, 0, w - end, h);
+  if (last < w) g.fillRect(last, 0, w - last, h);
 }
 
 // A thumbnail of keyframe k's pose (its boundary), all at one scale so motion shows.
@@ -186,6 +201,10 @@ export function drawTimeline() {
   S.keyFieldFor = st.current;
   $("key-time").disabled = st.current === 0;
   if (document.activeElement !== $("fps")) $("fps").value = st.fps;
+  if (document.activeElement !== $("scene-length")) {
+    $("scene-length").value = st.length === null || st.length === undefined ? "" : st.length;
+    $("scene-length").placeholder = `${+st.duration.toFixed(2)}`;
+  }
   $("delete-key").disabled = st.current === 0;
   $("paste-key").disabled = !S.copied;
   drawPlayhead();
@@ -211,6 +230,7 @@ function drawPlayhead() {
 let keysFor = [];
 onDraw(() => {
   if (!S.state) return;
+  settleSlide();
   const now = [S.state, S.ghostVersion, S.theme, S.axis.start, S.axis.span, S.copied];
   if (now.some((x, i) => x !== keysFor[i])) { keysFor = now; drawTimeline(); }
   drawPlayhead();
@@ -245,7 +265,7 @@ window.addEventListener("mousemove", (e) => {
   if (d.ripple) for (let i = d.index + 1; i < keys.length; i++) keys[i].style.left = `${timeToX(d.times[i] + shift)}px`;
 });
 window.addEventListener("mouseup", (e) => {
-  if (S.scrubbing) { S.scrubbing = false; S.sliding = false; return; }
+  if (S.scrubbing) { S.scrubbing = false; settleSlide(); return; }
   if (!S.keyDrag) return;
   const { index, moved, ripple } = S.keyDrag;
   const time = moved ? keyDragTime(e.clientX) : 0;
@@ -260,12 +280,11 @@ function scrubAt(clientX) {
   const st = S.state;
   const r = $("time").getBoundingClientRect();
   const x = clientX - r.left - 1;
-  let time = Math.min(Math.max(xToTime(x), 0), st.duration);
+  let time = Math.min(Math.max(xToTime(x), 0), st.timeline);
   for (const k of st.keyframes) if (Math.abs(timeToX(k.time) - x) <= 5) time = k.time;
-  S.localTime = time;
+  showTime(time);
   readout(time);
   drawPlayhead();
-  request({ op: "scrub", time });
 }
 $("time").addEventListener("mousedown", (e) => {
   if (e.button !== 0 || !S.state) return;
@@ -277,7 +296,7 @@ $("time").addEventListener("mousedown", (e) => {
 });
 
 // A frame shown (asked for here or in another tab): the playhead follows.
-on("frame", (kind) => { if (kind === KIND_FRAME && !S.playing && !S.sliding) redraw(); });
+on("frame", (kind) => { settleSlide(); if (kind === KIND_FRAME && !S.playing && !S.sliding) redraw(); });
 
 // Zoom (wheel) about the cursor and scroll (Shift+wheel, or a sideways wheel).
 function zoomAxis(factor, aboutX) {
@@ -285,7 +304,7 @@ function zoomAxis(factor, aboutX) {
   if (!st) return;
   const t = xToTime(aboutX);
   const fps = Math.max(1, st.fps);
-  const s = Math.min(Math.max(span() * factor, Math.max(4 / fps, 0.02)), Math.max(st.duration, 1) * 4);
+  const s = Math.min(Math.max(span() * factor, Math.max(4 / fps, 0.02)), Math.max(st.timeline, 1) * 4);
   S.axis.span = s;
   S.axis.start = t - ((aboutX - PAD) / width()) * s;
   clampAxis();
@@ -293,7 +312,7 @@ function zoomAxis(factor, aboutX) {
 }
 function clampAxis() {
   const st = S.state, s = span();
-  S.axis.start = Math.min(Math.max(S.axis.start, -0.02 * s), Math.max(0, st.duration - 0.1 * s));
+  S.axis.start = Math.min(Math.max(S.axis.start, -0.02 * s), Math.max(0, st.timeline - 0.1 * s));
 }
 function scrollAxis(dx) {
   S.axis.start += (dx / width()) * span();
@@ -333,8 +352,11 @@ function tick(now) {
       clock = { start: now, from, step: -1 };
       time = from;
     } else {
-      time = to;
+      // The end is shown (asked for even when a frame is still on its way).
       stop();
+      showTime(to);
+      redraw();
+      return;
     }
   }
   S.localTime = time;
@@ -342,6 +364,7 @@ function tick(now) {
   if (step !== clock.step && !S.busy()) {
     clock.step = step;
     const at = Math.min(Math.max(step / fps, from), to);
+    clock.at = at;
     readout(at);
     drawPlayhead();
     request({ op: "scrub", time: at });
@@ -350,6 +373,8 @@ function tick(now) {
 }
 function stop() {
   S.playing = false;
+  // The playhead stays on the last frame asked for until it is shown, then is that frame's.
+  if (clock && clock.at !== undefined) { S.localTime = clock.at; S.sliding = true; }
   $("play").textContent = "Play";
   redraw();
 }
@@ -375,9 +400,9 @@ export function stepFrame(direction) {
   if (S.playing) stop();
   const fps = Math.max(1, st.fps);
   const frame = Math.round(playheadTime() * fps) + direction;
-  const time = Math.min(Math.max(frame / fps, 0), st.duration);
-  S.localTime = time;
-  request({ op: "scrub", time });
+  const time = Math.min(Math.max(frame / fps, 0), st.timeline);
+  showTime(time);
+  redraw();
 }
 export function stepKey(direction) {
   const st = S.state;
@@ -400,8 +425,10 @@ function lastPlusOne() {
 export function insertKey() {
   const st = S.state;
   if (!st) return;
-  if ("keyframe" in st.shown) { S.errors.push(`keyframe ${nth(st.current)} is at the playhead already: move the playhead between keys to insert one`); redraw(); return; }
-  send({ op: "frame_to_keyframe", time: playheadTime() });
+  const t = playheadTime();
+  const k = st.keyframes.findIndex((key) => Math.abs(key.time - t) < 1e-6);
+  if (k >= 0) { S.errors.push(`keyframe ${nth(k)} is at the playhead already: move the playhead between keys or past the last to insert one`); redraw(); return; }
+  send({ op: "frame_to_keyframe", time: t });
 }
 export function copyKey() {
   const st = S.state;
@@ -418,8 +445,22 @@ export function pasteKey() {
   const k = st.keyframes.findIndex((key) => key.rev === S.copied.rev);
   if (k < 0) { S.errors.push("the copied keyframe was changed or deleted since: copy it again"); redraw(); return; }
   const t = Math.round(playheadTime() * 1000) / 1000;
-  const clash = st.keyframes.findIndex((key) => Math.abs(key.time - t) < 1e-9);
-  send({ op: "add_keyframe", time: clash >= 0 ? lastPlusOne() : t, copy: k });
+  const clash = st.keyframes.findIndex((key) => Math.abs(key.time - t) < 1e-6);
+  if (clash < 0) { send({ op: "add_keyframe", time: t, copy: k }); return; }
+  // Onto a keyframe: replace its pose, or insert the copy a frame after it (halfway to the
+  // next keyframe when that is nearer). Asked, never decided silently.
+  const next = st.keyframes[clash + 1];
+  let after = Math.round((st.keyframes[clash].time + 1 / Math.max(1, st.fps)) * 1000) / 1000;
+  if (next && after >= next.time - 1e-6) after = Math.round(((st.keyframes[clash].time + next.time) / 2) * 1000) / 1000;
+  const insert = `Insert after (${after.toFixed(2)} s)`;
+  const text = clash === k
+    ? `The copied keyframe ${nth(k)} is at the playhead: insert its copy after it, at ${after} s?`
+    : `Keyframe ${nth(clash)} is at the playhead (${t} s). Replace its pose and pins with keyframe ${nth(k)}'s, or insert the copy after it, at ${after} s?`;
+  const asked = clash === k ? confirmDialog(text, insert) : confirmDialog(text, "Replace", insert);
+  asked.then((choice) => {
+    if (choice === true && clash !== k) send({ op: "replace_keyframe", keyframe: clash, copy: k });
+    else if (choice === "other" || (choice === true && clash === k)) send({ op: "add_keyframe", time: after, copy: k });
+  });
 }
 export function duplicateKey() { if (S.state) send({ op: "add_keyframe", time: lastPlusOne(), copy: S.state.current }); }
 export function deleteKey(ask = true) {
@@ -468,4 +509,11 @@ $("load-file").addEventListener("change", async () => {
   $("load-file").value = "";
 });
 $("fps").addEventListener("change", () => send({ op: "fps", fps: Number($("fps").value) }));
+// The scene's length (empty: it ends at the last keyframe).
+$("scene-length").addEventListener("change", () => {
+  const text = $("scene-length").value.trim();
+  const length = text === "" ? null : Number(text);
+  if (length === S.state.length || (length === null && S.state.length == null)) return;
+  send({ op: "length", length });
+});
 $("key-time").addEventListener("change", () => send({ op: "set_time", keyframe: S.state.current, time: Number($("key-time").value) }));

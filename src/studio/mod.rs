@@ -36,6 +36,7 @@ pub mod pictures;
 /// The project file (the crate's [`crate::project`], with the feature `project`).
 pub use crate::project;
 pub mod protocol;
+pub mod rig;
 pub mod server;
 pub mod session;
 pub mod workspace;

@@ -25,7 +25,6 @@ use headless_chrome::protocol::cdp::Input;
 use studio_common::{scratch, Studio};
 use studio_page::*;
 
-
 /// A subject: a body and a raised arm (capsules), on transparency, 400 pixels square; with
 /// `specks`, three stray dots of dust; with `ball`, a second real piece.
 fn character(specks: bool, ball: bool) -> bdmorph::render::Image {

@@ -29,7 +29,14 @@ fn document(studio: &Studio, dir: &Path, name: &str) -> Project {
 }
 
 /// The studio opened on the torso painted under two arms, a page on it.
-fn open_character(name: &str) -> Option<(headless_chrome::Browser, Studio, PageTab, std::path::PathBuf)> {
+fn open_character(
+    name: &str,
+) -> Option<(
+    headless_chrome::Browser,
+    Studio,
+    PageTab,
+    std::path::PathBuf,
+)> {
     let browser = browser()?;
     let dir = scratch(name);
     let (layers, _) = layered::torso_under_arms();
@@ -165,7 +172,10 @@ fn joints_sit_at_the_shoulders_and_are_added_moved_and_removed_by_hand() {
         "the joint ties the arm to the torso"
     );
     let at = rest_pixel(&page, pair[0]);
-    assert!(distance(at, first) < 1.0, "the joint is where it was clicked: {at:?}");
+    assert!(
+        distance(at, first) < 1.0,
+        "the joint is where it was clicked: {at:?}"
+    );
     assert_eq!(rest_pixel(&page, pair[1]), at, "its vertices coincide");
     page.shot("rigs-1-added.png");
     page.undo();
@@ -231,7 +241,11 @@ fn joints_sit_at_the_shoulders_and_are_added_moved_and_removed_by_hand() {
     };
     let (arm_old, torso_old) = (nearest(arm, at), nearest(torso, at));
     for v in [arm_old, torso_old] {
-        assert_eq!(rest_pixel(&page, v), at, "the vertices made for the first joint");
+        assert_eq!(
+            rest_pixel(&page, v),
+            at,
+            "the vertices made for the first joint"
+        );
     }
     let from = page.vertex(hand);
     page.drag(from, [from[0] + 30.0, from[1] - 80.0], 40);
@@ -247,8 +261,14 @@ fn joints_sit_at_the_shoulders_and_are_added_moved_and_removed_by_hand() {
         apart(arm_joint, torso_joint),
         apart(arm_old, torso_old)
     );
-    assert!(distance(rest[hand], posed[hand]) > 40.0, "the hand was raised");
-    assert!(apart(arm_joint, torso_joint) < 1e-9, "the moved joint holds");
+    assert!(
+        distance(rest[hand], posed[hand]) > 40.0,
+        "the hand was raised"
+    );
+    assert!(
+        apart(arm_joint, torso_joint) < 1e-9,
+        "the moved joint holds"
+    );
     assert!(
         apart(arm_old, torso_old) > 2.0,
         "the arm turns about the moved joint, not where the joint was"
@@ -295,7 +315,10 @@ fn a_click_picks_the_part_drawn_in_front() {
         "(() => {{ let best = -1, bd = -1; for (let v = {}; v < {}; v++) {{ const x = studio.rest[2 * v], y = {H} - studio.rest[2 * v + 1]; const t = Math.max(0, Math.min(1, ((x - 135) * -75 + (y - 95) * 35) / (75 * 75 + 35 * 35))); const d = Math.hypot(x - (135 - 75 * t), y - (95 + 35 * t)); if (d > 7 || x < 123 || t <= 0) continue; let near = Infinity; for (let w = {}; w < {}; w++) near = Math.min(near, Math.hypot(studio.rest[2 * w] - studio.rest[2 * v], studio.rest[2 * w + 1] - studio.rest[2 * v + 1])); if (near > bd) {{ bd = near; best = v; }} }} return best; }})()",
         torso[0], torso[1], arm[0], arm[1]
     )) as usize;
-    assert!(hidden >= torso[0] && hidden < torso[1], "a torso vertex under the arm");
+    assert!(
+        hidden >= torso[0] && hidden < torso[1],
+        "a torso vertex under the arm"
+    );
     page.click(page.vertex(hidden));
     page.wait("studio.pins.length === 1 && !studio.busy()", 20);
     page.settle();
@@ -304,5 +327,119 @@ fn a_click_picks_the_part_drawn_in_front() {
     assert!(
         pin >= arm[0] && pin < arm[1],
         "the pin lands on the arm drawn in front (vertex {pin}), not the torso under it (vertex {hidden})"
+    );
+}
+
+/// Pin-red pixels in the canvas farther than `r` from every point of `marks` (page pixels).
+fn red_off(shot: &Shot, canvas: [f64; 4], marks: &[[f64; 2]], r: f64) -> usize {
+    let height = shot.rgb.len() / shot.width;
+    let mut n = 0;
+    for y in (canvas[1].max(0.0) as usize)..(canvas[3] as usize).min(height) {
+        for x in (canvas[0].max(0.0) as usize)..(canvas[2] as usize).min(shot.width) {
+            if pin_red(shot.rgb[y * shot.width + x])
+                && marks
+                    .iter()
+                    .all(|m| (m[0] - x as f64).hypot(m[1] - y as f64) > r)
+            {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// Item: pins are drawn where they are. On the keyframe, each on its vertex; on a frame
+/// between keyframes (scrubbed to with the mouse, or stepped to with the arrow keys), none
+/// off the mesh: a marker, if any, sits on a pinned vertex where it is drawn now; and after
+/// another tab deletes the keyframe, no stale pin stays on the keyframe shown.
+#[test]
+fn pins_are_drawn_only_where_they_are() {
+    let Some((browser, studio, page, dir)) = open_character("rigs-pins") else {
+        return;
+    };
+    // A second keyframe: the torso's lower corners pinned, the left hand raised.
+    page.click_on("#add-key");
+    page.wait(
+        "studio.state.current === 1 && studio.showing === 'pose'",
+        20,
+    );
+    let torso = part_range(&page, "torso");
+    let arm = part_range(&page, "arm_l");
+    let extreme = |range: [usize; 2], key: &str| {
+        page.num(&format!(
+            "(() => {{ let best = -1, bk = Infinity; for (let v = {}; v < {}; v++) {{ const x = studio.rest[2 * v], y = studio.rest[2 * v + 1]; const k = {key}; if (k < bk) {{ bk = k; best = v; }} }} return best; }})()",
+            range[0], range[1]
+        )) as usize
+    };
+    for corner in [extreme(torso, "y - x"), extreme(torso, "y + x")] {
+        page.click(page.vertex(corner));
+        page.wait(&format!("studio.pins.includes({corner})"), 20);
+    }
+    let hand = extreme(arm, "x");
+    let from = page.vertex(hand);
+    page.drag(from, [from[0] + 30.0, from[1] - 110.0], 40);
+    page.wait(&format!("studio.pins.includes({hand})"), 20);
+    page.settle();
+    let pins: Vec<usize> = page
+        .eval("studio.pins")
+        .as_array()
+        .expect("pins")
+        .iter()
+        .map(|v| v.as_u64().expect("pin") as usize)
+        .collect();
+    assert_eq!(pins.len(), 3);
+    let canvas = page.canvas();
+    let marks = |page: &PageTab| pins.iter().map(|&v| page.vertex(v)).collect::<Vec<_>>();
+    // On the keyframe: every pin drawn, on its vertex.
+    let shot = page.shot("rigs-pins-0-key.png");
+    let on_key = marks(&page);
+    for m in &on_key {
+        assert!(
+            shot.count_near(*m, 5.0, pin_red) > 10,
+            "a pin drawn at {m:?}"
+        );
+    }
+    // (A pin's disc is over 100 pixels; a few pixels of a piece's red-orange outline may
+    // pass for pin red.)
+    let stray = red_off(&shot, canvas, &on_key, 9.0);
+    assert!(stray < 30, "no red off the pins: {stray} pixels");
+
+    // Between the keyframes, scrubbed to with the mouse and stepped to with the arrow key.
+    for (step, how) in ["scrubbed", "stepped"].iter().enumerate() {
+        if step == 0 {
+            page.slide_to(0.4);
+        } else {
+            page.key("ArrowLeft", &[]);
+        }
+        page.wait("studio.showing === 'frame' && !studio.busy()", 20);
+        page.settle();
+        let shot = page.shot(&format!("rigs-pins-1-{how}.png"));
+        let now = marks(&page);
+        let off = red_off(&shot, canvas, &now, 9.0);
+        eprintln!("{how}: {off} pin-red pixels off the pinned vertices");
+        assert!(off < 30, "{how}: pins drawn off the mesh ({off} pixels)");
+        // The keyframe's pins are not where the frame's vertices are: the hand has moved.
+        assert!(distance(now[2], on_key[2]) > 10.0);
+    }
+
+    // Back on the keyframe, another tab deletes it: this page shows the first keyframe and
+    // draws no pin (it has none).
+    page.key("End", &[]);
+    page.wait(
+        "studio.showing === 'pose' && studio.state.current === 1 && studio.pins.length === 3",
+        20,
+    );
+    page.settle();
+    let other = PageTab::open(&browser, &studio.url, &dir);
+    other.wait("studio.state.current === 1", 20);
+    other.key("Delete", &[]);
+    page.wait("studio.state.keyframes.length === 1 && !studio.busy()", 20);
+    page.settle();
+    let shot = page.shot("rigs-pins-2-deleted-elsewhere.png");
+    assert_eq!(page.num("studio.pins.length"), 0.0);
+    let stale = shot.count_in(canvas, pin_red);
+    assert!(
+        stale < 30,
+        "no stale pin on the keyframe shown ({stale} pixels)"
     );
 }

@@ -363,7 +363,10 @@ pub fn move_joint(
     let (out, _) = joined(&without, a, b, p)?;
     Ok((
         out,
-        format!("joint between {} and {} moved", parts[a].name, parts[b].name),
+        format!(
+            "joint between {} and {} moved",
+            parts[a].name, parts[b].name
+        ),
     ))
 }
 
@@ -378,7 +381,10 @@ pub fn remove_joint(doc: &Project, joint: usize) -> Result<(Project, String), Ri
     }
     let label = match doc.parts.as_deref() {
         Some(parts) => match joint_parts(doc, parts, joint) {
-            Ok([a, b]) => format!("joint between {} and {} removed", parts[a].name, parts[b].name),
+            Ok([a, b]) => format!(
+                "joint between {} and {} removed",
+                parts[a].name, parts[b].name
+            ),
             Err(_) => "joint removed".to_owned(),
         },
         None => "joint removed".to_owned(),
@@ -430,9 +436,7 @@ mod tests {
     /// Two unit squares of two triangles each, overlapping on `[1, 2] x [0, 2]`: part "low"
     /// on `[0, 2]`, part "high" on `[1, 3]`, each 2 high; two keyframes (the second moved).
     fn two_parts() -> Project {
-        let square = |x0: f64| {
-            vec![[x0, 0.0], [x0 + 2.0, 0.0], [x0 + 2.0, 2.0], [x0, 2.0]]
-        };
+        let square = |x0: f64| vec![[x0, 0.0], [x0 + 2.0, 0.0], [x0 + 2.0, 2.0], [x0, 2.0]];
         let mut positions = square(0.0);
         positions.extend(square(1.0));
         let mesh = crate::PlanarMesh {
@@ -453,7 +457,12 @@ mod tests {
             },
         ]);
         doc.depth = Some(vec![0, 0, 1, 1]);
-        let moved: Vec<[f64; 2]> = doc.mesh.positions.iter().map(|p| [p[0] + 10.0, p[1]]).collect();
+        let moved: Vec<[f64; 2]> = doc
+            .mesh
+            .positions
+            .iter()
+            .map(|p| [p[0] + 10.0, p[1]])
+            .collect();
         doc.keyframes.push(Keyframe {
             time: 1.0,
             easing: "linear".into(),
@@ -475,7 +484,10 @@ mod tests {
         assert_eq!(out.mesh.positions.len(), 10);
         assert_eq!(out.mesh.faces.len(), 8);
         let [a, b] = out.joints.as_ref().expect("joints")[0];
-        assert_eq!(out.mesh.positions[a as usize], out.mesh.positions[b as usize]);
+        assert_eq!(
+            out.mesh.positions[a as usize],
+            out.mesh.positions[b as usize]
+        );
         let close = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) < 1e-12;
         assert!(close(out.mesh.positions[a as usize], [1.6, 1.1]));
         // Each new vertex is in its own part, numbered at its end.

@@ -572,9 +572,17 @@ pub fn torso_under_arms() -> (Vec<TestLayer>, [([f64; 2], f64); 2]) {
             (120.0..=180.0).contains(&x) && (60.0..=190.0).contains(&y)
         }),
         // From (135, 95) to (60, 130), radius 12: it crosses x = 120 at a fifth of its length.
-        shape("arm_l", [40, 180, 60], capsule([135.0, 95.0], [60.0, 130.0], 12.0)),
+        shape(
+            "arm_l",
+            [40, 180, 60],
+            capsule([135.0, 95.0], [60.0, 130.0], 12.0),
+        ),
         // From (165, 85) to (250, 50), radius 11: it crosses x = 180 at 15/85 of its length.
-        shape("arm_r", [220, 40, 40], capsule([165.0, 85.0], [250.0, 50.0], 11.0)),
+        shape(
+            "arm_r",
+            [240, 160, 40],
+            capsule([165.0, 85.0], [250.0, 50.0], 11.0),
+        ),
     ];
     let shoulders = [
         ([120.0, 95.0 + 35.0 * 0.2], 24.0),

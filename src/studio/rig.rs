@@ -64,6 +64,12 @@ pub enum RigError {
     },
 }
 
+impl From<RigError> for String {
+    fn from(e: RigError) -> String {
+        e.to_string()
+    }
+}
+
 /// A point closer to a triangle's edge than this (in barycentric terms) is not split into it:
 /// the triangles around it would be slivers.
 const MIN_BARYCENTRIC: f64 = 0.02;
@@ -132,7 +138,7 @@ pub fn parts_at(doc: &Project, shown: &[[f64; 2]], at: [f64; 2]) -> Vec<(usize, 
         }
     }
     // Drawn last is in front: the higher depth level, then the later triangle.
-    under.sort_by(|x, y| (y.0, y.1).cmp(&(x.0, x.1)));
+    under.sort_by_key(|u| std::cmp::Reverse((u.0, u.1)));
     let mut out: Vec<(usize, [f64; 2])> = Vec::new();
     for (_, f, w) in under {
         if out.iter().all(|o| o.0 != of[f]) {
@@ -556,11 +562,5 @@ mod tests {
         let rest = doc.mesh.positions.clone();
         let under = parts_at(&doc, &rest, [1.5, 1.0]);
         assert_eq!(under.iter().map(|u| u.0).collect::<Vec<_>>(), vec![1, 0]);
-    }
-}
-
-impl From<RigError> for String {
-    fn from(e: RigError) -> String {
-        e.to_string()
     }
 }

@@ -506,3 +506,42 @@ fn a_psd_written_by_imagemagick_reads_as_written() {
     let c = character(&layered, &CharacterOptions::default()).expect("character");
     assert_eq!((c.parts.len(), c.joints.len()), (6, 5));
 }
+
+/// An arm painted over the torso (its root hidden inside the torso, as artists paint it) is
+/// joined at the shoulder, where the arm's outline enters the torso's, not at the middle of
+/// the overlap (mid upper arm).
+#[test]
+fn an_arm_painted_over_the_torso_is_joined_at_the_shoulder() {
+    let (layers, shoulders) = layered::torso_under_arms();
+    let h = f64::from(FIGURE_SIZE.1);
+    for (format, bytes) in [("ORA", write_ora(&layers, 0)), ("PSD", write_psd(&layers))] {
+        let layered = read_layered(&bytes).unwrap_or_else(|e| panic!("{format}: {e}"));
+        for vertices in [600, 2000, 6000] {
+            let c = character(
+                &layered,
+                &CharacterOptions::default().with_vertices(vertices),
+            )
+            .expect("character");
+            assert_eq!(names(&c), ["torso", "arm_l", "arm_r"], "{format}");
+            assert_eq!(c.joints.len(), 2, "{format} {vertices}: {:?}", c.joints);
+            for (arm, (shoulder, width)) in ["arm_l", "arm_r"].iter().zip(shoulders) {
+                let j = c
+                    .joints
+                    .iter()
+                    .find(|j| j.parts.contains(&part(&c, arm)))
+                    .unwrap_or_else(|| panic!("{format}: no joint on {arm}"));
+                assert!(j.parts.contains(&part(&c, "torso")), "{format} {arm}");
+                let [a, b] = j.vertices.map(|v| c.mesh.positions[v as usize]);
+                assert_eq!(a, b, "{format} {arm}: the joint's vertices coincide");
+                let off = (a[0] - shoulder[0]).hypot(h - a[1] - shoulder[1]);
+                assert!(
+                    off <= 0.1 * width,
+                    "{format} {vertices} {arm}: the joint is {off:.2} px from the shoulder \
+                     {shoulder:?} (at {:?}), more than a tenth of the arm's width {width}",
+                    [a[0], h - a[1]]
+                );
+            }
+            c.mesh.validate().expect("valid");
+        }
+    }
+}

@@ -1698,6 +1698,11 @@ fn check_every_shortcut(page: &PageTab, listed: &[String]) {
                 page.wait("studio.tool === 'pins'", 5);
                 press("d", &[]);
             }
+            "tool-joints" => {
+                press("j", &[]);
+                page.wait("studio.tool === 'joints'", 5);
+                press("d", &[]);
+            }
             "select-all" | "select-none" => {
                 select(2);
                 if page.num("studio.pins.length") == 0.0 {

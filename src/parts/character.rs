@@ -1,6 +1,8 @@
 //! A character in parts from a layered picture: each layer meshed from its own alpha (the
 //! vertices shared out by area), textured by its own pixels through one atlas, stacked in the
-//! file's order, with a joint wherever two layers overlap.
+//! file's order, with a joint wherever two layers overlap: where their outlines meet (an arm
+//! painted over a torso is joined at the shoulder, where its outline enters the torso's), or
+//! at the overlap's centre when one lies inside the other.
 
 use crate::mesh::PlanarMesh;
 use crate::meshing::{self, MeshOptions, MeshingError, PictureOptions};
@@ -292,8 +294,9 @@ fn covers(layer: &Layer, col: i64, row: i64) -> bool {
 }
 
 /// The overlap of two layers: its centroid (canvas frame, y up) and area in pixels, if they
-/// overlap at all. Large overlaps are sampled on a coarser grid (at most 4 million samples).
-fn overlap(a: &Layer, b: &Layer, canvas_height: f64) -> Option<([f64; 2], f64)> {
+/// overlap at all, and where their outlines meet ([`outlines_meet`]). Large overlaps are
+/// sampled on a coarser grid (at most 4 million samples).
+fn overlap(a: &Layer, b: &Layer, canvas_height: f64) -> Option<Overlap> {
     let x0 = a.left.max(b.left);
     let y0 = a.top.max(b.top);
     let x1 = (a.left + i64::from(a.image.width)).min(b.left + i64::from(b.image.width));
@@ -304,6 +307,15 @@ fn overlap(a: &Layer, b: &Layer, canvas_height: f64) -> Option<([f64; 2], f64)> 
     let box_area = ((x1 - x0) * (y1 - y0)) as f64;
     let step = ((box_area / 4.0e6).sqrt().ceil() as i64).max(1);
     let (mut count, mut sx, mut sy) = (0.0, 0.0, 0.0);
+    // Sampled pixels on both outlines: in both layers, next to a pixel out of one and to a
+    // pixel out of the other (grid coordinates, for grouping).
+    let mut meeting: Vec<(i64, i64)> = Vec::new();
+    let edge = |l: &Layer, col: i64, row: i64| {
+        !covers(l, col - step, row)
+            || !covers(l, col + step, row)
+            || !covers(l, col, row - step)
+            || !covers(l, col, row + step)
+    };
     let mut row = y0;
     while row < y1 {
         let mut col = x0;
@@ -312,17 +324,75 @@ fn overlap(a: &Layer, b: &Layer, canvas_height: f64) -> Option<([f64; 2], f64)> 
                 count += 1.0;
                 sx += col as f64 + 0.5;
                 sy += row as f64 + 0.5;
+                if edge(a, col, row) && edge(b, col, row) {
+                    meeting.push(((col - x0) / step, (row - y0) / step));
+                }
             }
             col += step;
         }
         row += step;
     }
     (count > 0.0).then(|| {
-        (
-            [sx / count, canvas_height - sy / count],
-            count * (step * step) as f64,
-        )
+        let to_canvas = |(gx, gy): (f64, f64)| {
+            [
+                x0 as f64 + gx * step as f64 + 0.5,
+                canvas_height - (y0 as f64 + gy * step as f64 + 0.5),
+            ]
+        };
+        Overlap {
+            centre: [sx / count, canvas_height - sy / count],
+            area: count * (step * step) as f64,
+            meet: outlines_meet(&meeting).map(to_canvas),
+        }
     })
+}
+
+/// Two layers' overlap.
+struct Overlap {
+    /// Its centroid (canvas frame, y up).
+    centre: [f64; 2],
+    /// Its area in pixels.
+    area: f64,
+    /// Where the outlines meet (canvas frame, y up), if they cross.
+    meet: Option<[f64; 2]>,
+}
+
+/// Where two outlines meet, from the grid cells lying on both: the cells grouped into the
+/// places where the outlines cross (8-connected), and the mean of those places' centres, each
+/// place counting once. An arm over a torso crosses the torso's outline twice, on either side
+/// of the arm: the mean is the middle of the arm where it enters the torso, the shoulder.
+/// `None` when the outlines do not cross (one layer inside the other).
+fn outlines_meet(cells: &[(i64, i64)]) -> Option<(f64, f64)> {
+    if cells.is_empty() {
+        return None;
+    }
+    let set: std::collections::HashSet<(i64, i64)> = cells.iter().copied().collect();
+    let mut seen = std::collections::HashSet::new();
+    let (mut mx, mut my, mut places) = (0.0, 0.0, 0.0);
+    for &start in cells {
+        if !seen.insert(start) {
+            continue;
+        }
+        let (mut cx, mut cy, mut n) = (0.0, 0.0, 0.0);
+        let mut stack = vec![start];
+        while let Some((x, y)) = stack.pop() {
+            cx += x as f64;
+            cy += y as f64;
+            n += 1.0;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    let next = (x + dx, y + dy);
+                    if set.contains(&next) && seen.insert(next) {
+                        stack.push(next);
+                    }
+                }
+            }
+        }
+        mx += cx / n;
+        my += cy / n;
+        places += 1.0;
+    }
+    Some((mx / places, my / places))
 }
 
 /// Opaque pixels of a layer.
@@ -348,18 +418,46 @@ struct Site {
     into: usize,
 }
 
-/// Where to join parts `i` and `j` near `target`: a vertex of one lying well inside a
-/// triangle of the other (nearest the target first), or else a triangle's centre of one lying
-/// well inside the other.
+/// Where to join parts `i` and `j` near `target`: the target itself (or a point a little
+/// towards `towards`, the overlap's centre) where both parts hold it well inside a triangle;
+/// else a vertex of one lying well inside a triangle of the other (nearest the target first),
+/// or else a triangle's centre of one lying well inside the other.
 fn joint_site(
     meshes: &[PartMesh],
     i: usize,
     j: usize,
     target: [f64; 2],
+    towards: [f64; 2],
     inside: &dyn Fn([f64; 2]) -> bool,
 ) -> Option<Site> {
     let d2 = |p: [f64; 2]| (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2);
     let mut candidates: Vec<Site> = Vec::new();
+    // First the target itself, split into both parts, or the nearest point towards the
+    // overlap's centre (in steps of a quarter pixel, up to 3 pixels) that both hold well
+    // inside a triangle.
+    let (dx, dy) = (towards[0] - target[0], towards[1] - target[1]);
+    let length = dx.hypot(dy);
+    for k in 0..=12 {
+        let s = if length > 0.0 {
+            (0.25 * f64::from(k)).min(length) / length
+        } else {
+            0.0
+        };
+        let p = [target[0] + s * dx, target[1] + s * dy];
+        if !inside(p) {
+            continue;
+        }
+        if let (Some(t), Some(into)) = (holding(&meshes[i], p), holding(&meshes[j], p)) {
+            return Some(Site {
+                rank: 0.0,
+                own: i,
+                vertex: None,
+                triangle: t,
+                point: p,
+                into,
+            });
+        }
+    }
     for own in [i, j] {
         for (v, &p) in meshes[own].positions.iter().enumerate() {
             if inside(p) {
@@ -490,7 +588,7 @@ pub fn character_with(
             first_error.unwrap_or_else(|| "the picture has no layers".into()),
         ));
     }
-    // Joints, one per overlapping pair of parts, at the overlap's centre or near it.
+    // Joints, one per overlapping pair of parts, where their outlines meet or near it.
     let mut local_joints: Vec<(usize, u32, usize, u32)> = Vec::new();
     if options.joints {
         for i in 0..meshes.len() {
@@ -500,18 +598,21 @@ pub fn character_with(
                     &layered.layers[meshes[i].layer],
                     &layered.layers[meshes[j].layer],
                 );
-                let Some((centre, area)) = overlap(la, lb, canvas_height) else {
+                let Some(o) = overlap(la, lb, canvas_height) else {
                     continue;
                 };
                 let smaller = areas[meshes[i].layer].min(areas[meshes[j].layer]);
-                if area < MIN_OVERLAP_PIXELS.max(0.002 * smaller) {
+                if o.area < MIN_OVERLAP_PIXELS.max(0.002 * smaller) {
                     continue;
                 }
                 let inside = |p: [f64; 2]| {
                     let (col, row) = (p[0].floor() as i64, (canvas_height - p[1]).floor() as i64);
                     covers(la, col, row) && covers(lb, col, row)
                 };
-                match joint_site(&meshes, i, j, centre, &inside) {
+                // Where the outlines meet (the shoulder, where the arm enters the torso),
+                // else (one inside the other) the overlap's centre.
+                let target = o.meet.unwrap_or(o.centre);
+                match joint_site(&meshes, i, j, target, o.centre, &inside) {
                     Some(site) => {
                         let own = site.own;
                         let other = if own == i { j } else { i };

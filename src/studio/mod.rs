@@ -39,6 +39,7 @@ pub mod pictures;
 pub use crate::project;
 pub mod protocol;
 pub mod recovery;
+pub mod rig;
 pub mod scene;
 pub mod server;
 pub mod session;

@@ -265,6 +265,25 @@ pub enum Request {
         /// Its vertices take no new pin.
         locked: bool,
     },
+    /// A joint between the two front-most parts under `at` (a point of the shape shown), one
+    /// undo step (see [`super::rig`]).
+    JointAdd {
+        /// The point, in the mesh's frame.
+        at: [f64; 2],
+    },
+    /// Joint `joint` (from 0) moved to `to` (a point of the shape shown), between the same two
+    /// parts; one undo step.
+    JointMove {
+        /// The joint.
+        joint: usize,
+        /// Where to.
+        to: [f64; 2],
+    },
+    /// Joint `joint` (from 0) removed; one undo step.
+    JointRemove {
+        /// The joint.
+        joint: usize,
+    },
     /// A character's draw order (one undo step): `order` lists the parts (by their index in
     /// the document's list) bottom first; each is drawn over the ones before it.
     PartOrder {

@@ -1785,6 +1785,14 @@ impl Session {
         .to_string()
     }
 
+    /// The points of the shape shown: the keyframe posed, or the frame at the time shown.
+    fn shown_positions(&self) -> &[[f64; 2]] {
+        match self.view.shown {
+            Shown::Keyframe => &self.doc.keyframes[self.view.current].positions,
+            Shown::Time(_) => &self.engine.frame,
+        }
+    }
+
     /// The shown shape as a binary message tagged `seq`.
     fn shown_bytes(&mut self, seq: u32) -> Vec<u8> {
         let fresh = matches!(&self.shown_cache, Some((rev, _)) if *rev == self.revs.shown);
@@ -2225,6 +2233,20 @@ impl Session {
                 {
                     self.commit(label, edit)?;
                 }
+            }
+            Request::JointAdd { at } => {
+                let shown = self.shown_positions();
+                let (project, label) = super::rig::add_joint(&self.doc, shown, at)?;
+                self.commit(label, Edit::Document(Box::new(project)))?
+            }
+            Request::JointMove { joint, to } => {
+                let shown = self.shown_positions();
+                let (project, label) = super::rig::move_joint(&self.doc, shown, joint, to)?;
+                self.commit(label, Edit::Document(Box::new(project)))?
+            }
+            Request::JointRemove { joint } => {
+                let (project, label) = super::rig::remove_joint(&self.doc, joint)?;
+                self.commit(label, Edit::Document(Box::new(project)))?
             }
             Request::PartOrder { order } => {
                 let (project, label) = super::project::with_part_order(&self.doc, &order)?;

@@ -561,3 +561,32 @@ pub fn write_psd_spec(layers: &[TestLayer], spec: &PsdSpec) -> Vec<u8> {
     }
     psd_file(FIGURE_SIZE, spec, count, &records, &data)
 }
+
+/// A character painted as artists paint one: a torso (columns 120..180, rows 60..190) under two
+/// arms that enter it at an angle, each arm's root well inside the torso. Also each arm's
+/// shoulder, where its centre line crosses the torso's outline (pixels, rows from the top), and
+/// its width. Bottom first: torso, left arm, right arm.
+pub fn torso_under_arms() -> (Vec<TestLayer>, [([f64; 2], f64); 2]) {
+    let layers = vec![
+        shape("torso", [40, 60, 220], |x, y| {
+            (120.0..=180.0).contains(&x) && (60.0..=190.0).contains(&y)
+        }),
+        // From (135, 95) to (60, 130), radius 12: it crosses x = 120 at a fifth of its length.
+        shape(
+            "arm_l",
+            [40, 180, 60],
+            capsule([135.0, 95.0], [60.0, 130.0], 12.0),
+        ),
+        // From (165, 85) to (250, 50), radius 11: it crosses x = 180 at 15/85 of its length.
+        shape(
+            "arm_r",
+            [240, 160, 40],
+            capsule([165.0, 85.0], [250.0, 50.0], 11.0),
+        ),
+    ];
+    let shoulders = [
+        ([120.0, 95.0 + 35.0 * 0.2], 24.0),
+        ([180.0, 85.0 - 35.0 * 15.0 / 85.0], 22.0),
+    ];
+    (layers, shoulders)
+}

@@ -4,8 +4,13 @@
 // new pin) and two arrows that change the draw order. Hiding, locking and the draw order are
 // each an undoable step on the server, saved with the project. The joints are drawn on the
 // canvas as small rings, where two parts are tied.
+//
+// The joints tool (Pose mode, J): a click where two parts overlap ties the two drawn in front
+// there; a joint dragged is placed again where it is let go (between the same parts); a
+// right-click on a joint removes it. Each is one undoable step on the server, which makes the
+// vertices a joint needs (see src/studio/rig.rs).
 
-import { S, $, ctx, dpr, toCanvas, redraw } from "./view.js";
+import { S, $, canvas, ctx, dpr, eventCanvas, toCanvas, toWorld, redraw } from "./view.js";
 import { send } from "./net.js";
 
 S.hiddenParts = new Set();   // part names hidden (the document's, as the state says)
@@ -94,21 +99,70 @@ export function drawPartsPanel() {
   }
 }
 
-// The joints: a ring where two parts are tied.
+const jointsTool = () => S.state && S.state.mode === "pose" && S.tool === "joints" && S.state.parts;
+S.jointDrag = null;          // { joint, from, at } (canvas pixels) while a joint is dragged
+
+// The joint whose ring is nearest a canvas point, within `radius`, or -1.
+function nearestJoint(px, py, radius) {
+  const joints = (S.state && S.state.joints) || [];
+  let best = -1, bestD = radius * radius;
+  joints.forEach(([a], i) => {
+    if (a >= S.n) return;
+    const [x, y] = toCanvas(S.pose[2 * a], S.pose[2 * a + 1]);
+    const d = (x - px) ** 2 + (y - py) ** 2;
+    if (d < bestD) { bestD = d; best = i; }
+  });
+  return best;
+}
+
+canvas.addEventListener("mousedown", (e) => {
+  if (!jointsTool() || e.button !== 0 || e.altKey || !S.pose) return;
+  const [px, py] = eventCanvas(e);
+  const j = nearestJoint(px, py, 12 * dpr());
+  if (j >= 0) { S.jointDrag = { joint: j, from: [px, py], at: [px, py] }; redraw(); return; }
+  send({ op: "joint_add", at: toWorld(px, py) });
+});
+window.addEventListener("mousemove", (e) => {
+  if (!S.jointDrag) return;
+  S.jointDrag.at = eventCanvas(e);
+  redraw();
+});
+window.addEventListener("mouseup", () => {
+  const d = S.jointDrag;
+  if (!d) return;
+  S.jointDrag = null;
+  if (Math.hypot(d.at[0] - d.from[0], d.at[1] - d.from[1]) > 3 * dpr()) {
+    send({ op: "joint_move", joint: d.joint, to: toWorld(...d.at) });
+  }
+  redraw();
+});
+canvas.addEventListener("contextmenu", (e) => {
+  if (!jointsTool()) return;
+  e.preventDefault();
+  const [px, py] = eventCanvas(e);
+  const j = nearestJoint(px, py, 12 * dpr());
+  if (j >= 0) send({ op: "joint_remove", joint: j });
+});
+
+// The joints: a ring where two parts are tied (larger, to be grabbed, with the joints tool;
+// the one dragged where the mouse is).
 export function drawJoints() {
   const joints = S.state && S.state.joints;
-  if (!joints || !$("joints-shown").checked || !S.pose) return;
+  const tool = jointsTool();
+  if (!joints || !(tool || $("joints-shown").checked) || !S.pose) return;
   ctx.setTransform(1, 0, 0, 1, 0, 0);
   ctx.lineWidth = 2 * dpr();
-  ctx.strokeStyle = "rgba(255, 255, 255, 0.95)";
-  ctx.fillStyle = "rgba(20, 20, 20, 0.6)";
-  for (const [a] of joints) {
-    const [x, y] = toCanvas(S.pose[2 * a], S.pose[2 * a + 1]);
+  joints.forEach(([a], i) => {
+    if (a >= S.n) return;
+    const dragged = S.jointDrag && S.jointDrag.joint === i;
+    const [x, y] = dragged ? S.jointDrag.at : toCanvas(S.pose[2 * a], S.pose[2 * a + 1]);
+    ctx.strokeStyle = "rgba(255, 255, 255, 0.95)";
+    ctx.fillStyle = tool ? "rgba(255, 140, 0, 0.9)" : "rgba(20, 20, 20, 0.6)";
     ctx.beginPath();
-    ctx.arc(x, y, 4 * dpr(), 0, 2 * Math.PI);
+    ctx.arc(x, y, (tool ? 7 : 4) * dpr(), 0, 2 * Math.PI);
     ctx.fill();
     ctx.stroke();
-  }
+  });
 }
 
 $("joints-shown").addEventListener("change", redraw);

@@ -9,14 +9,46 @@
 // to rotate them (the round one above) and one to scale them (the square corner) about their
 // centre. Unselected pins hold still. A right-click removes a pin. Wheel zooms about the
 // cursor, the middle button or Alt+drag pans. The vertex and triangle under the cursor can be
-// highlighted (the original editor's aid).
+// highlighted (the original editor's aid). A click picks a vertex of the part drawn in front
+// under the cursor (a hand over the torso pins the hand). The joints tool is parts.js's.
 
 import { S, $, canvas, ctx, dpr, eventCanvas, toCanvas, toWorld, withinReach, zoomAt, redraw } from "./view.js";
 import { send, request } from "./net.js";
 
+// The triangle drawn in front under a canvas point (the higher depth level, then the later
+// triangle, as the mesh is drawn), among those of parts shown and not locked; or -1.
+function frontFaceAt(px, py) {
+  const [x, y] = toWorld(px, py), P = S.pose, F = S.faces;
+  let best = -1, bestDepth = -Infinity;
+  for (let f = 0; f < S.m; f++) {
+    if (S.faceHidden && S.faceHidden[f]) continue;
+    const a = 2 * F[3 * f], b = 2 * F[3 * f + 1], c = 2 * F[3 * f + 2];
+    const d1 = (x - P[b]) * (P[a + 1] - P[b + 1]) - (P[a] - P[b]) * (y - P[b + 1]);
+    const d2 = (x - P[c]) * (P[b + 1] - P[c + 1]) - (P[b] - P[c]) * (y - P[c + 1]);
+    const d3 = (x - P[a]) * (P[c + 1] - P[a + 1]) - (P[c] - P[a]) * (y - P[a + 1]);
+    const neg = d1 < 0 || d2 < 0 || d3 < 0, pos = d1 > 0 || d2 > 0 || d3 > 0;
+    if (neg && pos) continue;
+    if (S.vertexLocked && S.vertexLocked[F[3 * f]]) continue;
+    const depth = S.depth ? S.depth[f] : 0;
+    if (depth >= bestDepth) { best = f; bestDepth = depth; }
+  }
+  return best;
+}
+
+// The vertices a click at a canvas point may pick: those of the part drawn in front there (a
+// hand over the torso picks the hand), or every vertex off the parts.
+function pickable(px, py) {
+  const parts = S.state && S.state.parts;
+  if (!parts || !S.pose) return [0, S.n];
+  const f = frontFaceAt(px, py);
+  const p = f < 0 ? null : parts.find((q) => f >= q.faces[0] && f < q.faces[1]);
+  return p ? [p.vertices[0], Math.min(p.vertices[1], S.n)] : [0, S.n];
+}
+
 function nearestVertex(px, py, radius) {
   let best = -1, bestD = radius * radius;
-  for (let v = 0; v < S.n; v++) {
+  const [from, to] = pickable(px, py);
+  for (let v = from; v < to; v++) {
     // A locked part's vertices take no new pin.
     if (S.vertexLocked && S.vertexLocked[v]) continue;
     const [x, y] = toCanvas(S.pose[2 * v], S.pose[2 * v + 1]);
@@ -93,7 +125,7 @@ function startDrag(moving, [px, py], kind = "move") {
 
 canvas.addEventListener("contextmenu", (e) => {
   e.preventDefault();
-  if (!posing() || S.showing !== "pose") return;
+  if (!posing() || S.showing !== "pose" || S.tool === "joints") return;
   const [px, py] = eventCanvas(e);
   const i = nearestPin(px, py, 12 * dpr());
   if (i >= 0) send({ op: "pin_remove", vertex: S.pins[i] });
@@ -109,7 +141,7 @@ canvas.addEventListener("mousedown", (e) => {
   }
   if (!posing() || e.button !== 0 || !S.pose) return;
   // The brushes paint (paint.js).
-  if (S.tool === "depth" || S.tool === "stiff") return;
+  if (S.tool === "depth" || S.tool === "stiff" || S.tool === "joints") return;
   const shown = S.showing === "pose";
   // The selection's handles.
   const frame = shown ? selectionFrame() : null;
@@ -232,10 +264,22 @@ canvas.addEventListener("wheel", (e) => {
   zoomAt(px, py, Math.exp(-e.deltaY * 0.0015));
 }, { passive: false });
 
+// Whether the pins are drawn: on a keyframe shown, when the pins the page holds are that
+// keyframe's as the server last said (after a change in another tab, until its pins arrive,
+// none rather than stale ones), and not while the playhead runs ahead of the shape shown
+// (playing or scrubbing here). On a frame between keyframes no pin is drawn: pins belong to
+// keyframes.
+export function pinsShown() {
+  if (S.showing !== "pose" || !S.pose || S.playing || S.sliding) return false;
+  const st = S.state, k = S.frameInfo.keyframe;
+  if (!st || k < 0 || !st.keyframes[k]) return true;
+  return S.pinsKeyframe === k && st.keyframes[k].pins === S.pins.length;
+}
+
 // Drawn by the overlay: pins (selected ones ringed), the selection frame and its handles, the
 // selection box, a pin being placed again, and the highlight under the cursor.
 export function drawPins() {
-  if (S.showing !== "pose" || !S.pose) return;
+  if (!pinsShown()) return;
   const sel = new Set(selection());
   for (const v of S.pins) {
     if (v >= S.n) continue;
@@ -312,16 +356,19 @@ export function setTool(tool) {
   $("tool-pins").classList.toggle("on", tool === "pins");
   $("tool-depth").classList.toggle("on", tool === "depth");
   $("tool-stiff").classList.toggle("on", tool === "stiff");
+  $("tool-joints").classList.toggle("on", tool === "joints");
   $("brush-tools").hidden = tool !== "depth" && tool !== "stiff";
   $("depth-level-label").hidden = tool !== "depth";
   canvas.classList.toggle("pins-tool", tool === "pins");
   canvas.classList.toggle("brush-tool", tool === "depth" || tool === "stiff");
+  canvas.classList.toggle("joints-tool", tool === "joints");
   redraw();
 }
 $("tool-drag").onclick = () => setTool("drag");
 $("tool-pins").onclick = () => setTool("pins");
 $("tool-depth").onclick = () => setTool("depth");
 $("tool-stiff").onclick = () => setTool("stiff");
+$("tool-joints").onclick = () => setTool("joints");
 export function selectAllPins() { if (S.showing === "pose") for (const v of S.pins) S.selected.add(v); redraw(); }
 export function selectNone() { S.selected.clear(); redraw(); }
 $("select-all-pins").onclick = selectAllPins;

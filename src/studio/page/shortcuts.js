@@ -36,6 +36,7 @@ export const SHORTCUTS = [
   ["mode-animate", "3", "Animate mode", plain("3"), () => setMode("animate")],
   ["tool-drag", "D", "Drag tool: pin and pose", (e) => plain("d")(e), () => setTool("drag")],
   ["tool-pins", "P", "Pins tool: place pins, the mesh stays", (e) => plain("p")(e), () => setTool("pins")],
+  ["tool-joints", "J", "Joints tool: add (click where two parts overlap), move (drag) or remove (right-click) a joint", (e) => plain("j")(e), () => setTool("joints")],
   ["select-all", "Ctrl+A", "Select every pin", ctrl("a"), selectAllPins],
   ["select-none", "Esc", "Select no pin (in Outline: close the loop drawn)", plain("Escape"), () => {
     if (S.state && S.state.drawing !== null && S.state.drawing !== undefined) send({ op: "outline_close" });

@@ -114,7 +114,7 @@ pub fn write(path: &Path, snapshot: &Snapshot) -> Result<(), HistoryFileError> {
     crate::io::write_bytes_atomic(path, &bytes).map_err(|e| HistoryFileError::Write(e.to_string()))
 }
 
-/// Reads a history written by [`write`].
+/// Reads a history written by [`write()`].
 pub fn read(path: &Path) -> Result<Snapshot<Edit>, HistoryFileError> {
     let bytes = read_regular(path, MAX_HISTORY_FILE)?;
     let damaged = |why: String| HistoryFileError::Damaged {
